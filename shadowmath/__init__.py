@@ -1,0 +1,82 @@
+"""shadowmath: shadow matrices for NumPy and JAX.
+
+Blinn's planar-projection shadows and Gabor Nagy's adaptive projective shadow
+textures ("Real-Time Shadows on Complex Objects"), derived and tested against
+geometry rather than copied from print. The full text of these conventions,
+with figures, is ``docs/conventions.md``.
+
+CONVENTIONS
+-----------
+* **Column vectors.** A transformed point is ``M @ p``; matrices compose right
+  to left (``blocker_to_clip = P @ W @ B``). The articles print row-vector
+  matrices: ours are their transposes.
+* **Memory layout is separate.** NumPy stores ``M[row, col]`` row-major;
+  OpenGL's ``mat4`` wants columns first. :func:`column_major_bytes` gives the
+  float32 bytes for a uniform; nothing else in the package changes layout.
+* **Planes** are ``(a, b, c, d)`` for ``a x + b y + c z + d = 0``.
+* **Lights** are homogeneous ``(x, y, z, w)``: ``w = 1`` a point light at
+  ``(x, y, z)``, ``w = 0`` a directional light whose ``(x, y, z)`` points from
+  the scene *toward* the light. Functions of Nagy's method take a point
+  light's position ``(x, y, z)``.
+* **Light coordinates** (Nagy): origin at the light, ``+Z`` toward the
+  blocker, ``X = normalize(Z x V)`` with ``V`` the helper axis, ``Y = X x Z``.
+  Since ``X x Y = -Z`` the frame is *left-handed*. An OpenGL right-handed
+  look-at camera placed at the light with the same ``X`` and ``Y`` looks down
+  its ``-z``: its view coordinates are ours with ``z`` negated.
+* **Clip space and depth**: OpenGL's, ``w_clip = +z_light > 0`` in front of
+  the light, NDC depth ``-1`` at near and ``+1`` at far; texture coordinates
+  ``(s, t, r)`` in ``[0, 1]`` with ``t = 0`` at the map's first row.
+* **Batches**: every argument takes leading batch dimensions, ``(*batch, 3)``
+  points, ``(*batch, N, 3)`` vertex sets, ``(*batch, 4, 4)`` matrices, that
+  broadcast NumPy-style.
+* **Backends**: NumPy in gives NumPy out, JAX in gives JAX out (a mix gives
+  JAX); float32 stays float32, float64 stays float64, integers become float64
+  (float16 becomes float32). ``import shadowmath`` does not import JAX.
+* **Errors**: bad shapes always raise ``ValueError``. Bad values raise
+  ``ValueError`` naming the argument and the problem for NumPy and concrete
+  JAX inputs; inside JAX transformations (``jit``, ``vmap``, ``grad``), where
+  raising is impossible, the affected outputs are NaN instead, never a finite
+  wrong matrix.
+"""
+
+from ._frame import LightFrame as LightFrame
+from ._frame import helper_axis as helper_axis
+from ._frame import light_frame as light_frame
+from ._frame import light_frame_from_direction as light_frame_from_direction
+from ._frame import light_to_world as light_to_world
+from ._frame import mean_direction_vector as mean_direction_vector
+from ._frame import world_to_light as world_to_light
+from ._frustum import NEAR_FAR_SLACK as NEAR_FAR_SLACK
+from ._frustum import Frustum as Frustum
+from ._frustum import adaptive_frustum as adaptive_frustum
+from ._frustum import blocker_projection as blocker_projection
+from ._frustum import border_margin as border_margin
+from ._frustum import receiver_projection as receiver_projection
+from ._layout import column_major_bytes as column_major_bytes
+from ._planar import planar_projection as planar_projection
+from ._setup import ShadowSetup as ShadowSetup
+from ._setup import fit_shadow as fit_shadow
+from ._setup import receiver_texture_matrix as receiver_texture_matrix
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "NEAR_FAR_SLACK",
+    "Frustum",
+    "LightFrame",
+    "ShadowSetup",
+    "adaptive_frustum",
+    "blocker_projection",
+    "border_margin",
+    "column_major_bytes",
+    "fit_shadow",
+    "helper_axis",
+    "light_frame",
+    "light_frame_from_direction",
+    "light_to_world",
+    "mean_direction_vector",
+    "planar_projection",
+    "receiver_projection",
+    "receiver_texture_matrix",
+    "world_to_light",
+]

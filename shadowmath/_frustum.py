@@ -1,0 +1,364 @@
+"""The adaptive perspective frustum of the shadow map, and its two projections.
+
+Light coordinates (see :mod:`shadowmath._frame`) have the light at the origin
+and ``+Z`` toward the blocker. A light-space point ``(x, y, z)`` with ``z > 0``
+projects to the ratios ``x / z`` and ``y / z``; the frustum scales the largest
+of them to the border margin, so the blocker's silhouette fills the map up to a
+border of untouched texels.
+"""
+
+from __future__ import annotations
+
+import operator
+from typing import Any, NamedTuple
+
+from ._backend import Array, Checks, Context, all_finite, batch_shape, prepare, require_last
+from ._frame import LightFrame, _frame_arrays
+
+#: Relative slack of the default near and far planes around the blocker:
+#: ``near = z_min * (1 - NEAR_FAR_SLACK)``, ``far = z_max * (1 + NEAR_FAR_SLACK)``.
+NEAR_FAR_SLACK = 1.0 / 64.0
+
+
+class Frustum(NamedTuple):
+    """A symmetric perspective frustum in light coordinates.
+
+    Attributes (each ``(*batch,)``):
+        rx_max: largest ``|x / z|`` of the blocker (half-width of the frustum at ``z = 1``).
+        ry_max: largest ``|y / z|`` of the blocker.
+        near: distance of the near plane from the light (``z``), ``> 0``.
+        far: distance of the far plane, ``> near``.
+        margin_x: fraction of the map's half-width the silhouette may fill
+            (``(width - 2 border) / width``; the article's 0.98).
+        margin_y: the same along light ``Y`` (the map's height).
+    """
+
+    rx_max: Array
+    ry_max: Array
+    near: Array
+    far: Array
+    margin_x: Array
+    margin_y: Array
+
+
+def _texels(name: str, value: Any) -> tuple[int, int]:
+    """``map_size`` as ``(width, height)`` of positive Python ints."""
+    values = (value, value) if not isinstance(value, tuple | list) else tuple(value)
+    if len(values) != 2:
+        raise ValueError(f"{name}: expected an int or (width, height), got {value!r}")
+    try:
+        w, h = (operator.index(v) for v in values)
+    except TypeError:
+        raise ValueError(f"{name}: texel counts must be integers, got {value!r}") from None
+    if w <= 0 or h <= 0:
+        raise ValueError(f"{name}: texel counts must be positive, got {value!r}")
+    return w, h
+
+
+def border_margin(
+    map_size: int | tuple[int, int], *, border_texels: int = 1
+) -> tuple[float, float]:
+    r"""The fraction of a shadow map's half-extent left inside its border.
+
+    .. math:: m = \frac{\mathrm{size} - 2\,b}{\mathrm{size}}
+
+    With ``b`` border texels on each side the silhouette must stay within
+    ``|x_ndc| <= m``: NDC spans ``[-1, 1]`` over ``size`` texels, so one texel
+    is ``2 / size`` wide. The map is sampled with clamp-to-edge, which repeats
+    the edge texels over every receiver point outside the frustum; a single
+    drawn border texel would smear a streak of false shadow across the
+    receiver ("shadow leaking"). For a 100-texel map ``m = 0.98``, the
+    article's constant (and ``m / 2 = 0.49`` in texture space). The constant
+    0.98 stops guaranteeing an empty border below 100 texels, and below 50
+    texels it lets the silhouette cover border-texel *centres*, so even
+    point-sampled rasterization draws into the border.
+
+    Arguments:
+        map_size: ``size`` for a square map or ``(width, height)`` in texels.
+        border_texels: untouched texels on each side (``>= 0``).
+
+    Returns:
+        ``(margin_x, margin_y)`` as Python floats.
+
+    Raises:
+        ValueError: non-integer or non-positive sizes, a negative border, or a
+            map no larger than its two borders.
+
+    Example:
+        >>> border_margin(100)
+        (0.98, 0.98)
+        >>> border_margin((512, 256), border_texels=2)
+        (0.9921875, 0.984375)
+    """
+    w, h = _texels("map_size", map_size)
+    try:
+        b = operator.index(border_texels)
+    except TypeError:
+        raise ValueError(f"border_texels: expected an int, got {border_texels!r}") from None
+    if b < 0:
+        raise ValueError(f"border_texels: must be >= 0, got {b}")
+    if min(w, h) <= 2 * b:
+        raise ValueError(
+            f"map_size: {w}x{h} texels leave no room inside a border of {b} texel(s) on each "
+            f"side; use at least {2 * b + 1} texels per axis"
+        )
+    return (w - 2 * b) / w, (h - 2 * b) / h
+
+
+def _margins(map_size: Any, border_texels: int, margin: Any) -> tuple[float, float]:
+    derived = border_margin(map_size, border_texels=border_texels)
+    if margin is None:
+        return derived
+    values = tuple(margin) if isinstance(margin, tuple | list) else (margin, margin)
+    if len(values) != 2:
+        raise ValueError(f"margin: expected a float or (margin_x, margin_y), got {margin!r}")
+    mx, my = (float(v) for v in values)
+    if not (0 < mx <= 1 and 0 < my <= 1):
+        raise ValueError(f"margin: must lie in (0, 1], got {margin!r}")
+    return mx, my
+
+
+def adaptive_frustum(
+    frame: LightFrame,
+    vertices: Any,
+    map_size: int | tuple[int, int],
+    *,
+    border_texels: int = 1,
+    margin: float | tuple[float, float] | None = None,
+    near: Any = None,
+    far: Any = None,
+) -> Frustum:
+    r"""The article's adaptive frustum: the largest projection ratios of the blocker.
+
+    .. math::
+
+        R_{x,\max} = \max_i \left|\frac{x_i}{z_i}\right|, \qquad
+        R_{y,\max} = \max_i \left|\frac{y_i}{z_i}\right|
+
+    over the blocker's vertices ``(x_i, y_i, z_i)`` in light coordinates.
+    Scaling ``x / z`` by ``margin_x / R_x,max`` then puts every vertex inside
+    ``|x_ndc| <= margin_x`` with at least one on it (and likewise for ``y``).
+
+    Arguments:
+        frame: the :class:`LightFrame` (``(*batch, 3)`` fields).
+        vertices: ``(*batch, N, 3)`` blocker vertices in world coordinates.
+        map_size: ``size`` of a square map or ``(width, height)`` in texels;
+            width runs along light ``X``, height along light ``Y``.
+        border_texels: texels left empty on each side (default 1, as in the article).
+        margin: force the margins instead of deriving them from the map's size,
+            e.g. ``0.98`` for the article's constant (a float, or ``(mx, my)``).
+        near: near-plane distance; default ``z_min * (1 - NEAR_FAR_SLACK)``.
+        far: far-plane distance; default ``z_max * (1 + NEAR_FAR_SLACK)``, so
+            the blocker is never clipped (``NEAR_FAR_SLACK = 1/64``).
+
+    Returns:
+        :class:`Frustum` with ``(*batch,)`` fields.
+
+    Raises:
+        ValueError: wrong shapes, an empty vertex set, non-finite values, any
+            vertex not strictly in front of the light (``z <= 0``: one frustum
+            cannot see it), a silhouette of zero width or height (a point or an
+            edge-on blocker), a map too small for its border, ``near <= 0`` or
+            ``near >= far``. Under JAX transformations the frustum's fields are
+            NaN instead (except the static margins).
+
+    Example:
+        >>> f = light_frame([0, 0, 0], [[-1, -1, 4], [1, 1, 4], [1, -1, 4], [-1, 1, 4]])
+        >>> fr = adaptive_frustum(f, [[-1, -1, 4], [1, 1, 4], [1, -1, 4], [-1, 1, 4]], 100)
+        >>> float(fr.rx_max), float(fr.margin_x)
+        (0.25, 0.98)
+    """
+    mx, my = _margins(map_size, border_texels, margin)
+    _, fchecks, f = _frame_arrays(frame)
+    ctx, a = prepare(
+        origin=f.origin,
+        x_axis=f.x_axis,
+        y_axis=f.y_axis,
+        z_axis=f.z_axis,
+        vertices=vertices,
+        near=near,
+        far=far,
+    )
+    xp = ctx.xp
+    verts = a["vertices"]
+    require_last("vertices", verts, 3, min_ndim=2, hint="vertices are (*batch, N, 3)")
+    if verts.shape[-2] == 0:
+        raise ValueError("vertices: the vertex set is empty (N = 0); a blocker needs vertices")
+    checks = Checks(ctx)
+    checks.invalid = fchecks.invalid
+    checks.require(all_finite(xp, verts, 2), "vertices: contains non-finite values")
+
+    offsets = verts - a["origin"][..., None, :]
+    x = xp.sum(offsets * a["x_axis"][..., None, :], axis=-1)
+    y = xp.sum(offsets * a["y_axis"][..., None, :], axis=-1)
+    z = xp.sum(offsets * a["z_axis"][..., None, :], axis=-1)
+    z_min, z_max = xp.min(z, axis=-1), xp.max(z, axis=-1)
+    checks.require(
+        z_min > 0,
+        "vertices: a blocker vertex is not strictly in front of the light (z <= 0 in light "
+        "coordinates); one frustum cannot cover it: move the light out of the blocker, or "
+        "split the blocker (or use an omnidirectional shadow map)",
+    )
+    # Divide by a safe z so that invalid entries (z <= 0) never produce inf/NaN
+    # gradients that leak into valid ones; they are poisoned below.
+    safe_z = xp.where(z > 0, z, xp.ones_like(z))
+    rx_max = xp.max(xp.abs(x) / safe_z, axis=-1)
+    ry_max = xp.max(xp.abs(y) / safe_z, axis=-1)
+    checks.require(
+        (rx_max > 0) & (ry_max > 0),
+        "vertices: the blocker's silhouette has zero width or height as seen from the light "
+        "(a single point, or a flat blocker seen edge-on); no frustum can be fitted",
+    )
+
+    near_v = a["near"] if a["near"] is not None else z_min * (1 - NEAR_FAR_SLACK)
+    far_v = a["far"] if a["far"] is not None else z_max * (1 + NEAR_FAR_SLACK)
+    for name in ("near", "far"):
+        if a[name] is not None:
+            checks.require(xp.isfinite(a[name]), f"{name}: must be finite")
+    checks.require(near_v > 0, "near: the near plane must lie in front of the light (near > 0)")
+    checks.require(near_v < far_v, "near/far: the near plane must be closer than the far plane")
+
+    shape = batch_shape(
+        tuple(rx_max.shape), tuple(near_v.shape), tuple(far_v.shape), names=("frame", "near", "far")
+    )
+
+    def field(v: Array) -> Array:
+        return checks.poison(xp.broadcast_to(v, shape), 0)
+
+    return Frustum(
+        rx_max=field(rx_max),
+        ry_max=field(ry_max),
+        near=field(near_v),
+        far=field(far_v),
+        margin_x=xp.broadcast_to(ctx.constant(mx), shape),
+        margin_y=xp.broadcast_to(ctx.constant(my), shape),
+    )
+
+
+def _frustum_arrays(frustum: Frustum) -> tuple[Context, dict[str, Array], tuple[int, ...]]:
+    if not isinstance(frustum, tuple) or len(frustum) < 6:
+        raise ValueError("frustum: expected a Frustum (rx_max, ry_max, near, far, margin_x, ...)")
+    names = ("rx_max", "ry_max", "near", "far", "margin_x", "margin_y")
+    ctx, a = prepare(**dict(zip(names, frustum[:6], strict=True)))
+    shape = batch_shape(*(tuple(a[n].shape) for n in names), names=names)
+    return ctx, a, shape
+
+
+def _entries(ctx: Context, rows: list[list[Array | float]], shape: tuple[int, ...]) -> Array:
+    """Stack a 4x4 of scalars and ``(*batch,)`` arrays into ``(*batch, 4, 4)``."""
+    xp = ctx.xp
+    flat = [xp.broadcast_to(ctx.asarray(e), shape) for row in rows for e in row]
+    return xp.reshape(xp.stack(flat, axis=-1), (*shape, 4, 4))
+
+
+def _projection_rows(ctx: Context, a: dict[str, Array]) -> list[list[Array | float]]:
+    n, f = a["near"], a["far"]
+    return [
+        [a["margin_x"] / a["rx_max"], 0.0, 0.0, 0.0],
+        [0.0, a["margin_y"] / a["ry_max"], 0.0, 0.0],
+        [0.0, 0.0, (f + n) / (f - n), -2 * f * n / (f - n)],
+        [0.0, 0.0, 1.0, 0.0],
+    ]
+
+
+def _checked(ctx: Context, a: dict[str, Array], shape: tuple[int, ...], M: Array) -> Array:
+    xp = ctx.xp
+    checks = Checks(ctx)
+    for name, v in a.items():
+        checks.require(xp.isfinite(v), f"frustum.{name}: must be finite")
+    checks.require((a["rx_max"] > 0) & (a["ry_max"] > 0), "frustum: rx_max and ry_max must be > 0")
+    checks.require(a["near"] > 0, "frustum.near: must be > 0")
+    checks.require(a["near"] < a["far"], "frustum: near must be < far")
+    if checks.invalid is not None:
+        checks.invalid = xp.broadcast_to(checks.invalid, shape)
+    return checks.poison(M, 2)
+
+
+def blocker_projection(frustum: Frustum) -> Array:
+    r"""Light coordinates to OpenGL clip space, for drawing the shadow map.
+
+    .. math::
+
+        P = \begin{bmatrix}
+            m_x / R_{x,\max} & 0 & 0 & 0 \\
+            0 & m_y / R_{y,\max} & 0 & 0 \\
+            0 & 0 & \frac{f + n}{f - n} & \frac{-2 f n}{f - n} \\
+            0 & 0 & 1 & 0
+        \end{bmatrix}
+
+    Clip ``w = +z`` (positive in front of the light), so ``x_ndc = m_x x /
+    (R_x,max z)`` lies within ``[-m_x, m_x]`` for the blocker, and depth is
+    ``-1`` at ``near``, ``+1`` at ``far``. **Errata:** the article's matrix
+    (printed transposed, for row vectors) has ``-1`` and
+    ``(f + n)/(n - f)``, ``2 f n/(n - f)``: those belong to a camera looking
+    down ``-Z``, whereas the article's own light frame looks down ``+Z``; and
+    its ``* SMapWidth`` factor is spurious in OpenGL, where the viewport
+    transform maps NDC to texels (it would blow the image up ``width`` times).
+
+    Arguments:
+        frustum: a :class:`Frustum` with ``(*batch,)`` fields.
+
+    Returns:
+        ``(*batch, 4, 4)`` column-vector matrix.
+
+    Raises:
+        ValueError: non-finite fields, ``rx_max``/``ry_max <= 0``, ``near <= 0`` or
+            ``near >= far`` (NaN under JAX transformations).
+
+    Example:
+        >>> import numpy as np
+        >>> fr = Frustum(rx_max=0.5, ry_max=0.25, near=1.0, far=3.0, margin_x=0.98, margin_y=0.98)
+        >>> clip = blocker_projection(fr) @ np.array([1.0, 0.5, 2.0, 1.0])
+        >>> (clip[:3] / clip[3]).round(4)  # on the x and y margins, mid depth
+        array([0.98, 0.98, 0.5 ])
+    """
+    ctx, a, shape = _frustum_arrays(frustum)
+    return _checked(ctx, a, shape, _entries(ctx, _projection_rows(ctx, a), shape))
+
+
+def receiver_projection(frustum: Frustum) -> Array:
+    r"""Light coordinates to homogeneous shadow-map texture coordinates.
+
+    The blocker projection followed by the scale-and-bias from NDC ``[-1, 1]``
+    to texture ``[0, 1]``:
+
+    .. math::
+
+        T = \begin{bmatrix}
+            \tfrac12 & 0 & 0 & \tfrac12 \\ 0 & \tfrac12 & 0 & \tfrac12 \\
+            0 & 0 & \tfrac12 & \tfrac12 \\ 0 & 0 & 0 & 1
+        \end{bmatrix} P
+
+    giving ``(s q, t q, r q, q)`` with ``q = z``,
+    ``s = 1/2 + (m_x / 2) x / (R_x,max z)`` (the article's 0.49 at 100 texels),
+    and ``r`` the ``[0, 1]`` window depth a depth shadow map would hold.
+    Texture ``t = 0`` is the map's first row, which is where OpenGL draws
+    ``y_ndc = -1``, so no flip is needed. A receiver point with ``q <= 0``
+    is behind the light: it must get no shadow (the division flips signs).
+
+    Arguments:
+        frustum: a :class:`Frustum` with ``(*batch,)`` fields.
+
+    Returns:
+        ``(*batch, 4, 4)`` column-vector matrix.
+
+    Raises:
+        ValueError: as :func:`blocker_projection`.
+
+    Example:
+        >>> import numpy as np
+        >>> fr = Frustum(rx_max=0.5, ry_max=0.5, near=1.0, far=3.0, margin_x=0.98, margin_y=0.98)
+        >>> stq = receiver_projection(fr) @ np.array([1.0, 0.0, 2.0, 1.0])
+        >>> (stq[:2] / stq[3]).round(4)  # the right margin: s = 0.5 + 0.49
+        array([0.99, 0.5 ])
+    """
+    ctx, a, shape = _frustum_arrays(frustum)
+    P = _projection_rows(ctx, a)
+    half = 0.5
+    rows: list[list[Array | float]] = [
+        [half * P[0][0], 0.0, half, 0.0],
+        [0.0, half * P[1][1], half, 0.0],
+        [0.0, 0.0, half * P[2][2] + half, half * P[2][3]],
+        [0.0, 0.0, 1.0, 0.0],
+    ]
+    return _checked(ctx, a, shape, _entries(ctx, rows, shape))
