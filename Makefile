@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck pytest clean
+.PHONY: demo test lint typecheck pytest docs notebooks clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -12,12 +12,12 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
-## The main job: the default scene (see README).
+## The main job: the default scene (see README). Options: make demo ARGS="--help"
 demo: $(STAMP)
 	$(PY) -m shadowmath $(ARGS)
 
-## The whole suite: lint, strict typing, tests.
-test: lint typecheck pytest
+## The whole suite: lint, strict typing, tests, the docs site and the notebooks.
+test: lint typecheck pytest docs notebooks
 
 lint: $(STAMP)
 	$(PY) -m ruff check .
@@ -28,6 +28,12 @@ typecheck: $(STAMP)
 
 pytest: $(STAMP)
 	$(PY) -m pytest
+
+docs: $(STAMP)
+	@if [ -f mkdocs.yml ]; then $(PY) -m mkdocs build --strict --quiet; else echo "no mkdocs.yml yet"; fi
+
+notebooks: $(STAMP)
+	@if ls notebooks/*.ipynb >/dev/null 2>&1; then $(PY) -m pytest --nbmake -p no:doctest notebooks; else echo "no notebooks yet"; fi
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis site out
