@@ -1,0 +1,123 @@
+"""The offscreen OpenGL context, shader loading and input checks shared by the passes."""
+
+from __future__ import annotations
+
+from importlib import resources
+from typing import Any
+
+import moderngl
+import numpy as np
+from numpy.typing import NDArray
+
+from shadowmath._layout import column_major_bytes
+
+#: Debian packages that provide a headless EGL context (Mesa's llvmpipe without a GPU).
+DEBIAN_PACKAGES = ("libegl1", "libgl1-mesa-dri")
+
+_default: list[moderngl.Context] = []
+
+
+class GLUnavailableError(RuntimeError):
+    """No OpenGL 3.3 context could be created (no EGL library or driver)."""
+
+
+def standalone_context() -> moderngl.Context:
+    """The shared offscreen context: EGL, OpenGL 3.3 core, created on first use.
+
+    Works without a display or GPU through Mesa's llvmpipe. Every function of
+    :mod:`shadowmath.render` uses it unless given a ``ctx``.
+
+    Returns:
+        a ``moderngl.Context``.
+
+    Raises:
+        GLUnavailableError: EGL or a GL driver is missing; the message names the
+            Debian packages to install (``libegl1``, ``libgl1-mesa-dri``).
+
+    Example:
+        >>> ctx = standalone_context()  # doctest: +SKIP
+    """
+    if not _default:
+        try:
+            # Passed as a dict: moderngl's stubs type **settings too narrowly.
+            settings: dict[str, Any] = {"require": 330, "backend": "egl"}
+            ctx = moderngl.create_standalone_context(**settings)
+        except Exception as err:  # glcontext raises bare Exceptions
+            raise GLUnavailableError(
+                f"no OpenGL 3.3 context through EGL ({err}); on Debian/Ubuntu install "
+                f"{' and '.join(DEBIAN_PACKAGES)} (apt-get install -y {' '.join(DEBIAN_PACKAGES)})"
+            ) from err
+        _default.append(ctx)
+    return _default[0]
+
+
+def resolve_context(ctx: moderngl.Context | None) -> moderngl.Context:
+    return standalone_context() if ctx is None else ctx
+
+
+def shader_source(name: str) -> str:
+    """A shader file shipped in ``shadowmath/render/shaders``."""
+    return (resources.files("shadowmath.render") / "shaders" / name).read_text(encoding="utf-8")
+
+
+def program(ctx: moderngl.Context, vertex: str, fragment: str) -> moderngl.Program:
+    """The program linked from two shader files, cached on the context."""
+    if not isinstance(ctx.extra, dict):
+        ctx.extra = {}
+    cache: dict[tuple[str, str], Any] = ctx.extra.setdefault("shadowmath_programs", {})
+    key = (vertex, fragment)
+    if key not in cache:
+        cache[key] = ctx.program(
+            vertex_shader=shader_source(vertex), fragment_shader=shader_source(fragment)
+        )
+    prog: moderngl.Program = cache[key]
+    return prog
+
+
+def set_matrix(prog: moderngl.Program, name: str, matrix: Any) -> None:
+    """Upload a column-vector matrix to a ``mat4`` uniform (through :func:`column_major_bytes`)."""
+    uniform = prog[name]
+    if not isinstance(uniform, moderngl.Uniform):
+        raise TypeError(f"{name}: not a uniform of the program")
+    uniform.write(column_major_bytes(matrix))
+
+
+def check_matrix(name: str, matrix: Any) -> NDArray[np.float64]:
+    m = np.asarray(matrix, dtype=np.float64)
+    if m.shape != (4, 4):
+        raise ValueError(f"{name}: expected a (4, 4) matrix, got shape {m.shape}")
+    if not np.all(np.isfinite(m)):
+        raise ValueError(f"{name}: contains non-finite entries")
+    return m
+
+
+def check_mesh(
+    name: str, vertices: Any, triangles: Any
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """``(N, 3)`` finite vertices and ``(M, 3)`` in-range integer triangles."""
+    v = np.asarray(vertices, dtype=np.float64)
+    t = np.asarray(triangles)
+    if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] == 0:
+        raise ValueError(f"{name} vertices: expected a non-empty (N, 3) array, got shape {v.shape}")
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name} vertices: contain non-finite values")
+    if t.ndim != 2 or t.shape[1] != 3 or t.shape[0] == 0:
+        raise ValueError(
+            f"{name} triangles: expected a non-empty (M, 3) array, got shape {t.shape}"
+        )
+    if t.dtype.kind not in "iu":
+        raise ValueError(f"{name} triangles: expected integer indices, got dtype {t.dtype}")
+    if t.min() < 0 or t.max() >= len(v):
+        raise ValueError(f"{name} triangles: indices must lie in [0, {len(v)})")
+    return v, t.astype(np.int64)
+
+
+def image_size(name: str, size: Any) -> tuple[int, int]:
+    """``size`` or ``(width, height)`` as two positive ints."""
+    values = (size, size) if not isinstance(size, tuple | list) else tuple(size)
+    if len(values) != 2 or not all(isinstance(s, int | np.integer) for s in values):
+        raise ValueError(f"{name}: expected an int or (width, height) of ints, got {size!r}")
+    w, h = int(values[0]), int(values[1])
+    if w <= 0 or h <= 0:
+        raise ValueError(f"{name}: sizes must be positive, got {size!r}")
+    return w, h
