@@ -79,7 +79,9 @@ def test_shadow_lies_on_the_ray_from_the_light(to: Any, dtype: Any, scene: Any) 
 
 
 @given(scenes(directional=True))
-def test_directional_shadow_moves_along_the_light_direction(to: Any, dtype: Any, scene: Any) -> None:
+def test_directional_shadow_moves_along_the_light_direction(
+    to: Any, dtype: Any, scene: Any
+) -> None:
     plane, light, points = scene
     M = planar_projection(to(plane), to(light))
     q = project(M, points)
