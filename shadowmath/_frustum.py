@@ -21,16 +21,21 @@ NEAR_FAR_SLACK = 1.0 / 64.0
 
 
 class Frustum(NamedTuple):
-    """A symmetric perspective frustum in light coordinates.
+    """A perspective frustum in light coordinates, symmetric unless offset.
 
     Attributes (each ``(*batch,)``):
-        rx_max: largest ``|x / z|`` of the blocker (half-width of the frustum at ``z = 1``).
-        ry_max: largest ``|y / z|`` of the blocker.
+        rx_max: half-width of the frustum at ``z = 1`` about its centre: for the
+            article's symmetric frustum, the largest ``|x / z|`` of the blocker.
+        ry_max: the same along light ``Y``.
         near: distance of the near plane from the light (``z``), ``> 0``.
         far: distance of the far plane, ``> near``.
         margin_x: fraction of the map's half-width the silhouette may fill
             (``(width - 2 border) / width``; the article's 0.98).
         margin_y: the same along light ``Y`` (the map's height).
+        x_offset: the ratio ``x / z`` at the map's centre (default 0: symmetric).
+            An off-centre frustum spans ``x / z`` in
+            ``[x_offset - rx_max, x_offset + rx_max]`` (before the margin).
+        y_offset: the same along light ``Y``.
     """
 
     rx_max: Array
@@ -39,6 +44,8 @@ class Frustum(NamedTuple):
     far: Array
     margin_x: Array
     margin_y: Array
+    x_offset: Array = 0.0
+    y_offset: Array = 0.0
 
 
 def _texels(name: str, value: Any) -> tuple[int, int]:
@@ -232,14 +239,20 @@ def adaptive_frustum(
         far=field(far_v),
         margin_x=xp.broadcast_to(ctx.constant(mx), shape),
         margin_y=xp.broadcast_to(ctx.constant(my), shape),
+        x_offset=xp.zeros(shape, dtype=ctx.dtype),
+        y_offset=xp.zeros(shape, dtype=ctx.dtype),
     )
 
 
 def _frustum_arrays(frustum: Frustum) -> tuple[Context, dict[str, Array], tuple[int, ...]]:
-    if not isinstance(frustum, tuple) or len(frustum) < 6:
+    if not isinstance(frustum, tuple) or len(frustum) not in (6, 8):
         raise ValueError("frustum: expected a Frustum (rx_max, ry_max, near, far, margin_x, ...)")
-    names = ("rx_max", "ry_max", "near", "far", "margin_x", "margin_y")
-    ctx, a = prepare(**dict(zip(names, frustum[:6], strict=True)))
+    names = ("rx_max", "ry_max", "near", "far", "margin_x", "margin_y", "x_offset", "y_offset")
+    values = dict(zip(names, (*frustum, 0.0, 0.0)[:8], strict=True))
+    # A default (Python number) offset must not promote a float32 frustum to float64.
+    defaults = {n: values.pop(n) for n in names[6:] if isinstance(values[n], int | float)}
+    ctx, a = prepare(**values)
+    a.update({n: ctx.constant(float(v)) for n, v in defaults.items()})
     shape = batch_shape(*(tuple(a[n].shape) for n in names), names=names)
     return ctx, a, shape
 
@@ -253,9 +266,10 @@ def _entries(ctx: Context, rows: list[list[Array | float]], shape: tuple[int, ..
 
 def _projection_rows(ctx: Context, a: dict[str, Array]) -> list[list[Array | float]]:
     n, f = a["near"], a["far"]
+    sx, sy = a["margin_x"] / a["rx_max"], a["margin_y"] / a["ry_max"]
     return [
-        [a["margin_x"] / a["rx_max"], 0.0, 0.0, 0.0],
-        [0.0, a["margin_y"] / a["ry_max"], 0.0, 0.0],
+        [sx, 0.0, -sx * a["x_offset"], 0.0],
+        [0.0, sy, -sy * a["y_offset"], 0.0],
         [0.0, 0.0, (f + n) / (f - n), -2 * f * n / (f - n)],
         [0.0, 0.0, 1.0, 0.0],
     ]
@@ -280,15 +294,17 @@ def blocker_projection(frustum: Frustum) -> Array:
     .. math::
 
         P = \begin{bmatrix}
-            m_x / R_{x,\max} & 0 & 0 & 0 \\
-            0 & m_y / R_{y,\max} & 0 & 0 \\
+            m_x / R_{x,\max} & 0 & -m_x c_x / R_{x,\max} & 0 \\
+            0 & m_y / R_{y,\max} & -m_y c_y / R_{y,\max} & 0 \\
             0 & 0 & \frac{f + n}{f - n} & \frac{-2 f n}{f - n} \\
             0 & 0 & 1 & 0
         \end{bmatrix}
 
-    Clip ``w = +z`` (positive in front of the light), so ``x_ndc = m_x x /
-    (R_x,max z)`` lies within ``[-m_x, m_x]`` for the blocker, and depth is
-    ``-1`` at ``near``, ``+1`` at ``far``. **Errata:** the article's matrix
+    Clip ``w = +z`` (positive in front of the light), so ``x_ndc = m_x (x / z
+    - c_x) / R_x,max`` lies within ``[-m_x, m_x]`` for the blocker, and depth
+    is ``-1`` at ``near``, ``+1`` at ``far``. The offsets ``c_x, c_y``
+    (``frustum.x_offset``, ``y_offset``; 0 for the article's symmetric
+    frustum) shear the frustum off-centre. **Errata:** the article's matrix
     (printed transposed, for row vectors) has ``-1`` and
     ``(f + n)/(n - f)``, ``2 f n/(n - f)``: those belong to a camera looking
     down ``-Z``, whereas the article's own light frame looks down ``+Z``; and
@@ -330,7 +346,8 @@ def receiver_projection(frustum: Frustum) -> Array:
         \end{bmatrix} P
 
     giving ``(s q, t q, r q, q)`` with ``q = z``,
-    ``s = 1/2 + (m_x / 2) x / (R_x,max z)`` (the article's 0.49 at 100 texels),
+    ``s = 1/2 + (m_x / 2) (x / z - c_x) / R_x,max`` (the article's 0.49 at 100
+    texels),
     and ``r`` the ``[0, 1]`` window depth a depth shadow map would hold.
     Texture ``t = 0`` is the map's first row, which is where OpenGL draws
     ``y_ndc = -1``, so no flip is needed. A receiver point with ``q <= 0``
@@ -356,8 +373,8 @@ def receiver_projection(frustum: Frustum) -> Array:
     P = _projection_rows(ctx, a)
     half = 0.5
     rows: list[list[Array | float]] = [
-        [half * P[0][0], 0.0, half, 0.0],
-        [0.0, half * P[1][1], half, 0.0],
+        [half * P[0][0], 0.0, half * P[0][2] + half, 0.0],
+        [0.0, half * P[1][1], half * P[1][2] + half, 0.0],
         [0.0, 0.0, half * P[2][2] + half, half * P[2][3]],
         [0.0, 0.0, 1.0, 0.0],
     ]
