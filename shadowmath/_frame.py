@@ -17,6 +17,7 @@ from ._backend import (
     Context,
     all_finite,
     batch_shape,
+    eps,
     prepare,
     require_last,
 )
@@ -132,13 +133,17 @@ def _helper_axis(ctx: Context, z: Array) -> Array:
     return xp.astype(xp.stack([pick_x, pick_y, pick_z], axis=-1), ctx.dtype)
 
 
-def _frame_from_z(ctx: Context, checks: Checks, light: Array, direction: Array) -> LightFrame:
+def _frame_from_z(
+    ctx: Context, checks: Checks, light: Array, direction: Array, noise: Array | float = 0.0
+) -> LightFrame:
+    """The frame with ``Z`` along ``direction``; ``noise`` bounds its rounding error."""
     xp = ctx.xp
     z, length = safe_normalize(xp, direction)
     checks.require(
-        length > 0,
+        length > noise,
         "the light's viewing direction is zero: the light sits at the blocker's centre "
-        "(zero mean direction vector); move the light or pass an explicit direction",
+        "(zero mean direction vector, or one within rounding of zero); move the light or "
+        "pass an explicit direction to light_frame_from_direction",
     )
     v = _helper_axis(ctx, z)
     x, _ = safe_normalize(xp, cross(xp, z, v))
@@ -199,7 +204,12 @@ def light_frame(
         direction = xp.mean(offsets, axis=-2)
     else:
         direction = 0.5 * (xp.max(offsets, axis=-2) + xp.min(offsets, axis=-2))
-    return _frame_from_z(ctx, checks, light, direction)
+    # A light at the blocker's centre computed in floating point (e.g. the mean
+    # of the vertices) leaves an MDV of rounding noise, a few ulps of the
+    # offsets, pointing anywhere. Relative to the blocker's extent seen from the
+    # light, anything that short is treated as zero; any unit of length works.
+    extent = xp.max(xp.max(xp.abs(offsets), axis=-1), axis=-1)
+    return _frame_from_z(ctx, checks, light, direction, 32 * eps(ctx) * extent)
 
 
 def light_frame_from_direction(light_position: Any, direction: Any) -> LightFrame:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from ._backend import Array, Checks, all_finite, batch_shape, eps, prepare, require_last
-from ._vector import dot, norm
+from ._vector import accurate_dot, norm
 
 
 def planar_projection(plane: Any, light: Any) -> Array:
@@ -82,9 +82,13 @@ def planar_projection(plane: Any, light: Any) -> Array:
         "light: all components are zero; use (x, y, z, 1) for a point light or "
         "(dx, dy, dz, 0) with a nonzero direction for a directional light",
     )
-    pi_dot_L = dot(xp, pi, L)
-    # pi.L is a sum of terms of size |n||l| and |d w|; a result within rounding
-    # of zero cannot be told apart from zero, whatever the scene's units.
+    # pi.L cancels for a light close to the plane far from the origin (terms of
+    # size |n||l| and |d w|, a small sum): compensated, it is accurate to an ulp
+    # of itself, so its sign (which orients M) and size are right.
+    pi_dot_L = accurate_dot(xp, pi, L)
+    # The threshold is relative to the terms' size, never an absolute distance:
+    # a light within a few ulps of the scene's scale from the plane is in it as
+    # far as the rounding of its own coordinates can tell.
     scale = n_len * norm(xp, L[..., :3]) + xp.abs(pi[..., 3] * L[..., 3])
     checks.require(
         xp.abs(pi_dot_L) > 16 * eps(ctx) * scale,
@@ -94,10 +98,13 @@ def planar_projection(plane: Any, light: Any) -> Array:
     )
 
     sign = xp.where(pi_dot_L < 0, ctx.constant(-1.0), ctx.constant(1.0))
-    eye = xp.eye(4, dtype=ctx.dtype)
-    M = (
-        xp.abs(pi_dot_L)[..., None, None] * eye
-        - (sign[..., None, None] * L[..., :, None]) * (pi[..., None, :])
-    )
+    # Diagonal entries (pi.L) - L_i pi_i are the other three terms of pi.L:
+    # summed directly (compensated) they keep full relative precision where the
+    # subtraction would cancel. Off-diagonal entries are single products.
+    others = xp.ones((4, 4), dtype=ctx.dtype) - xp.eye(4, dtype=ctx.dtype)
+    diagonal = accurate_dot(xp, pi[..., None, :], L[..., None, :] * others)
+    off_diagonal = -(sign[..., None, None] * L[..., :, None]) * pi[..., None, :]
+    is_diagonal = xp.eye(4, dtype=xp.bool)
+    M = xp.where(is_diagonal, (sign[..., None] * diagonal)[..., None, :], off_diagonal)
     M = xp.broadcast_to(M, (*shape, 4, 4))
     return checks.poison(M, 2)
