@@ -156,7 +156,9 @@ class Checks:
     ``require(ok, message)`` takes a boolean array over the batch shape that is
     True where the input is valid. Eagerly, any False raises ``ValueError`` with
     ``message`` (and the first failing batch index); lazily, the failures are
-    remembered and :meth:`poison` turns the matching outputs into NaN.
+    remembered and :meth:`poison` turns the matching outputs into NaN, and
+    inside ``jax.experimental.checkify.checkify`` each failed check is also
+    reported as an error carrying ``message``.
     """
 
     def __init__(self, ctx: Context) -> None:
@@ -174,6 +176,11 @@ class Checks:
                 )
                 raise ValueError(message + where)
             return
+        # Under jax.experimental.checkify the failed check becomes an error with
+        # this message; elsewhere debug_check is a no-op and the NaN stays.
+        from jax.experimental import checkify
+
+        checkify.debug_check(xp.all(ok), message)
         bad = xp.logical_not(ok)
         self.invalid = bad if self.invalid is None else xp.logical_or(self.invalid, bad)
 
