@@ -39,6 +39,11 @@ CONVENTIONS
   wrong matrix.
 """
 
+from ._fitting import FrustumFit as FrustumFit
+from ._fitting import cross_section_area as cross_section_area
+from ._fitting import optimize_frustum as optimize_frustum
+from ._fitting import receiver_texel_size as receiver_texel_size
+from ._fitting import silhouette_coverage as silhouette_coverage
 from ._frame import LightFrame as LightFrame
 from ._frame import helper_axis as helper_axis
 from ._frame import light_frame as light_frame
@@ -57,26 +62,39 @@ from ._planar import planar_projection as planar_projection
 from ._setup import ShadowSetup as ShadowSetup
 from ._setup import fit_shadow as fit_shadow
 from ._setup import receiver_texture_matrix as receiver_texture_matrix
+from ._smooth import offcenter_frustum as offcenter_frustum
+from ._smooth import rolled_light_frame as rolled_light_frame
+from ._smooth import smooth_frustum as smooth_frustum
+from ._smooth import smooth_max as smooth_max
 
 __version__ = "0.1.0"
 
 __all__ = [
     "NEAR_FAR_SLACK",
     "Frustum",
+    "FrustumFit",
     "LightFrame",
     "ShadowSetup",
     "adaptive_frustum",
     "blocker_projection",
     "border_margin",
     "column_major_bytes",
+    "cross_section_area",
     "fit_shadow",
     "helper_axis",
     "light_frame",
     "light_frame_from_direction",
     "light_to_world",
     "mean_direction_vector",
+    "offcenter_frustum",
+    "optimize_frustum",
     "planar_projection",
     "receiver_projection",
+    "receiver_texel_size",
     "receiver_texture_matrix",
+    "rolled_light_frame",
+    "silhouette_coverage",
+    "smooth_frustum",
+    "smooth_max",
     "world_to_light",
 ]

@@ -49,6 +49,7 @@ def fit_shadow(
     near: Any = None,
     far: Any = None,
     aim: Literal["mean", "bbox"] = "mean",
+    method: Literal["mdv", "optimized"] = "mdv",
 ) -> ShadowSetup:
     r"""Nagy's projective shadow texture for one point light and one blocker.
 
@@ -70,7 +71,12 @@ def fit_shadow(
         border_texels: texels left empty on each side of the map.
         blocker_to_world: ``(*batch, 4, 4)`` the blocker's local-to-world placement.
         margin, near, far: as in :func:`adaptive_frustum`.
-        aim: as in :func:`light_frame`.
+        aim: as in :func:`light_frame` (for ``method="mdv"``).
+        method: ``"mdv"`` (default) the article's frame and symmetric frustum;
+            ``"optimized"`` the frame and off-centre frustum of
+            :func:`optimize_frustum` (needs JAX; the silhouette fills the map
+            better, it touches the margin on all four sides). The matrices
+            are used the same way either way.
 
     Returns:
         :class:`ShadowSetup`.
@@ -105,10 +111,32 @@ def fit_shadow(
             xp.all(xp.isfinite(B), axis=(-2, -1)), "blocker_to_world: contains non-finite values"
         )
     world_verts = _transform_points(xp, B, verts)
-    frame = light_frame(light, world_verts, aim=aim)
-    frustum = adaptive_frustum(
-        frame, world_verts, map_size, border_texels=border_texels, margin=margin, near=near, far=far
-    )
+    if method == "mdv":
+        frame = light_frame(light, world_verts, aim=aim)
+        frustum = adaptive_frustum(
+            frame,
+            world_verts,
+            map_size,
+            border_texels=border_texels,
+            margin=margin,
+            near=near,
+            far=far,
+        )
+    elif method == "optimized":
+        from ._fitting import optimize_frustum
+
+        fit = optimize_frustum(
+            light,
+            world_verts,
+            map_size,
+            border_texels=border_texels,
+            margin=margin,
+            near=near,
+            far=far,
+        )
+        frame, frustum = fit.frame, fit.frustum
+    else:
+        raise ValueError(f"method: expected 'mdv' or 'optimized', got {method!r}")
     W = world_to_light(frame)
     blocker_to_clip = xp.matmul(blocker_projection(frustum), xp.matmul(W, B))
     world_to_texture = xp.matmul(receiver_projection(frustum), W)

@@ -1,0 +1,389 @@
+"""Smooth, still-conservative variants for gradient-based fitting.
+
+The article's frustum takes hard maxima of the projection ratios: its gradient
+flows to the extreme vertex only and jumps when another vertex takes over. Its
+light frame picks a helper axis discretely: ``X`` and ``Y`` jump when two
+components of ``Z`` tie. For optimisation this module offers
+
+* :func:`smooth_max`, a log-sum-exp soft maximum that is an *upper bound* of
+  the true maximum, so a frustum built from it never clips the blocker;
+* :func:`smooth_frustum`, the (symmetric or off-centre) frustum from soft
+  bounds of the ratios, and :func:`offcenter_frustum`, its exact (hard) limit;
+* :func:`rolled_light_frame`, a light frame from a direction and a roll angle
+  about it, continuous in both (the reference ``up`` axis is fixed, not chosen).
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+from typing import Any
+
+from ._backend import (
+    Array,
+    Checks,
+    Context,
+    all_finite,
+    batch_shape,
+    eps,
+    prepare,
+    require_last,
+)
+from ._frame import LightFrame, _frame_arrays
+from ._frustum import NEAR_FAR_SLACK, Frustum, _margins
+from ._vector import cross, dot, safe_normalize
+
+
+def _smooth_max(
+    xp: ModuleType, x: Array, temperature: Array, weights: Array | None = None
+) -> Array:
+    """``T log sum_i w_i exp(x_i / T)`` over the last axis, shifted by the hard max for range.
+
+    The shift ``m = max x`` cancels mathematically (its derivative is
+    ``1 - sum softmax = 0``), and keeps every exponent ``<= 0``, so nothing
+    overflows. ``weights`` (0 or 1) drop padded entries.
+    """
+    m = xp.max(x, axis=-1)
+    T = temperature[..., None]
+    e = xp.exp((x - m[..., None]) / T)
+    if weights is not None:
+        e = e * weights
+    return m + temperature * xp.log(xp.sum(e, axis=-1))
+
+
+def smooth_max(values: Any, temperature: Any) -> Array:
+    r"""A soft maximum over the last axis that never underestimates the maximum.
+
+    .. math::
+
+        \operatorname{smax}_T(x) = T \log \sum_{i=1}^{N} e^{x_i / T},
+        \qquad \max_i x_i \le \operatorname{smax}_T(x) \le \max_i x_i + T \log N
+
+    Smooth in every ``x_i`` (its gradient is the softmax of ``x / T``, spread
+    over the near-maximal entries), and exact as ``T -> 0``.
+
+    Arguments:
+        values: ``(*batch, N)`` the values, ``N >= 1``.
+        temperature: ``(*batch,)`` ``T > 0``, in the units of ``values``.
+
+    Returns:
+        ``(*batch,)``.
+
+    Raises:
+        ValueError: ``N = 0``, non-finite values, ``T <= 0`` or non-finite
+            (NaN under JAX transformations).
+
+    Example:
+        >>> float(smooth_max([0.0, 1.0, 1.0], 0.01))  # two tied maxima: 1 + T log 2
+        1.0069314718055995
+    """
+    ctx, a = prepare(values=values, temperature=temperature)
+    xp = ctx.xp
+    x, T = a["values"], a["temperature"]
+    if x.ndim < 1 or x.shape[-1] == 0:
+        raise ValueError(f"values: expected shape (*batch, N) with N >= 1, got {tuple(x.shape)}")
+    checks = Checks(ctx)
+    checks.require(all_finite(xp, x, 1), "values: contains non-finite values")
+    checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
+    shape = batch_shape(tuple(x.shape[:-1]), tuple(T.shape), names=("values", "temperature"))
+    x = xp.broadcast_to(x, (*shape, x.shape[-1]))
+    safe_T = xp.where(T > 0, T, xp.ones_like(T))
+    return checks.poison(xp.broadcast_to(_smooth_max(xp, x, safe_T), shape), 0)
+
+
+def _ratio_frustum(
+    frame: LightFrame,
+    vertices: Any,
+    map_size: int | tuple[int, int],
+    *,
+    temperature: Any,
+    symmetric: bool,
+    border_texels: int,
+    margin: float | tuple[float, float] | None,
+    near: Any,
+    far: Any,
+) -> Frustum:
+    """The frustum from bounds of the ratios ``x / z`` and ``y / z`` (hard if T is None)."""
+    mx, my = _margins(map_size, border_texels, margin)
+    _, fchecks, f = _frame_arrays(frame)
+    ctx, a = prepare(
+        origin=f.origin,
+        x_axis=f.x_axis,
+        y_axis=f.y_axis,
+        z_axis=f.z_axis,
+        vertices=vertices,
+        temperature=temperature,
+        near=near,
+        far=far,
+    )
+    xp = ctx.xp
+    verts = a["vertices"]
+    require_last("vertices", verts, 3, min_ndim=2, hint="vertices are (*batch, N, 3)")
+    if verts.shape[-2] == 0:
+        raise ValueError("vertices: the vertex set is empty (N = 0); a blocker needs vertices")
+    checks = Checks(ctx)
+    checks.invalid = fchecks.invalid
+    checks.require(all_finite(xp, verts, 2), "vertices: contains non-finite values")
+
+    offsets = verts - a["origin"][..., None, :]
+    x = xp.sum(offsets * a["x_axis"][..., None, :], axis=-1)
+    y = xp.sum(offsets * a["y_axis"][..., None, :], axis=-1)
+    z = xp.sum(offsets * a["z_axis"][..., None, :], axis=-1)
+    z_min, z_max = xp.min(z, axis=-1), xp.max(z, axis=-1)
+    checks.require(
+        z_min > 0,
+        "vertices: a blocker vertex is not strictly in front of the light (z <= 0 in light "
+        "coordinates); one frustum cannot cover it",
+    )
+    # A safe z keeps invalid entries (z <= 0) from leaking inf/NaN into gradients.
+    safe_z = xp.where(z > 0, z, xp.ones_like(z))
+    rx, ry = x / safe_z, y / safe_z
+
+    T = a["temperature"]
+    if T is None:
+        hi_x, lo_x = xp.max(rx, axis=-1), xp.min(rx, axis=-1)
+        hi_y, lo_y = xp.max(ry, axis=-1), xp.min(ry, axis=-1)
+        if symmetric:
+            hi_x, hi_y = xp.maximum(hi_x, -lo_x), xp.maximum(hi_y, -lo_y)
+    else:
+        checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
+        T = xp.where(T > 0, T, xp.ones_like(T))
+        if symmetric:
+            # The soft max of (r, -r): a smooth upper bound of max |r| (abs is not smooth at 0).
+            hi_x = _smooth_max(xp, xp.concat([rx, -rx], axis=-1), T)
+            hi_y = _smooth_max(xp, xp.concat([ry, -ry], axis=-1), T)
+        else:
+            hi_x, lo_x = _smooth_max(xp, rx, T), -_smooth_max(xp, -rx, T)
+            hi_y, lo_y = _smooth_max(xp, ry, T), -_smooth_max(xp, -ry, T)
+    if symmetric:
+        half_x, half_y = hi_x, hi_y
+        cx, cy = xp.zeros_like(hi_x), xp.zeros_like(hi_y)
+    else:
+        half_x, half_y = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
+        cx, cy = 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y)
+    checks.require(
+        (half_x > 0) & (half_y > 0),
+        "vertices: the blocker's silhouette has zero width or height as seen from the light "
+        "(a single point, or a flat blocker seen edge-on); no frustum can be fitted",
+    )
+
+    near_v = a["near"] if a["near"] is not None else z_min * (1 - NEAR_FAR_SLACK)
+    far_v = a["far"] if a["far"] is not None else z_max * (1 + NEAR_FAR_SLACK)
+    for name in ("near", "far"):
+        if a[name] is not None:
+            checks.require(xp.isfinite(a[name]), f"{name}: must be finite")
+    checks.require(near_v > 0, "near: the near plane must lie in front of the light (near > 0)")
+    checks.require(near_v < far_v, "near/far: the near plane must be closer than the far plane")
+
+    shapes = [tuple(v.shape) for v in (half_x, half_y, near_v, far_v)]
+    shape = batch_shape(*shapes, names=("frame", "temperature", "near", "far"))
+
+    def field(v: Array) -> Array:
+        return checks.poison(xp.broadcast_to(v, shape), 0)
+
+    return Frustum(
+        rx_max=field(half_x),
+        ry_max=field(half_y),
+        near=field(near_v),
+        far=field(far_v),
+        margin_x=xp.broadcast_to(ctx.constant(mx), shape),
+        margin_y=xp.broadcast_to(ctx.constant(my), shape),
+        x_offset=field(cx),
+        y_offset=field(cy),
+    )
+
+
+def smooth_frustum(
+    frame: LightFrame,
+    vertices: Any,
+    map_size: int | tuple[int, int],
+    *,
+    temperature: Any,
+    symmetric: bool = True,
+    border_texels: int = 1,
+    margin: float | tuple[float, float] | None = None,
+    near: Any = None,
+    far: Any = None,
+) -> Frustum:
+    r"""A frustum from soft maxima of the projection ratios: smooth and conservative.
+
+    With ``r_i = x_i / z_i`` in light coordinates and :func:`smooth_max`
+    ``smax_T``, the symmetric frustum has ``R_x = smax_T(r, -r) >= max |r_i|``
+    and the off-centre one spans ``[-smax_T(-r), smax_T(r)]``, which contains
+    ``[min r_i, max r_i]``, so (like :func:`adaptive_frustum`) every vertex
+    maps inside the margins; only the touching is relaxed, by at most
+    ``T log(2N)``. Smooth in the frame and the vertices (the default near and
+    far planes are still the hard ``z`` extremes, which do not affect the
+    silhouette's footprint in the map).
+
+    Arguments:
+        frame: the :class:`LightFrame` (``(*batch, 3)`` fields).
+        vertices: ``(*batch, N, 3)`` blocker vertices in world coordinates.
+        map_size: ``size`` or ``(width, height)`` in texels.
+        temperature: ``(*batch,)`` ``T > 0`` in ratio units (``x / z``); a few
+            percent of the ratios' spread keeps the bound tight.
+        symmetric: True (default) for the article's centred frustum, False for
+            the off-centre one (``x_offset``, ``y_offset`` at the mid-range).
+        border_texels, margin, near, far: as in :func:`adaptive_frustum`.
+
+    Returns:
+        :class:`Frustum` with ``(*batch,)`` fields.
+
+    Raises:
+        ValueError: everything :func:`adaptive_frustum` raises, and a
+            non-positive or non-finite temperature (NaN under JAX transformations).
+
+    Example:
+        >>> verts = [[-1, -1, 4], [1, 1, 4], [1, -1, 4], [-1, 1, 4]]
+        >>> f = light_frame([0, 0, 0], verts)
+        >>> exact = adaptive_frustum(f, verts, 100).rx_max
+        >>> soft = smooth_frustum(f, verts, 100, temperature=1e-3).rx_max
+        >>> bool(exact <= soft <= exact + 1e-3 * np.log(8))
+        True
+    """
+    return _ratio_frustum(
+        frame,
+        vertices,
+        map_size,
+        temperature=temperature,
+        symmetric=symmetric,
+        border_texels=border_texels,
+        margin=margin,
+        near=near,
+        far=far,
+    )
+
+
+def offcenter_frustum(
+    frame: LightFrame,
+    vertices: Any,
+    map_size: int | tuple[int, int],
+    *,
+    border_texels: int = 1,
+    margin: float | tuple[float, float] | None = None,
+    near: Any = None,
+    far: Any = None,
+) -> Frustum:
+    r"""The off-centre adaptive frustum: the silhouette touches all four margins.
+
+    .. math::
+
+        c_x = \tfrac12 \big(\max_i r_i + \min_i r_i\big), \qquad
+        R_x = \tfrac12 \big(\max_i r_i - \min_i r_i\big), \qquad r_i = x_i / z_i
+
+    and likewise along ``Y``. :func:`blocker_projection` then maps
+    ``x_ndc = m_x (x / z - c_x) / R_x``: the vertex with the smallest ratio
+    lands on ``-m_x``, the largest on ``+m_x``. The article's symmetric
+    frustum touches one side per axis only (``R_x = max |r_i|``), so this
+    one's cross-section is never larger, usually smaller, at the same frame.
+
+    Arguments:
+        frame, vertices, map_size, border_texels, margin, near, far: as in
+            :func:`adaptive_frustum`.
+
+    Returns:
+        :class:`Frustum` with ``(*batch,)`` fields, offsets set.
+
+    Raises:
+        ValueError: as :func:`adaptive_frustum` (NaN under JAX transformations).
+
+    Example:
+        >>> f = light_frame_from_direction([0, 0, 0], [0, 0, 1])
+        >>> f.x_axis  # light X is world Y here
+        array([0., 1., 0.])
+        >>> verts = [[0, 0, 4], [1, 2, 4], [0, 2, 4], [1, 0, 4]]  # light x / z in [0, 0.5]
+        >>> fr = offcenter_frustum(f, verts, 100)
+        >>> float(fr.rx_max), float(fr.x_offset), float(adaptive_frustum(f, verts, 100).rx_max)
+        (0.25, 0.25, 0.5)
+    """
+    return _ratio_frustum(
+        frame,
+        vertices,
+        map_size,
+        temperature=None,
+        symmetric=False,
+        border_texels=border_texels,
+        margin=margin,
+        near=near,
+        far=far,
+    )
+
+
+def rolled_light_frame(
+    light_position: Any, direction: Any, roll: Any, *, up: Any = None
+) -> LightFrame:
+    r"""A light frame from a direction and a roll angle, continuous in both.
+
+    .. math::
+
+        Z = \frac{d}{|d|}, \quad
+        X_0 = \frac{Z \times U}{|Z \times U|}, \quad Y_0 = X_0 \times Z, \quad
+        X = \cos\theta\, X_0 + \sin\theta\, Y_0, \quad
+        Y = -\sin\theta\, X_0 + \cos\theta\, Y_0
+
+    It is :func:`light_frame_from_direction`'s construction with a fixed
+    reference axis ``U`` in place of the discretely chosen helper axis, then
+    turned by ``theta`` about ``Z`` (positive turns ``X`` toward ``Y``). The
+    frame stays left-handed (``X x Y = -Z``) and is smooth in ``d`` and
+    ``theta`` everywhere except where ``d`` is parallel to ``U``. With
+    ``U = helper_axis(d)`` and ``theta = 0`` it is the article's frame.
+
+    Arguments:
+        light_position: ``(*batch, 3)``.
+        direction: ``(*batch, 3)`` nonzero, from the light toward the blocker.
+        roll: ``(*batch,)`` the angle ``theta`` in radians.
+        up: ``(*batch, 3)`` the reference axis ``U`` (default world ``+Y``),
+            not parallel to ``direction``.
+
+    Returns:
+        :class:`LightFrame` with ``(*batch, 3)`` fields.
+
+    Raises:
+        ValueError: wrong shapes, non-finite values, a zero direction or ``up``
+            parallel to it (NaN under JAX transformations).
+
+    Example:
+        >>> f = rolled_light_frame([0, 0, 0], [0, 0, 1], np.pi / 2)
+        >>> f.x_axis.round(6) + 0.0, f.y_axis.round(6) + 0.0
+        (array([0., 1., 0.]), array([1., 0., 0.]))
+    """
+    ctx, a = prepare(light_position=light_position, direction=direction, roll=roll, up=up)
+    xp = ctx.xp
+    light, d, theta = a["light_position"], a["direction"], a["roll"]
+    U = a["up"] if a["up"] is not None else ctx.constant([0.0, 1.0, 0.0])
+    require_last("light_position", light, 3)
+    require_last("direction", d, 3)
+    require_last("up", U, 3)
+    checks = Checks(ctx)
+    for name, v in (("light_position", light), ("direction", d), ("up", U)):
+        checks.require(all_finite(xp, v, 1), f"{name}: contains non-finite values")
+    checks.require(xp.isfinite(theta), "roll: contains non-finite values")
+    return _rolled_frame(ctx, checks, light, d, theta, U)
+
+
+def _rolled_frame(
+    ctx: Context, checks: Checks, light: Array, d: Array, theta: Array, U: Array
+) -> LightFrame:
+    xp = ctx.xp
+    z, length = safe_normalize(xp, d)
+    checks.require(length > 0, "direction: the light's viewing direction is zero")
+    u, u_len = safe_normalize(xp, U)
+    zxu = cross(xp, z, u)
+    # |Z x U| = sin(angle): below a few hundred ulps the cross product is rounding noise.
+    checks.require(
+        (u_len > 0) & (dot(xp, zxu, zxu) > (256 * eps(ctx)) ** 2),
+        "up: the reference axis is zero or parallel to the direction; pick another up axis",
+    )
+    x0, _ = safe_normalize(xp, zxu)
+    y0 = cross(xp, x0, z)
+    c, s = xp.cos(theta)[..., None], xp.sin(theta)[..., None]
+    x = c * x0 + s * y0
+    y = c * y0 - s * x0
+    shape = batch_shape(
+        tuple(light.shape[:-1]),
+        tuple(x.shape[:-1]),
+        names=("light_position", "direction/roll/up"),
+    )
+    frame = LightFrame(*(xp.broadcast_to(v, (*shape, 3)) for v in (light, x, y, z)))
+    if checks.invalid is not None:
+        checks.invalid = xp.broadcast_to(checks.invalid, shape)
+    return LightFrame(*(checks.poison(v, 1) for v in frame))
