@@ -1,0 +1,96 @@
+"""Turning shadowmath's NaN-marked invalid outputs back into errors.
+
+With NumPy (or concrete JAX) inputs every function raises ``ValueError`` on bad
+values. Inside JAX transformations (``jit``, ``vmap``, ``grad``) raising on a
+value is impossible, so the affected outputs are NaN instead. Two ways to get
+an error back:
+
+* **checkify, with the specific message.** Every value check of shadowmath
+  is also a ``jax.experimental.checkify.debug_check``: wrap the transformed
+  function in ``checkify.checkify`` and the returned error carries the same
+  message NumPy input would have raised::
+
+      from jax.experimental import checkify
+
+      fitted = checkify.checkify(jax.jit(lambda L, V: fit_shadow(L, V, 256)))
+      err, setup = fitted(light, vertices)
+      err.throw()  # JaxRuntimeError: vertices: a blocker vertex is not strictly ...
+
+  Without ``checkify.checkify`` those checks cost nothing and the NaNs stay.
+
+* **check_finite on the outputs**, for any result: eagerly it raises
+  ``ValueError``; under a transformation it calls ``checkify.check``, so it
+  must run inside ``checkify.checkify`` (JAX refuses to trace it otherwise,
+  rather than skipping it silently).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ._backend import _is_jax, _is_tracer
+
+
+def _leaves(value: Any, name: str) -> list[tuple[str, Any]]:
+    """``(name, array)`` pairs of an array, a NamedTuple or a tuple of them."""
+    if isinstance(value, tuple):
+        fields = getattr(value, "_fields", None) or [str(i) for i in range(len(value))]
+        out: list[tuple[str, Any]] = []
+        for field, item in zip(fields, value, strict=True):
+            out += _leaves(item, f"{name}.{field}")
+        return out
+    return [(name, value)]
+
+
+def check_finite(value: Any, *, name: str = "value") -> Any:
+    """Raise where shadowmath marked an output invalid (NaN), else return it unchanged.
+
+    Arguments:
+        value: an array, or a NamedTuple of arrays such as :class:`LightFrame`,
+            :class:`Frustum` or :class:`ShadowSetup`.
+        name: how the error message refers to ``value``.
+
+    Returns:
+        ``value`` itself.
+
+    Raises:
+        ValueError: with NumPy or concrete JAX arrays, when any entry is NaN or
+            infinite; the message names the field and the first bad index.
+            Under JAX transformations the check goes through
+            ``jax.experimental.checkify.check`` instead: run the function inside
+            ``checkify.checkify`` and call ``err.throw()``.
+
+    Example:
+        >>> import numpy as np
+        >>> M = check_finite(planar_projection([0, 1, 0, 0], [0, 10, 0, 1]), name="M")
+        >>> bad = np.stack([M, np.full((4, 4), np.nan)])
+        >>> check_finite(bad, name="M")
+        Traceback (most recent call last):
+        ...
+        ValueError: M: NaN or infinite entries (first at index (1, 0, 0)): ...
+    """
+    for label, leaf in _leaves(value, name):
+        if _is_tracer(leaf):
+            import jax.numpy as jnp
+            from jax.experimental import checkify
+
+            checkify.check(
+                jnp.all(jnp.isfinite(leaf)),
+                f"{label}: NaN or infinite entries (invalid input; see the function's errors)",
+            )
+            continue
+        arr = np.asarray(leaf) if _is_jax(leaf) or not isinstance(leaf, np.ndarray) else leaf
+        if arr.dtype.kind not in "biuf":
+            raise ValueError(f"{label}: expected an array of real numbers, got dtype {arr.dtype}")
+        finite = np.isfinite(arr)
+        if not bool(np.all(finite)):
+            first = tuple(int(i) for i in np.argwhere(~finite)[0]) if arr.ndim else ()
+            raise ValueError(
+                f"{label}: NaN or infinite entries (first at index {first}): shadowmath marks "
+                "invalid input "
+                "with NaN under JAX transformations; call the function on concrete values "
+                "(or inside jax.experimental.checkify.checkify) to get the specific error"
+            )
+    return value
