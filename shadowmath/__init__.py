@@ -39,6 +39,7 @@ CONVENTIONS
   wrong matrix.
 """
 
+from ._checks import check_finite as check_finite
 from ._fitting import FrustumFit as FrustumFit
 from ._fitting import cross_section_area as cross_section_area
 from ._fitting import optimize_frustum as optimize_frustum
@@ -78,6 +79,7 @@ __all__ = [
     "adaptive_frustum",
     "blocker_projection",
     "border_margin",
+    "check_finite",
     "column_major_bytes",
     "cross_section_area",
     "fit_shadow",
