@@ -12,8 +12,18 @@ from __future__ import annotations
 import operator
 from typing import Any, NamedTuple
 
-from ._backend import Array, Checks, Context, all_finite, batch_shape, prepare, require_last
+from ._backend import (
+    Array,
+    Checks,
+    Context,
+    all_finite,
+    batch_shape,
+    eps,
+    prepare,
+    require_last,
+)
 from ._frame import LightFrame, _frame_arrays
+from ._vector import norm
 
 #: Relative slack of the default near and far planes around the blocker:
 #: ``near = z_min * (1 - NEAR_FAR_SLACK)``, ``far = z_max * (1 + NEAR_FAR_SLACK)``.
@@ -200,21 +210,29 @@ def adaptive_frustum(
     y = xp.sum(offsets * a["y_axis"][..., None, :], axis=-1)
     z = xp.sum(offsets * a["z_axis"][..., None, :], axis=-1)
     z_min, z_max = xp.min(z, axis=-1), xp.max(z, axis=-1)
+    # Thresholds relative to each vertex's distance, never absolute: x, y and z
+    # carry rounding errors of a few ulps of |V - P| (the difference and the
+    # axes' own rounding), so a vertex is in front only when z clears that
+    # noise, and a silhouette has width only when R_max clears it, in any units.
+    dist = norm(xp, offsets)
+    tiny = eps(ctx)
     checks.require(
-        z_min > 0,
+        xp.all(z > 16 * tiny * dist, axis=-1),
         "vertices: a blocker vertex is not strictly in front of the light (z <= 0 in light "
-        "coordinates); one frustum cannot cover it: move the light out of the blocker, or "
-        "split the blocker (or use an omnidirectional shadow map)",
+        "coordinates, or within rounding of 0); one frustum cannot cover it: move the light "
+        "out of the blocker, or split the blocker (or use an omnidirectional shadow map)",
     )
     # Divide by a safe z so that invalid entries (z <= 0) never produce inf/NaN
     # gradients that leak into valid ones; they are poisoned below.
     safe_z = xp.where(z > 0, z, xp.ones_like(z))
     rx_max = xp.max(xp.abs(x) / safe_z, axis=-1)
     ry_max = xp.max(xp.abs(y) / safe_z, axis=-1)
+    noise = 32 * tiny * xp.max(dist / safe_z, axis=-1)
     checks.require(
-        (rx_max > 0) & (ry_max > 0),
+        (rx_max > noise) & (ry_max > noise),
         "vertices: the blocker's silhouette has zero width or height as seen from the light "
-        "(a single point, or a flat blocker seen edge-on); no frustum can be fitted",
+        "(a single point, or a flat blocker seen edge-on, within rounding); no frustum can "
+        "be fitted",
     )
 
     near_v = a["near"] if a["near"] is not None else z_min * (1 - NEAR_FAR_SLACK)
