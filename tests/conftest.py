@@ -5,10 +5,9 @@ JAX runs with float64 enabled so that float64 really means float64 there too.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from typing import Any
-
-import os
 
 import jax
 import jax.numpy as jnp
