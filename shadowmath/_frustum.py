@@ -293,7 +293,13 @@ def _projection_rows(ctx: Context, a: dict[str, Array]) -> list[list[Array | flo
     ]
 
 
-def _checked(ctx: Context, a: dict[str, Array], shape: tuple[int, ...], M: Array) -> Array:
+def _validated(ctx: Context, a: dict[str, Array], shape: tuple[int, ...]) -> Checks:
+    """The frustum's value checks, run before any entry is computed.
+
+    Eagerly a bad field raises here, before a division by ``rx_max = 0`` or
+    ``far - near = 0`` could emit a NumPy warning; lazily the returned checks
+    poison the matrix.
+    """
     xp = ctx.xp
     checks = Checks(ctx)
     for name, v in a.items():
@@ -303,7 +309,7 @@ def _checked(ctx: Context, a: dict[str, Array], shape: tuple[int, ...], M: Array
     checks.require(a["near"] < a["far"], "frustum: near must be < far")
     if checks.invalid is not None:
         checks.invalid = xp.broadcast_to(checks.invalid, shape)
-    return checks.poison(M, 2)
+    return checks
 
 
 def blocker_projection(frustum: Frustum) -> Array:
@@ -347,7 +353,8 @@ def blocker_projection(frustum: Frustum) -> Array:
         array([0.98, 0.98, 0.5 ])
     """
     ctx, a, shape = _frustum_arrays(frustum)
-    return _checked(ctx, a, shape, _entries(ctx, _projection_rows(ctx, a), shape))
+    checks = _validated(ctx, a, shape)
+    return checks.poison(_entries(ctx, _projection_rows(ctx, a), shape), 2)
 
 
 def receiver_projection(frustum: Frustum) -> Array:
@@ -388,6 +395,7 @@ def receiver_projection(frustum: Frustum) -> Array:
         array([0.99, 0.5 ])
     """
     ctx, a, shape = _frustum_arrays(frustum)
+    checks = _validated(ctx, a, shape)
     P = _projection_rows(ctx, a)
     half = 0.5
     rows: list[list[Array | float]] = [
@@ -396,4 +404,4 @@ def receiver_projection(frustum: Frustum) -> Array:
         [0.0, 0.0, half * P[2][2] + half, half * P[2][3]],
         [0.0, 0.0, 1.0, 0.0],
     ]
-    return _checked(ctx, a, shape, _entries(ctx, rows, shape))
+    return checks.poison(_entries(ctx, rows, shape), 2)
