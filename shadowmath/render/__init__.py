@@ -7,14 +7,30 @@ NumPy arrays. Importing this module imports moderngl; ``import shadowmath``
 does not.
 """
 
+from ._camera import look_at as look_at
+from ._camera import perspective as perspective
 from ._context import DEBIAN_PACKAGES as DEBIAN_PACKAGES
 from ._context import GLUnavailableError as GLUnavailableError
 from ._context import standalone_context as standalone_context
+from ._scene import MAX_LIGHTS as MAX_LIGHTS
+from ._scene import PLANAR_POLYGON_OFFSET as PLANAR_POLYGON_OFFSET
+from ._scene import Body as Body
+from ._scene import Frame as Frame
+from ._scene import Light as Light
+from ._scene import render_scene as render_scene
 from ._shadow_map import render_shadow_map as render_shadow_map
 
 __all__ = [
     "DEBIAN_PACKAGES",
+    "MAX_LIGHTS",
+    "PLANAR_POLYGON_OFFSET",
+    "Body",
+    "Frame",
     "GLUnavailableError",
+    "Light",
+    "look_at",
+    "perspective",
+    "render_scene",
     "render_shadow_map",
     "standalone_context",
 ]

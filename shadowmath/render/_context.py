@@ -74,12 +74,21 @@ def program(ctx: moderngl.Context, vertex: str, fragment: str) -> moderngl.Progr
     return prog
 
 
+def uniform(prog: moderngl.Program, name: str) -> moderngl.Uniform:
+    """The program's uniform ``name`` (a ``TypeError`` if it is something else)."""
+    member = prog[name]
+    if not isinstance(member, moderngl.Uniform):
+        raise TypeError(f"{name}: not a uniform of the program")
+    return member
+
+
+def set_uniform(prog: moderngl.Program, name: str, value: Any) -> None:
+    uniform(prog, name).value = value
+
+
 def set_matrix(prog: moderngl.Program, name: str, matrix: Any) -> None:
     """Upload a column-vector matrix to a ``mat4`` uniform (through :func:`column_major_bytes`)."""
-    uniform = prog[name]
-    if not isinstance(uniform, moderngl.Uniform):
-        raise TypeError(f"{name}: not a uniform of the program")
-    uniform.write(column_major_bytes(matrix))
+    uniform(prog, name).write(column_major_bytes(matrix))
 
 
 def check_matrix(name: str, matrix: Any) -> NDArray[np.float64]:

@@ -1,0 +1,121 @@
+"""An independent ground truth for shadows: segments to the light against blocker triangles.
+
+Pure NumPy and deliberately unrelated to the shadow matrices: no light frame,
+no frustum, no projection, no texture. A receiver point ``P`` is in a
+blocker's shadow when the open segment from ``P`` to the point light ``L``
+crosses one of the blocker's triangles, found with the Möller–Trumbore
+ray-triangle test, vectorized over points and triangles.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: Pairs of (point, triangle) tested per chunk: bounds the temporary arrays (~100 MB).
+_CHUNK_PAIRS = 1 << 20
+
+
+def _points(name: str, value: Any) -> NDArray[np.float64]:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim < 1 or arr.shape[-1] != 3:
+        raise ValueError(f"{name}: expected (..., 3) coordinates, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: contains non-finite values")
+    return arr
+
+
+def segment_hits_triangles(
+    points: Any,
+    light_position: Any,
+    vertices: Any,
+    triangles: Any,
+    *,
+    eps: float = 1e-9,
+) -> NDArray[np.bool_]:
+    r"""Whether the segment from each point to the light crosses any triangle.
+
+    Möller–Trumbore: with ``d = L - P``, edges ``e1 = B - A``, ``e2 = C - A``,
+    ``h = d x e2``, ``det = e1 . h``, ``s = P - A``, ``k = s x e1``:
+
+    .. math::
+
+        u = \frac{s \cdot h}{\det}, \quad v = \frac{d \cdot k}{\det}, \quad
+        t = \frac{e_2 \cdot k}{\det}
+
+    and the segment hits the triangle when ``det != 0``, ``u >= 0``, ``v >= 0``,
+    ``u + v <= 1`` and ``eps < t < 1 - eps`` (strictly between the point and
+    the light, so a receiver touching the blocker is not shadowed by the
+    contact itself). Both faces of a triangle block light.
+
+    Arguments:
+        points: ``(..., 3)`` receiver points in world coordinates.
+        light_position: ``(3,)`` the point light.
+        vertices: ``(N, 3)`` blocker vertices in world coordinates.
+        triangles: ``(M, 3)`` integer indices into ``vertices``.
+        eps: the fraction of the segment ignored at each end.
+
+    Returns:
+        ``(...)`` booleans: ``True`` where the point is in the blocker's shadow.
+
+    Raises:
+        ValueError: wrong shapes, non-finite values, indices out of range.
+
+    Example:
+        >>> tri = [[-1, -1, 1], [1, -1, 1], [0, 1, 1]]  # a triangle at height 1
+        >>> points = [[0, 0, 0], [5, 0, 0]]  # under it, and off to the side
+        >>> segment_hits_triangles(points, [0, 0, 2], tri, [[0, 1, 2]])
+        array([ True, False])
+    """
+    p = _points("points", points)
+    light = _points("light_position", light_position)
+    if light.shape != (3,):
+        raise ValueError(f"light_position: expected shape (3,), got {light.shape}")
+    v = _points("vertices", vertices)
+    if v.ndim != 2:
+        raise ValueError(f"vertices: expected shape (N, 3), got {v.shape}")
+    t = np.asarray(triangles)
+    if t.ndim != 2 or t.shape[1] != 3 or t.dtype.kind not in "iu":
+        raise ValueError(f"triangles: expected (M, 3) integer indices, got {t.dtype} {t.shape}")
+    if t.size and (t.min() < 0 or t.max() >= len(v)):
+        raise ValueError(f"triangles: indices must lie in [0, {len(v)})")
+
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    e1, e2 = b - a, c - a
+
+    def chunk(q: NDArray[np.float64]) -> NDArray[np.bool_]:
+        # Components as separate (P, M) arrays: np.cross on (P, M, 3) is several times slower.
+        dx, dy, dz = (light[i] - q[:, i, None] for i in range(3))
+        sx, sy, sz = (q[:, i, None] - a[None, :, i] for i in range(3))
+        ax, ay, az = e1[:, 0], e1[:, 1], e1[:, 2]
+        bx, by, bz = e2[:, 0], e2[:, 1], e2[:, 2]
+        hx, hy, hz = dy * bz - dz * by, dz * bx - dx * bz, dx * by - dy * bx  # d x e2
+        det = ax * hx + ay * hy + az * hz
+        ok = np.abs(det) > 1e-300  # a segment parallel to the triangle's plane never hits it
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        u = (sx * hx + sy * hy + sz * hz) * inv
+        kx, ky, kz = sy * az - sz * ay, sz * ax - sx * az, sx * ay - sy * ax  # s x e1
+        w = (dx * kx + dy * ky + dz * kz) * inv
+        along = (bx * kx + by * ky + bz * kz) * inv
+        crossing = ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (along > eps) & (along < 1 - eps)
+        result: NDArray[np.bool_] = crossing.any(axis=-1)
+        return result
+
+    flat = p.reshape(-1, 3)
+    # Only segments that pass through the blocker's bounding sphere can hit it: the
+    # others are answered without the (points x triangles) test.
+    centre = v.mean(axis=0)
+    radius = np.linalg.norm(v - centre, axis=1).max() * (1 + 1e-9) + 1e-12
+    seg = light - flat
+    along_seg = np.clip(
+        np.sum((centre - flat) * seg, axis=1) / np.maximum(np.sum(seg * seg, axis=1), 1e-300), 0, 1
+    )
+    nearest = flat + along_seg[:, None] * seg
+    near = np.flatnonzero(np.linalg.norm(nearest - centre, axis=1) <= radius)
+    step = max(1, _CHUNK_PAIRS // max(1, len(t)))
+    parts = [chunk(flat[near[i : i + step]]) for i in range(0, len(near), step)]
+    hits_near = np.concatenate(parts) if parts else np.zeros(0, dtype=bool)
+    hits = np.isin(np.arange(len(flat)), near[hits_near])
+    return hits.reshape(p.shape[:-1])
