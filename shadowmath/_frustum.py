@@ -12,6 +12,8 @@ from __future__ import annotations
 import operator
 from typing import Any, NamedTuple
 
+import numpy as np
+
 from ._backend import (
     Array,
     Checks,
@@ -60,9 +62,12 @@ class Frustum(NamedTuple):
 
 def _texels(name: str, value: Any) -> tuple[int, int]:
     """``map_size`` as ``(width, height)`` of positive Python ints."""
-    values = (value, value) if not isinstance(value, tuple | list) else tuple(value)
+    is_pair = isinstance(value, tuple | list) or (isinstance(value, np.ndarray) and value.ndim == 1)
+    values = tuple(value) if is_pair else (value, value)
     if len(values) != 2:
         raise ValueError(f"{name}: expected an int or (width, height), got {value!r}")
+    if any(isinstance(v, bool | np.bool_) for v in values):
+        raise ValueError(f"{name}: texel counts must be integers, not booleans, got {value!r}")
     try:
         w, h = (operator.index(v) for v in values)
     except TypeError:
