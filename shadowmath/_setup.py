@@ -4,7 +4,15 @@ from __future__ import annotations
 
 from typing import Any, Literal, NamedTuple
 
-from ._backend import Array, Checks, batch_shape, prepare, require_last, require_matrix
+from ._backend import (
+    Array,
+    Checks,
+    all_finite,
+    batch_shape,
+    prepare,
+    require_last,
+    require_matrix,
+)
 from ._frame import LightFrame, light_frame, world_to_light
 from ._frustum import Frustum, adaptive_frustum, blocker_projection, receiver_projection
 
@@ -31,11 +39,21 @@ class ShadowSetup(NamedTuple):
     world_to_texture: Array
 
 
-def _transform_points(xp: Any, M: Array, p: Array) -> Array:
-    """``(*batch, N, 3)`` points through ``(*batch, 4, 4)``, with the homogeneous divide."""
-    h = xp.matmul(p, xp.matrix_transpose(M[..., :3, :3])) + M[..., None, :3, 3]
+def _transform_points(xp: Any, checks: Checks, M: Array, p: Array) -> Array:
+    """``(*batch, N, 3)`` points through ``(*batch, 4, 4)``, with the homogeneous divide.
+
+    The checks run before the arithmetic, so that bad input raises its own
+    ``ValueError`` rather than a NumPy warning from ``inf * 0`` or ``1 / 0``.
+    """
+    checks.require(all_finite(xp, p, 2), "blocker_vertices: contains non-finite values")
     w = xp.sum(p * M[..., None, 3, :3], axis=-1) + M[..., None, 3, 3]
-    return h / w[..., None]
+    checks.require(
+        xp.all(w > 0, axis=-1),
+        "blocker_to_world: sends a blocker vertex to w <= 0 (a projective placement); "
+        "use an affine placement, last row (0, 0, 0, 1)",
+    )
+    h = xp.matmul(p, xp.matrix_transpose(M[..., :3, :3])) + M[..., None, :3, 3]
+    return h / xp.where(w > 0, w, xp.ones_like(w))[..., None]
 
 
 def fit_shadow(
@@ -105,12 +123,13 @@ def fit_shadow(
     B = a["blocker_to_world"]
     if B is None:
         B = xp.eye(4, dtype=ctx.dtype)
+        world_verts = verts  # no placement: the vertices exactly as given
     else:
         require_matrix("blocker_to_world", B)
         checks.require(
             xp.all(xp.isfinite(B), axis=(-2, -1)), "blocker_to_world: contains non-finite values"
         )
-    world_verts = _transform_points(xp, B, verts)
+        world_verts = _transform_points(xp, checks, B, verts)
     if method == "mdv":
         frame = light_frame(light, world_verts, aim=aim)
         frustum = adaptive_frustum(

@@ -192,6 +192,16 @@ VALUE_CASES = {
         (LIGHT, VERTS, _with(np.eye(4), (0, 3), np.nan)), (LIGHT, VERTS, np.eye(4)),
         ("blocker_to_world:", "non-finite"),
     ),
+    "fit_shadow: non-finite vertex under a placement": Case(
+        lambda L, V, B: sm.fit_shadow(L, V, 128, blocker_to_world=B),
+        (LIGHT, _with(VERTS, (2, 2), np.inf), np.eye(4)), (LIGHT, VERTS, np.eye(4)),
+        ("blocker_vertices:", "non-finite"),
+    ),
+    "fit_shadow: projective placement with w <= 0": Case(
+        lambda L, V, B: sm.fit_shadow(L, V, 128, blocker_to_world=B),
+        (LIGHT, VERTS, _with(np.eye(4), (3, 2), -1.0)), (LIGHT, VERTS, np.eye(4)),
+        ("blocker_to_world:", "w <= 0", "affine placement"),
+    ),
     "receiver_texture_matrix: non-finite receiver_to_world": Case(
         lambda L, V, R: sm.receiver_texture_matrix(sm.fit_shadow(L, V, 64), R),
         (LIGHT, VERTS, _with(np.eye(4), (2, 2), np.inf)), (LIGHT, VERTS, np.eye(4)),
