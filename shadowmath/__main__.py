@@ -167,7 +167,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     setup = frame.setups[0][0]
     np.set_printoptions(precision=5, suppress=True)
 
-    def show(matrix: Any) -> NDArray[np.float64]:
+    def show(matrix: Any) -> NDArray[Any]:
         # Rounding away the last bits, then + 0.0, prints rounding noise and -0 as 0.
         return np.round(np.asarray(matrix, dtype=np.float64), 12) + 0.0
 
