@@ -213,11 +213,13 @@ def render_scene(
 
     Example:
         >>> from shadowmath.meshes import grid, sphere
+        >>> from shadowmath.render import Body, Light, look_at, perspective, render_scene
         >>> floor = Body(*grid((6.0, 6.0)), plane=(0, 0, 1, 0))
-        >>> ball = Body(*sphere(0.5), to_world=np.diag([1.0, 1.0, 1.0, 1.0]) + np.eye(4, k=3) * 0)
+        >>> ball = Body(*sphere(0.5), to_world=np.array(
+        ...     [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1.5], [0, 0, 0, 1.0]]))
         >>> camera = perspective(50.0, 1.0, 0.1, 50.0) @ look_at([0, -6, 5], [0, 0, 0], [0, 0, 1])
-        >>> frame = render_scene([floor], [ball._replace(to_world=None)], [Light([0, 0, 5])],
-        ...                      camera, image_size=64)  # doctest: +SKIP
+        >>> frame = render_scene([floor], [ball], [Light([0, 0, 5])], camera,
+        ...                      image_size=64)  # doctest: +SKIP
         >>> frame.color.shape, frame.shadow.shape  # doctest: +SKIP
         ((64, 64, 3), (64, 64, 1))
     """
