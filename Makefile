@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck pytest docs notebooks clean
+.PHONY: demo test lint typecheck pytest docs notebooks bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,10 @@ docs: $(STAMP)
 
 notebooks: $(STAMP)
 	@if ls notebooks/*.ipynb >/dev/null 2>&1; then $(PY) -m pytest --nbmake -p no:doctest notebooks; else echo "no notebooks yet"; fi
+
+## Coverage of the optimized frustum fit vs the article's MDV set-up (not a test; prints a table).
+bench: $(STAMP)
+	$(PY) benchmarks/bench_fit.py $(ARGS)
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis site out
