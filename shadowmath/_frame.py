@@ -206,10 +206,13 @@ def light_frame(
         direction = 0.5 * (xp.max(offsets, axis=-2) + xp.min(offsets, axis=-2))
     # A light at the blocker's centre computed in floating point (e.g. the mean
     # of the vertices) leaves an MDV of rounding noise, a few ulps of the
-    # offsets, pointing anywhere. Relative to the blocker's extent seen from the
-    # light, anything that short is treated as zero; any unit of length works.
-    extent = xp.max(xp.max(xp.abs(offsets), axis=-1), axis=-1)
-    return _frame_from_z(ctx, checks, light, direction, 32 * eps(ctx) * extent)
+    # coordinates, pointing anywhere. Relative to the coordinates' size (the
+    # precision the scene is stored with), anything that short is treated as
+    # zero; any unit of length works.
+    size = xp.maximum(
+        xp.max(xp.max(xp.abs(verts), axis=-1), axis=-1), xp.max(xp.abs(light), axis=-1)
+    )
+    return _frame_from_z(ctx, checks, light, direction, 32 * eps(ctx) * size)
 
 
 def light_frame_from_direction(light_position: Any, direction: Any) -> LightFrame:

@@ -293,7 +293,8 @@ def _projection_rows(ctx: Context, a: dict[str, Array]) -> list[list[Array | flo
     return [
         [sx, 0.0, -sx * a["x_offset"], 0.0],
         [0.0, sy, -sy * a["y_offset"], 0.0],
-        [0.0, 0.0, (f + n) / (f - n), -2 * f * n / (f - n)],
+        # -2 n (f / (f - n)) rather than -2 f n / (f - n): no overflow of f n.
+        [0.0, 0.0, (f + n) / (f - n), -2 * n * (f / (f - n))],
         [0.0, 0.0, 1.0, 0.0],
     ]
 
@@ -309,7 +310,12 @@ def _validated(ctx: Context, a: dict[str, Array], shape: tuple[int, ...]) -> Che
     checks = Checks(ctx)
     for name, v in a.items():
         checks.require(xp.isfinite(v), f"frustum.{name}: must be finite")
-    checks.require((a["rx_max"] > 0) & (a["ry_max"] > 0), "frustum: rx_max and ry_max must be > 0")
+    # At least the smallest normal float, so that margin / rx_max cannot overflow.
+    tiny = float(np.finfo(ctx.dtype).tiny)
+    checks.require(
+        (a["rx_max"] >= tiny) & (a["ry_max"] >= tiny),
+        "frustum: rx_max and ry_max must be > 0 (and normal floats)",
+    )
     checks.require(a["near"] > 0, "frustum.near: must be > 0")
     checks.require(a["near"] < a["far"], "frustum: near must be < far")
     if checks.invalid is not None:

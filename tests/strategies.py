@@ -181,9 +181,11 @@ def invalid_planar(draw: st.DrawFn) -> Invalid:
             k = int(np.flatnonzero(n)[0])
             light[k] = -plane[3] / n[k]
     else:
-        light = np.append(np.cross(n, draw(unit_vectors())), 0.0)
-        if not np.any(light):
-            light = np.append(np.cross(n, [1.0, 2.0, 3.0]), 0.0)
+        # A cross product with n, kept long: a short one's rounding would tilt it off the plane.
+        c = np.cross(n, draw(unit_vectors()))
+        if np.linalg.norm(c) < 0.5 * np.linalg.norm(n):
+            c = np.cross(n, np.eye(3)[int(np.argmin(np.abs(n)))])
+        light = np.append(c, 0.0)
     return Invalid((plane, light), "light lies in the plane")
 
 
