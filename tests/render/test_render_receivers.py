@@ -163,6 +163,14 @@ def test_receiver_behind_the_light_gets_no_shadow(gl):
     inside = (st >= 0).all(axis=1) & (st < 1).all(axis=1)
     texels = smap[(st[inside, 1] * h).astype(int), (st[inside, 0] * w).astype(int)]
     assert (texels > 0.5).sum() > 200
+    # Blinn's planar shadow on the same wall: the blocker lies beyond the light as seen from
+    # the plane, its flattened points get w < 0 and the GPU clips them (no anti-shadow).
+    for plane in ((0, 0, 1, 3.0), (0, 0, -1, -3.0)):  # either sign of the same plane
+        planar = render_scene(
+            [behind._replace(plane=plane)], [blocker], [light], cam,
+            image_size=SIZE, method="planar", ctx=gl,
+        )  # fmt: skip
+        assert np.all(planar.shadow[..., 0] == 0.0)
 
 
 def test_back_faces_get_no_shadow(gl):
