@@ -33,7 +33,7 @@ docs: $(STAMP)
 	@if [ -f mkdocs.yml ]; then $(PY) -m mkdocs build --strict --quiet; else echo "no mkdocs.yml yet"; fi
 
 notebooks: $(STAMP)
-	@if ls notebooks/*.ipynb >/dev/null 2>&1; then $(PY) -m pytest --nbmake -p no:doctest notebooks; else echo "no notebooks yet"; fi
+	@if ls notebooks/*.ipynb >/dev/null 2>&1; then $(PY) -m pytest --nbmake notebooks; else echo "no notebooks yet"; fi
 
 ## Coverage of the optimized frustum fit vs the article's MDV set-up (not a test; prints a table).
 bench: $(STAMP)
