@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck pytest docs notebooks bench clean
+.PHONY: demo test lint typecheck pytest docs notebooks bench fuzz clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -38,6 +38,10 @@ notebooks: $(STAMP)
 ## Coverage of the optimized frustum fit vs the article's MDV set-up (not a test; prints a table).
 bench: $(STAMP)
 	$(PY) benchmarks/bench_fit.py $(ARGS)
+
+## The long fuzz run (2000 examples per fuzz test instead of 25); prints the cases tried.
+fuzz: $(STAMP)
+	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -p no:doctest -q tests/test_fuzz.py $(ARGS)
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis site out

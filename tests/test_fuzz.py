@@ -9,13 +9,14 @@ fuzz`` runs ``HYPOTHESIS_PROFILE=fuzz`` and prints how many cases were tried.
 
 from __future__ import annotations
 
+import os
 from collections import Counter
 from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import shadowmath as sm
@@ -286,3 +287,49 @@ def test_fuzz_check_finite(shape: list[int], nan_at: int) -> None:
             sm.check_finite(M)
     else:
         assert sm.check_finite(M) is M
+
+
+# --- the reference render ------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def gl() -> Any:
+    """The shared offscreen context; as tests/render: fails under SHADOWMATH_REQUIRE_GL=1."""
+    try:
+        from shadowmath.render import standalone_context
+
+        return standalone_context()
+    except Exception as err:  # ImportError (no moderngl) or GLUnavailableError
+        if os.environ.get("SHADOWMATH_REQUIRE_GL") == "1":
+            pytest.fail(f"SHADOWMATH_REQUIRE_GL=1: no OpenGL context: {err}")
+        pytest.skip(f"no OpenGL context for the reference render: {err}")
+
+
+@st.composite
+def bordered_maps(draw: st.DrawFn) -> tuple[tuple[int, int], int]:
+    """Small maps (the render is the slow part) with a border of 1 to 3 texels."""
+    w, h = draw(st.integers(3, 300)), draw(st.integers(3, 300))
+    if draw(st.booleans()):
+        h = w
+    return (w, h), draw(st.integers(1, min(3, (min(w, h) - 1) // 2)))
+
+
+@settings(max_examples=max(10, (settings.default.max_examples or 0) // 10))
+@given(data=st.data())
+def test_fuzz_reference_render_never_draws_into_the_border(gl: Any, data: st.DataObject) -> None:
+    from shadowmath.render import render_shadow_map
+
+    p = data.draw(placements(np.float32, max_vertices=10))
+    (w, h), border = data.draw(bordered_maps())
+    # The GPU applies the matrix in float32: its rounding, eps32 * kappa in NDC, must stay
+    # under a quarter texel (2 / size in NDC) for the one-texel guarantee to be meaningful.
+    assume(_eps(np.float32) * _kappa(p) * max(w, h) < 0.25)
+    CASES["render (reference, GL)"] += 1
+    s = sm.fit_shadow(p.light, p.vertices, (w, h), border_texels=border)
+    n = len(p.vertices)
+    triangles = [(0, i, i + 1) for i in range(1, n - 1)] + [(i, i + 1, i + 2) for i in range(n - 2)]
+    mask = render_shadow_map(p.vertices, triangles, s.blocker_to_clip, (w, h), ctx=gl)
+    assert mask.shape == (h, w)
+    assert set(np.unique(mask)) <= {0.0, 1.0}
+    for edge in (mask[:border], mask[-border:], mask[:, :border], mask[:, -border:]):
+        assert not edge.any(), "shadow drawn into the border"
