@@ -11,8 +11,9 @@ from numpy.typing import NDArray
 
 from shadowmath._layout import column_major_bytes
 
-#: Debian packages that provide a headless EGL context (Mesa's llvmpipe without a GPU).
-DEBIAN_PACKAGES = ("libegl1", "libgl1-mesa-dri")
+#: Debian packages that provide a headless EGL context (Mesa's llvmpipe without a GPU):
+#: the EGL loader, the GL library glcontext opens beside it, and Mesa's drivers.
+DEBIAN_PACKAGES = ("libegl1", "libgl1", "libgl1-mesa-dri")
 
 _default: list[moderngl.Context] = []
 
@@ -32,7 +33,7 @@ def standalone_context() -> moderngl.Context:
 
     Raises:
         GLUnavailableError: EGL or a GL driver is missing; the message names the
-            Debian packages to install (``libegl1``, ``libgl1-mesa-dri``).
+            Debian packages to install (``libegl1``, ``libgl1``, ``libgl1-mesa-dri``).
 
     Example:
         >>> ctx = standalone_context()  # doctest: +SKIP
@@ -45,7 +46,7 @@ def standalone_context() -> moderngl.Context:
         except Exception as err:  # glcontext raises bare Exceptions
             raise GLUnavailableError(
                 f"no OpenGL 3.3 context through EGL ({err}); on Debian/Ubuntu install "
-                f"{' and '.join(DEBIAN_PACKAGES)} (apt-get install -y {' '.join(DEBIAN_PACKAGES)})"
+                f"{', '.join(DEBIAN_PACKAGES)} (apt-get install -y {' '.join(DEBIAN_PACKAGES)})"
             ) from err
         _default.append(ctx)
     return _default[0]

@@ -19,8 +19,8 @@ def gl() -> Any:
         message = f"no OpenGL context for the reference render: {err}"
         if "libegl1" not in message:
             message += (
-                "; install the 'render' extra and the Debian packages libegl1 and "
-                "libgl1-mesa-dri (apt-get install -y libegl1 libgl1-mesa-dri)"
+                "; install the 'render' extra and the Debian packages libegl1, libgl1 and "
+                "libgl1-mesa-dri (apt-get install -y libegl1 libgl1 libgl1-mesa-dri)"
             )
         if os.environ.get("SHADOWMATH_REQUIRE_GL") == "1":
             pytest.fail(f"SHADOWMATH_REQUIRE_GL=1: {message}")
