@@ -5,6 +5,22 @@ GPU). It follows Gabor Nagy's passes with the matrices of :mod:`shadowmath`
 uploaded as they are (:func:`shadowmath.column_major_bytes`), and returns
 NumPy arrays. Importing this module imports moderngl; ``import shadowmath``
 does not.
+
+* :func:`render_shadow_map`: pass 1 alone, the blocker's flat-colour silhouette
+  through ``blocker_to_clip`` (no depth test), as a ``(height, width)`` mask
+  whose row 0 is texture ``t = 0``.
+* :func:`render_scene`: the whole method from a camera: a lit pass, then per
+  light the shadow maps of its blockers applied to the receivers as projective
+  textures (or Blinn's flattened blockers, ``method="planar"``), combined into
+  one mask per light, and a subtractive pass per light.
+* moderngl 5 has no stencil state. Where the articles use the stencil buffer
+  (confining planar shadows to their receiver, darkening overlapping shadows
+  once) this renderer records each pixel's body id in the lit pass and
+  discards mask fragments on other bodies, and blends the masks with ``MAX``.
+
+The shaders are files in ``shadowmath/render/shaders``. No GL context, no
+picture: :class:`GLUnavailableError` names the Debian packages to install
+(:data:`DEBIAN_PACKAGES`).
 """
 
 from ._camera import look_at as look_at
