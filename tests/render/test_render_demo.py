@@ -118,3 +118,29 @@ def test_import_shadowmath_does_not_import_moderngl():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     )
     assert result.stdout.strip() == "False"
+
+
+def test_camera_helpers():
+    from shadowmath.render import look_at, perspective
+
+    eye, target = np.array([3.0, -2.0, 5.0]), np.array([0.5, 1.0, 0.0])
+    V = look_at(eye, target, (0.0, 0.0, 1.0))
+    R = V[:3, :3]
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(R) == pytest.approx(1.0)  # right-handed: a rotation
+    np.testing.assert_allclose(V @ np.append(eye, 1), [0, 0, 0, 1], atol=1e-12)
+    d = np.linalg.norm(target - eye)
+    np.testing.assert_allclose(V @ np.append(target, 1), [0, 0, -d, 1], atol=1e-12)
+    assert (V @ [0, 0, 10.0, 1])[1] > 0  # world up appears upward
+    P = perspective(60.0, 2.0, 0.5, 20.0)
+    for z, ndc in ((-0.5, -1.0), (-20.0, 1.0)):
+        clip = P @ [0.0, 0.0, z, 1.0]
+        assert clip[2] / clip[3] == pytest.approx(ndc)
+    top = P @ [0.0, np.tan(np.radians(30.0)), -1.0, 1.0]  # the top of the field of view
+    assert top[1] / top[3] == pytest.approx(1.0)
+    right = P @ [2 * np.tan(np.radians(30.0)), 0.0, -1.0, 1.0]  # aspect 2: twice as wide
+    assert right[0] / right[3] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="up"):
+        look_at([0, 0, 0], [0, 0, 1], [0, 0, 2])
+    with pytest.raises(ValueError, match="near"):
+        perspective(60.0, 1.0, 0.0, 1.0)
