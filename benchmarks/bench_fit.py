@@ -10,7 +10,8 @@ the coverage of the usable map is measured on the rendered mask
 percentiles per family and overall, the ratios to the MDV figures of the same
 run, and the time per fit.
 
-Run: ``make bench`` or ``.venv/bin/python benchmarks/bench_fit.py [--per-family N]``.
+Run: ``make bench`` or ``.venv/bin/python benchmarks/bench_fit.py [--per-family N]``;
+``--figures DIR`` also writes the figures of ``docs/fitting.md`` there.
 """
 
 from __future__ import annotations
@@ -80,9 +81,11 @@ def _light(rng: np.random.Generator, mesh: meshes.Mesh, B: np.ndarray) -> np.nda
     return centre + d / np.linalg.norm(d) * radius * np.exp(rng.uniform(np.log(1.5), np.log(20)))
 
 
-def _case(
-    rng: np.random.Generator, family: str, map_size: int
-) -> tuple[float, float, float, float, int] | None:
+Case = tuple[float, float, float, float, int]
+EXAMPLES: dict[str, list[np.ndarray]] = {}  # the first case's two masks per family
+
+
+def _case(rng: np.random.Generator, family: str, map_size: int) -> Case | None:
     mesh, B = FAMILIES[family](rng)
     light = _light(rng, mesh, B)
     try:
@@ -98,6 +101,9 @@ def _case(
     for setup in (mdv, opt):
         mask = render_shadow_map(mesh.vertices, mesh.triangles, setup.blocker_to_clip, map_size)
         covers.append(float(sm.silhouette_coverage(mask)))
+        EXAMPLES.setdefault(family, [])
+        if len(EXAMPLES[family]) < 2:
+            EXAMPLES[family].append(mask)
         border = np.concatenate([mask[0], mask[-1], mask[:, 0], mask[:, -1]])
         clipped += int(border.max() > 0)
     return covers[0], covers[1], t1 - t0, t2 - t1, clipped
@@ -119,15 +125,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--per-family", type=int, default=25)
     parser.add_argument("--map-size", type=int, default=256)
     parser.add_argument("--seed", type=int, default=2026)
+    parser.add_argument("--figures", default=None, help="folder for the docs' figures")
     args = parser.parse_args(argv)
     rng = np.random.default_rng(args.seed)
 
     # Warm-up: compile the optimiser for every vertex-count bucket used below.
     for family in FAMILIES:
-        mesh, B = FAMILIES[family](np.random.default_rng(0))
+        mesh, _ = FAMILIES[family](np.random.default_rng(0))
         sm.fit_shadow([9.0, 9.0, 9.0], mesh.vertices, args.map_size, method="optimized")
 
-    results: dict[str, list[tuple[float, float, float, float, int]]] = {f: [] for f in FAMILIES}
+    results: dict[str, list[Case]] = {f: [] for f in FAMILIES}
     skipped = 0
     for family in FAMILIES:
         while len(results[family]) < args.per_family:
@@ -163,7 +170,47 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     med_ratio = np.median(opt) / np.median(mdv)
     p10_ratio = np.percentile(opt, 10) / np.percentile(mdv, 10)
     print(f"targets: median ratio {med_ratio:.2f} (>= 1.2), p10 ratio {p10_ratio:.2f} (>= 1.5)")
+    if args.figures:
+        _figures(args.figures, results)
     return {"median_ratio": med_ratio, "p10_ratio": p10_ratio}
+
+
+def _figures(folder: str, results: dict[str, list[Case]]) -> None:
+    import os
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    os.makedirs(folder, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(4.6, 4.2))
+    for family, rows in results.items():
+        arr = np.array(rows)
+        ax.scatter(arr[:, 0], arr[:, 1], s=14, label=family)
+    ax.plot([0, 1], [0, 1], color="gray", lw=0.8, ls="--")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.set_xlabel("coverage, article's MDV set-up")
+    ax.set_ylabel('coverage, method="optimized"')
+    ax.legend(loc="lower right")
+    fig.tight_layout()
+    fig.savefig(os.path.join(folder, "fitting_scatter.png"), dpi=90)
+    plt.close(fig)
+
+    fig, axes = plt.subplots(2, len(EXAMPLES), figsize=(2.2 * len(EXAMPLES), 4.6))
+    for col, (family, masks) in enumerate(EXAMPLES.items()):
+        for row, (title, mask) in enumerate(zip(("MDV", "optimized"), masks, strict=True)):
+            ax = axes[row, col]
+            ax.imshow(mask[::-1], cmap="gray_r", vmin=0, vmax=1, interpolation="nearest")
+            ax.set_title(
+                f"{family}, {title}: {float(sm.silhouette_coverage(mask)):.2f}", fontsize=8
+            )
+            ax.set_xticks([])
+            ax.set_yticks([])
+    fig.tight_layout()
+    fig.savefig(os.path.join(folder, "fitting_examples.png"), dpi=90)
+    plt.close(fig)
 
 
 if __name__ == "__main__":
