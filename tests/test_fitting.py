@@ -307,3 +307,30 @@ def test_fit_shadow_optimized_is_a_drop_in_setup() -> None:
     assert np.allclose(s.world_to_texture, sm.receiver_projection(fit.frustum) @ W, atol=1e-12)
     with pytest.raises(ValueError, match="method"):
         sm.fit_shadow(light, verts, MAP, method="best")  # type: ignore[arg-type]
+
+
+def test_new_functions_under_jit_and_vmap_match_numpy() -> None:
+    pairs = [_blocker(s) for s in (10, 11, 12)]
+    lights = np.stack([p[0] for p in pairs])
+    verts = np.stack([p[1] for p in pairs])
+    rolls = np.array([0.1, -0.7, 2.0])
+
+    def pipeline(light: Any, v: Any, roll: Any) -> tuple[Any, ...]:
+        frame = sm.rolled_light_frame(light, v.mean(-2) - light, roll)
+        soft = sm.smooth_frustum(frame, v, MAP, temperature=0.01, symmetric=False)
+        hard = sm.offcenter_frustum(frame, v, MAP)
+        M = sm.receiver_projection(hard) @ sm.world_to_light(frame)
+        size = sm.receiver_texel_size(M, v[..., 0, :] * 2 - light, frame.z_axis, MAP)
+        return (
+            *frame,
+            *soft,
+            sm.cross_section_area(hard),
+            sm.smooth_max(v[..., 2], 0.1),
+            size,
+        )
+
+    expected = pipeline(lights, verts, rolls)  # NumPy, batched by broadcasting
+    got = jax.jit(jax.vmap(pipeline))(jnp.asarray(lights), jnp.asarray(verts), jnp.asarray(rolls))
+    for e, g in zip(expected, got, strict=True):
+        assert isinstance(g, jax.Array)
+        assert np.allclose(g, e, rtol=1e-10, atol=1e-12)
