@@ -41,7 +41,7 @@ bench: $(STAMP)
 
 ## The long fuzz run (2000 examples per fuzz test instead of 25); prints the cases tried.
 fuzz: $(STAMP)
-	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -p no:doctest -q tests/test_fuzz.py $(ARGS)
+	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests/test_fuzz.py $(ARGS)
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis site out

@@ -170,16 +170,14 @@ def invalid_planar(draw: st.DrawFn) -> Invalid:
         return Invalid((plane, light), "the normal (a, b, c) is zero")
     if kind == "zero_light":
         return Invalid((plane, np.zeros(4)), "light: all components are zero")
-    # In the plane: a point light projected onto it, or a direction parallel to it.
+    # In the plane: the plane moved through a point light, or a direction parallel to it.
     n = plane[:3]
     if light[3] != 0:
+        # Move the plane through the light (d = -n . pos): pi . L is then the rounding
+        # error of one dot product, within a few ulps of the terms, at any scale.
         pos = light[:3] / light[3]
-        pos = pos - ((n @ pos + plane[3]) / (n @ n)) * n
-        # Snap to an exactly representable in-plane point when the plane is axis-aligned.
         light = np.append(pos, 1.0)
-        if np.count_nonzero(n) == 1:
-            k = int(np.flatnonzero(n)[0])
-            light[k] = -plane[3] / n[k]
+        plane = np.append(n, -(n @ pos))
     else:
         # A cross product with n, kept long: a short one's rounding would tilt it off the plane.
         c = np.cross(n, draw(unit_vectors()))

@@ -262,6 +262,10 @@ def test_fuzz_projections_of_any_frustum(data: st.DataObject) -> None:
         return
     P = sm.blocker_projection(fr)
     T = sm.receiver_projection(fr)
+    assert np.all(np.isfinite(P))
+    assert np.all(np.isfinite(T))
+    if near < 1e-290:  # subnormal corners: the check below would measure its own underflow
+        return
     # Depth loses (f + n) / (f - n) ulps to cancellation, whatever the formula.
     tol = 1e-13 * (far + near) / (far - near)
     for z, depth in ((near, -1.0), (far, 1.0)):
