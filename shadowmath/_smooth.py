@@ -30,7 +30,7 @@ from ._backend import (
 )
 from ._frame import LightFrame, _frame_arrays
 from ._frustum import NEAR_FAR_SLACK, Frustum, _margins
-from ._vector import cross, dot, safe_normalize
+from ._vector import cross, dot, norm, safe_normalize
 
 
 def _smooth_max(
@@ -129,10 +129,13 @@ def _ratio_frustum(
     y = xp.sum(offsets * a["y_axis"][..., None, :], axis=-1)
     z = xp.sum(offsets * a["z_axis"][..., None, :], axis=-1)
     z_min, z_max = xp.min(z, axis=-1), xp.max(z, axis=-1)
+    # Relative thresholds, as in adaptive_frustum: z and the ratios carry rounding
+    # errors of a few ulps of |V - P|.
+    dist = norm(xp, offsets)
     checks.require(
-        z_min > 0,
+        xp.all(z > 16 * eps(ctx) * dist, axis=-1),
         "vertices: a blocker vertex is not strictly in front of the light (z <= 0 in light "
-        "coordinates); one frustum cannot cover it",
+        "coordinates, or within rounding of 0); one frustum cannot cover it",
     )
     # A safe z keeps invalid entries (z <= 0) from leaking inf/NaN into gradients.
     safe_z = xp.where(z > 0, z, xp.ones_like(z))
@@ -160,8 +163,9 @@ def _ratio_frustum(
     else:
         half_x, half_y = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
         cx, cy = 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y)
+    noise = 32 * eps(ctx) * xp.max(dist / safe_z, axis=-1)
     checks.require(
-        (half_x > 0) & (half_y > 0),
+        (half_x > noise) & (half_y > noise),
         "vertices: the blocker's silhouette has zero width or height as seen from the light "
         "(a single point, or a flat blocker seen edge-on); no frustum can be fitted",
     )
