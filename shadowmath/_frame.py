@@ -171,6 +171,9 @@ def light_frame(
 
     with ``V`` the :func:`helper_axis` of ``Z``. The frame is left-handed
     (``X x Y = -Z``); see :mod:`shadowmath` for how it relates to an OpenGL camera.
+    Differentiable, but only piecewise smooth: where two components of ``Z``
+    tie in size the helper axis switches, and ``X`` and ``Y`` jump (by a turn
+    about ``Z``). :func:`rolled_light_frame` is a continuous alternative.
 
     Arguments:
         light_position: ``(*batch, 3)`` the point light's position.

@@ -160,6 +160,10 @@ def adaptive_frustum(
     over the blocker's vertices ``(x_i, y_i, z_i)`` in light coordinates.
     Scaling ``x / z`` by ``margin_x / R_x,max`` then puts every vertex inside
     ``|x_ndc| <= margin_x`` with at least one on it (and likewise for ``y``).
+    As maxima, ``R_x,max`` and ``R_y,max`` are only piecewise smooth: their
+    gradient flows to the extreme vertex alone (shared among tied ones) and
+    jumps when another vertex takes over. :func:`smooth_frustum` is a smooth,
+    still conservative alternative, :func:`offcenter_frustum` an off-centre one.
 
     Arguments:
         frame: the :class:`LightFrame` (``(*batch, 3)`` fields).
