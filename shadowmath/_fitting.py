@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import functools
 import math
+import operator
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -115,7 +116,10 @@ def silhouette_coverage(mask: Any, *, border_texels: int = 1) -> Array:
     m = a["mask"]
     if m.ndim < 2:
         raise ValueError(f"mask: expected shape (*batch, height, width), got {tuple(m.shape)}")
-    b = int(border_texels)
+    try:
+        b = operator.index(border_texels)
+    except TypeError:
+        raise ValueError(f"border_texels: expected an int, got {border_texels!r}") from None
     h, w = int(m.shape[-2]), int(m.shape[-1])
     if b < 0 or min(h, w) <= 2 * b:
         raise ValueError(f"border_texels: {b} leaves no interior in a {w}x{h} mask")
