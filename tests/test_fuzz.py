@@ -337,3 +337,82 @@ def test_fuzz_reference_render_never_draws_into_the_border(gl: Any, data: st.Dat
     assert set(np.unique(mask)) <= {0.0, 1.0}
     for edge in (mask[:border], mask[-border:], mask[:, :border], mask[:, -border:]):
         assert not edge.any(), "shadow drawn into the border"
+
+
+# --- what the fitting issue added: smooth and off-centre frusta, rolled frames --------------
+
+
+def _light_ratios(frame: sm.LightFrame, verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    off = verts.astype(np.float64) - np.asarray(frame.origin, np.float64)
+    x, y, z = (off @ np.asarray(a, np.float64) for a in frame[1:])
+    return x / z, y / z
+
+
+@DTYPES
+@given(data=st.data())
+def test_fuzz_offcenter_and_smooth_frusta(dtype: Any, data: st.DataObject) -> None:
+    map_size, border = data.draw(sized_maps())
+    if not data.draw(st.booleans()):
+        CASES["offcenter/smooth_frustum invalid"] += 1
+        bad = data.draw(invalid_placements())
+        light, verts = (np.asarray(a, dtype) for a in bad.args)
+        if bad.message in ("not strictly in front", "zero width or height"):
+            frame = sm.light_frame(light, verts)
+            _raises(bad, sm.offcenter_frustum, frame, verts, map_size, border_texels=border)
+            if bad.message == "not strictly in front":  # a point still gets T log 2 > 0
+                _raises(bad, sm.smooth_frustum, frame, verts, map_size, temperature=1e-3)
+        return
+    CASES["offcenter/smooth_frustum valid"] += 1
+    p = data.draw(placements(dtype))
+    light, verts = p.light.astype(dtype), p.vertices.astype(dtype)
+    frame = sm.light_frame(light, verts)
+    tol = 64 * _eps(dtype) * _kappa(p)
+    rx, ry = _light_ratios(frame, verts)
+    fr = sm.offcenter_frustum(frame, verts, map_size, border_texels=border)
+    # The off-centre frustum: smallest ratio on -R, largest on +R about the offset.
+    for r, half, centre in ((rx, fr.rx_max, fr.x_offset), (ry, fr.ry_max, fr.y_offset)):
+        u = (r - float(centre)) / float(half)
+        assert u.min() == pytest.approx(-1, abs=tol)
+        assert u.max() == pytest.approx(1, abs=tol)
+    hard = sm.adaptive_frustum(frame, verts, map_size, border_texels=border)
+    assert float(fr.rx_max) <= float(hard.rx_max) * (1 + tol)
+    # The smooth symmetric frustum: never tighter than the hard one, at most T log(2N) wider.
+    T = data.draw(st.sampled_from([1e-4, 1e-2, 1.0])) * float(hard.rx_max)
+    soft = sm.smooth_frustum(frame, verts, map_size, temperature=T, border_texels=border)
+    slack = T * np.log(2 * len(verts))
+    for s_r, h_r in ((soft.rx_max, hard.rx_max), (soft.ry_max, hard.ry_max)):
+        assert float(h_r) * (1 - tol) <= float(s_r) <= float(h_r) * (1 + tol) + slack * (1 + tol)
+    with pytest.raises(ValueError, match="temperature: must be finite and > 0"):
+        sm.smooth_frustum(frame, verts, map_size, temperature=-T)
+
+
+@given(
+    values=st.lists(st.floats(-1e6, 1e6), min_size=0, max_size=12),
+    temperature=st.one_of(st.floats(1e-6, 1e3), st.sampled_from([0.0, -1.0, np.inf, np.nan])),
+)
+def test_fuzz_smooth_max(values: list[float], temperature: float) -> None:
+    CASES["smooth_max"] += 1
+    if not values or not (np.isfinite(temperature) and temperature > 0):
+        with pytest.raises(ValueError, match=r"\w"):
+            sm.smooth_max(np.array(values), temperature)
+        return
+    v = np.array(values)
+    got = float(sm.smooth_max(v, temperature))
+    tol = 8 * _eps(np.float64) * (np.abs(v).max() + temperature * np.log(len(v)) + 1)
+    assert v.max() - tol <= got <= v.max() + temperature * np.log(len(v)) + tol
+
+
+@given(direction=unit_vectors(), roll=st.floats(-10, 10), up=unit_vectors())
+def test_fuzz_rolled_light_frame(direction: np.ndarray, roll: float, up: np.ndarray) -> None:
+    CASES["rolled_light_frame"] += 1
+    sin_angle = np.linalg.norm(np.cross(direction, up))
+    if sin_angle < 1e-12:  # parallel: the documented error (256 ulps is the threshold)
+        with pytest.raises(ValueError, match="up: the reference axis is zero or parallel"):
+            sm.rolled_light_frame(np.zeros(3), direction, roll, up=up)
+        return
+    f = sm.rolled_light_frame(np.ones(3), direction, roll, up=up)
+    X, Y, Z = (np.asarray(a) for a in f[1:])
+    R = np.stack([X, Y, Z])
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12 / sin_angle)
+    np.testing.assert_allclose(np.cross(X, Y), -Z, atol=1e-12 / sin_angle)
+    np.testing.assert_allclose(Z, direction / np.linalg.norm(direction), atol=1e-15)
