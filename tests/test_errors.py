@@ -202,6 +202,32 @@ VALUE_CASES = {
         (LIGHT, VERTS, _with(np.eye(4), (3, 2), -1.0)), (LIGHT, VERTS, np.eye(4)),
         ("blocker_to_world:", "w <= 0", "affine placement"),
     ),
+    "smooth_max: temperature <= 0": Case(
+        sm.smooth_max, (np.array([0.0, 1.0]), np.array(0.0)),
+        (np.array([0.0, 1.0]), np.array(0.1)), ("temperature:", "> 0"),
+    ),
+    "smooth_frustum: non-finite temperature": Case(
+        lambda f, v, t: sm.smooth_frustum(f, v, 64, temperature=t),
+        (FRAME, VERTS, np.array(np.nan)), (FRAME, VERTS, np.array(0.01)),
+        ("temperature:", "finite"),
+    ),
+    "offcenter_frustum: vertex behind the light": Case(
+        lambda f, v: sm.offcenter_frustum(f, v, 64),
+        (FRAME, np.concatenate([VERTS, [2 * LIGHT - VERTS[0]]])),
+        (FRAME, np.concatenate([VERTS, VERTS[:1]])),
+        ("vertices:", "not strictly in front of the light"),
+    ),
+    "rolled_light_frame: up parallel to the direction": Case(
+        lambda L, d, r: sm.rolled_light_frame(L, d, r),
+        (LIGHT, np.array([0.0, -2.0, 0.0]), np.array(0.3)),
+        (LIGHT, np.array([0.0, 0.0, 1.0]), np.array(0.3)),
+        ("up:", "parallel to the direction"),
+    ),
+    "rolled_light_frame: zero direction": Case(
+        lambda L, d, r: sm.rolled_light_frame(L, d, r),
+        (LIGHT, np.zeros(3), np.array(0.3)), (LIGHT, np.array([0.0, 0.0, 1.0]), np.array(0.3)),
+        ("direction:", "zero"),
+    ),
     "receiver_texture_matrix: non-finite receiver_to_world": Case(
         lambda L, V, R: sm.receiver_texture_matrix(sm.fit_shadow(L, V, 64), R),
         (LIGHT, VERTS, _with(np.eye(4), (2, 2), np.inf)), (LIGHT, VERTS, np.eye(4)),
