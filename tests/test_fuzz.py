@@ -416,3 +416,36 @@ def test_fuzz_rolled_light_frame(direction: np.ndarray, roll: float, up: np.ndar
     np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12 / sin_angle)
     np.testing.assert_allclose(np.cross(X, Y), -Z, atol=1e-12 / sin_angle)
     np.testing.assert_allclose(Z, direction / np.linalg.norm(direction), atol=1e-15)
+
+
+# --- JAX: the same answers under jit, and NaN exactly where NumPy raises --------------------
+
+
+def _fit_64(light: Any, verts: Any) -> Any:
+    return sm.fit_shadow(light, verts, 64).blocker_to_clip
+
+
+@given(data=st.data())
+def test_fuzz_jit_gives_numpy_results_or_nan_where_numpy_raises(data: st.DataObject) -> None:
+    import jax
+    import jax.numpy as jnp
+
+    if data.draw(st.booleans()):
+        p = data.draw(placements())
+        args: tuple[np.ndarray, ...] = (p.light, p.vertices)
+        plane_args: tuple[np.ndarray, ...] = tuple(data.draw(planar_scenes())[:2])
+    else:
+        args = data.draw(invalid_placements()).args
+        plane_args = data.draw(invalid_planar()).args
+    # Module-level functions, so that jit compiles once per vertex count, not per example.
+    for fn, call_args in ((_fit_64, args), (sm.planar_projection, plane_args)):
+        if any(np.asarray(a).shape[-2:-1] == (0,) for a in call_args):
+            continue  # the empty vertex set is a shape error: it raises under jit too
+        CASES["jit vs NumPy"] += 1
+        got = np.asarray(jax.jit(fn)(*(jnp.asarray(a) for a in call_args)))
+        try:
+            want = fn(*call_args)
+        except ValueError:
+            assert np.all(np.isnan(got)), "a finite result where NumPy raises"
+            continue
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
