@@ -448,4 +448,14 @@ def test_fuzz_jit_gives_numpy_results_or_nan_where_numpy_raises(data: st.DataObj
         except ValueError:
             assert np.all(np.isnan(got)), "a finite result where NumPy raises"
             continue
-        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+        atol = 1e-9 * np.abs(want).max()
+        if fn is _fit_64 and not np.allclose(got, want, rtol=1e-9, atol=atol):
+            # Only at a helper-axis tie may XLA's rounding pick the other (equally valid)
+            # axis: then the jit matrix must still fit the blocker to the margins.
+            z = np.sort(np.abs(np.asarray(sm.light_frame(*call_args).z_axis)))
+            assert z[1] - z[0] <= 1e-12 * z[2], "jit and NumPy differ away from a tie"
+            clip = np.c_[call_args[1], np.ones(len(call_args[1]))] @ got.T
+            ndc = clip[:, :2] / clip[:, 3:]
+            np.testing.assert_allclose(np.abs(ndc).max(axis=0), 62 / 64, rtol=1e-9)
+            continue
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=atol)
