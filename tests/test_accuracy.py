@@ -42,6 +42,9 @@ CONDITION = {
     "blocker_projection": "1",
     "receiver_projection": "1",
     "fit_shadow": "kappa(MDV) + kappa(frustum)",
+    "offcenter_frustum": "max_i |V_i - P| / z_i  /  min(R_x, R_y)",
+    "smooth_max": "(max |x_i| + T) / |smax|",
+    "rolled_light_frame": "1 / |Z x up|",
     "border_margin": "1",
 }
 
@@ -245,6 +248,7 @@ def measure(s: Scene, dtype: Any, xp: Any = np) -> Iterator[tuple[str, float, fl
     )
 
     frame = sm.light_frame(cast(light), cast(verts))
+    mdv_ref_f = np.array([float(v) for v in mdv_ref])
     frame_np = [np.asarray(f, dtype=np.float64) for f in frame]
     helper = np.asarray(sm.helper_axis(frame.z_axis), dtype=np.float64)
     ref_f = ref_frame(light, mdv_ref, helper)
@@ -288,6 +292,42 @@ def measure(s: Scene, dtype: Any, xp: Any = np) -> Iterator[tuple[str, float, fl
     kappa_fr = float(spread / min(rx, ry))
     got = np.array([float(v) for v in fr[:4]])
     yield "adaptive_frustum", normwise_ulps(got, np.array([rx, ry, n, f]), dtype), kappa_fr
+
+    # The fitting issue's functions on the same scene.
+    rx_i = [a / b for a, b in zip(off_l @ frame_mp[1], off_l @ frame_mp[3], strict=True)]
+    ry_i = [a / b for a, b in zip(off_l @ frame_mp[2], off_l @ frame_mp[3], strict=True)]
+    oc = sm.offcenter_frustum(frame, cast(verts), s.map_size)
+    oc_ref = [
+        (max(rx_i) - min(rx_i)) / 2,
+        (max(ry_i) - min(ry_i)) / 2,
+        (max(rx_i) + min(rx_i)) / 2,
+        (max(ry_i) + min(ry_i)) / 2,
+    ]
+    oc_got = np.array([float(v) for v in (oc.rx_max, oc.ry_max, oc.x_offset, oc.y_offset)])
+    kappa_oc = float(spread / min(oc_ref[0], oc_ref[1]))
+    yield "offcenter_frustum", normwise_ulps(oc_got, np.array(oc_ref), dtype), kappa_oc
+
+    T = mpmath.mpf(float(np.asarray(0.01 * rx, dtype=dtype)))
+    x_in = np.array([float(v) for v in rx_i], dtype=dtype)
+    smax_ref = T * mpmath.log(sum(mpmath.exp(mpmath.mpf(float(v)) / T) for v in x_in))
+    smax = sm.smooth_max(cast(x_in), cast(np.asarray(float(T), dtype=dtype)))
+    kappa_smax = float((max(abs(mpmath.mpf(float(v))) for v in x_in) + T) / abs(smax_ref))
+    yield "smooth_max", normwise_ulps(smax, np.array([smax_ref]), dtype), kappa_smax
+
+    roll = np.asarray(0.7, dtype=dtype)
+    mdv_np = np.asarray(mdv_ref_f, dtype)
+    rf = sm.rolled_light_frame(cast(light), cast(mdv_np), cast(roll))
+    z = mp_normalize(mp_array(mdv_np))
+    x0 = mp_normalize(mp_cross(z, mp_array([0.0, 1.0, 0.0])))
+    y0 = mp_cross(x0, z)
+    c, sn = mpmath.cos(mpmath.mpf(float(roll))), mpmath.sin(mpmath.mpf(float(roll)))
+    rolled_ref = [c * x0 + sn * y0, -sn * x0 + c * y0, z]
+    sin_up = float(mp_sqrt(np.sum(mp_cross(z, mp_array([0.0, 1.0, 0.0])) ** 2)))
+    yield (
+        "rolled_light_frame",
+        max(normwise_ulps(np.asarray(rf[i + 1]), rolled_ref[i], dtype) for i in range(3)),
+        1 / sin_up,
+    )
 
     fields = [mp_array(np.asarray(v, dtype=np.float64)) for v in fr[:6]]
     P_ref = ref_projection(*(v[()] for v in fields))
@@ -349,7 +389,7 @@ def table(dtype: Any, cases: int, xp: Any = np, seed: int = 2024) -> dict[str, R
 @pytest.mark.parametrize("dtype", [np.float64, np.float32], ids=["f64", "f32"])
 def test_every_function_within_a_few_ulps_times_the_condition(dtype: Any) -> None:
     rows = table(dtype, cases=3)
-    assert len(rows) == (12 if np.dtype(dtype) == np.float64 else 11)
+    assert len(rows) == (15 if np.dtype(dtype) == np.float64 else 14)
     for name, row in rows.items():
         assert row.worst_over_kappa <= BOUND_ULPS, (name, row)
     # Compensation makes the planar matrix accurate entry by entry, not just normwise.
