@@ -36,7 +36,7 @@ def standalone_context() -> moderngl.Context:
             Debian packages to install (``libegl1``, ``libgl1``, ``libgl1-mesa-dri``).
 
     Example:
-        >>> ctx = standalone_context()  # doctest: +SKIP
+        >>> ctx = standalone_context()
     """
     if not _default:
         try:
