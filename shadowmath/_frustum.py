@@ -194,7 +194,30 @@ def adaptive_frustum(
         >>> float(fr.rx_max), float(fr.margin_x)
         (0.25, 0.98)
     """
-    mx, my = _margins(map_size, border_texels, margin)
+    margins = _margins(map_size, border_texels, margin)
+    ls = _light_space(frame, vertices, near=near, far=far)
+    xp = ls.ctx.xp
+    rx_max = xp.max(xp.abs(ls.x) / ls.safe_z, axis=-1)
+    ry_max = xp.max(xp.abs(ls.y) / ls.safe_z, axis=-1)
+    zero = xp.zeros_like(rx_max)
+    return _assemble(ls, margins, rx_max, ry_max, zero, zero)
+
+
+class _LightSpace(NamedTuple):
+    """A validated blocker in light coordinates, shared by every frustum builder."""
+
+    ctx: Context
+    checks: Checks
+    args: dict[str, Array]  # the converted arguments (near, far and any extras)
+    x: Array  # (*batch, N) light-space coordinates of the vertices
+    y: Array
+    z: Array
+    safe_z: Array  # z, with 1 where z <= 0 (those entries are invalid anyway)
+    noise: Array  # (*batch,) the rounding noise of the ratios x / z and y / z
+
+
+def _light_space(frame: LightFrame, vertices: Any, **extra: Any) -> _LightSpace:
+    """The blocker's vertices in light coordinates, with the in-front check done."""
     _, fchecks, f = _frame_arrays(frame)
     ctx, a = prepare(
         origin=f.origin,
@@ -202,8 +225,7 @@ def adaptive_frustum(
         y_axis=f.y_axis,
         z_axis=f.z_axis,
         vertices=vertices,
-        near=near,
-        far=far,
+        **extra,
     )
     xp = ctx.xp
     verts = a["vertices"]
@@ -218,11 +240,10 @@ def adaptive_frustum(
     x = xp.sum(offsets * a["x_axis"][..., None, :], axis=-1)
     y = xp.sum(offsets * a["y_axis"][..., None, :], axis=-1)
     z = xp.sum(offsets * a["z_axis"][..., None, :], axis=-1)
-    z_min, z_max = xp.min(z, axis=-1), xp.max(z, axis=-1)
     # Thresholds relative to each vertex's distance, never absolute: x, y and z
     # carry rounding errors of a few ulps of |V - P| (the difference and the
     # axes' own rounding), so a vertex is in front only when z clears that
-    # noise, and a silhouette has width only when R_max clears it, in any units.
+    # noise, and a silhouette has width only when its ratios clear it, in any units.
     dist = norm(xp, offsets)
     tiny = eps(ctx)
     checks.require(
@@ -234,40 +255,51 @@ def adaptive_frustum(
     # Divide by a safe z so that invalid entries (z <= 0) never produce inf/NaN
     # gradients that leak into valid ones; they are poisoned below.
     safe_z = xp.where(z > 0, z, xp.ones_like(z))
-    rx_max = xp.max(xp.abs(x) / safe_z, axis=-1)
-    ry_max = xp.max(xp.abs(y) / safe_z, axis=-1)
     noise = 32 * tiny * xp.max(dist / safe_z, axis=-1)
+    return _LightSpace(ctx, checks, a, x, y, z, safe_z, noise)
+
+
+def _assemble(
+    ls: _LightSpace,
+    margins: tuple[float, float],
+    half_x: Array,
+    half_y: Array,
+    x_offset: Array,
+    y_offset: Array,
+) -> Frustum:
+    """The Frustum of given half-extents and centre, with default or checked near/far."""
+    ctx, checks, a = ls.ctx, ls.checks, ls.args
+    xp = ctx.xp
     checks.require(
-        (rx_max > noise) & (ry_max > noise),
+        (half_x > ls.noise) & (half_y > ls.noise),
         "vertices: the blocker's silhouette has zero width or height as seen from the light "
         "(a single point, or a flat blocker seen edge-on, within rounding); no frustum can "
         "be fitted",
     )
-
-    near_v = a["near"] if a["near"] is not None else z_min * (1 - NEAR_FAR_SLACK)
-    far_v = a["far"] if a["far"] is not None else z_max * (1 + NEAR_FAR_SLACK)
+    near = a["near"] if a["near"] is not None else xp.min(ls.z, axis=-1) * (1 - NEAR_FAR_SLACK)
+    far = a["far"] if a["far"] is not None else xp.max(ls.z, axis=-1) * (1 + NEAR_FAR_SLACK)
     for name in ("near", "far"):
         if a[name] is not None:
             checks.require(xp.isfinite(a[name]), f"{name}: must be finite")
-    checks.require(near_v > 0, "near: the near plane must lie in front of the light (near > 0)")
-    checks.require(near_v < far_v, "near/far: the near plane must be closer than the far plane")
+    checks.require(near > 0, "near: the near plane must lie in front of the light (near > 0)")
+    checks.require(near < far, "near/far: the near plane must be closer than the far plane")
 
-    shape = batch_shape(
-        tuple(rx_max.shape), tuple(near_v.shape), tuple(far_v.shape), names=("frame", "near", "far")
-    )
+    shapes = [tuple(v.shape) for v in (half_x, half_y, near, far)]
+    shape = batch_shape(*shapes, names=("frame and vertices", "temperature", "near", "far"))
 
     def field(v: Array) -> Array:
         return checks.poison(xp.broadcast_to(v, shape), 0)
 
+    mx, my = margins
     return Frustum(
-        rx_max=field(rx_max),
-        ry_max=field(ry_max),
-        near=field(near_v),
-        far=field(far_v),
+        rx_max=field(half_x),
+        ry_max=field(half_y),
+        near=field(near),
+        far=field(far),
         margin_x=xp.broadcast_to(ctx.constant(mx), shape),
         margin_y=xp.broadcast_to(ctx.constant(my), shape),
-        x_offset=xp.zeros(shape, dtype=ctx.dtype),
-        y_offset=xp.zeros(shape, dtype=ctx.dtype),
+        x_offset=field(x_offset),
+        y_offset=field(y_offset),
     )
 
 

@@ -28,9 +28,9 @@ from ._backend import (
     prepare,
     require_last,
 )
-from ._frame import LightFrame, _frame_arrays
-from ._frustum import NEAR_FAR_SLACK, Frustum, _margins
-from ._vector import cross, dot, norm, safe_normalize
+from ._frame import LightFrame
+from ._frustum import Frustum, _assemble, _light_space, _margins
+from ._vector import cross, dot, safe_normalize
 
 
 def _smooth_max(
@@ -103,52 +103,19 @@ def _ratio_frustum(
     far: Any,
 ) -> Frustum:
     """The frustum from bounds of the ratios ``x / z`` and ``y / z`` (hard if T is None)."""
-    mx, my = _margins(map_size, border_texels, margin)
-    _, fchecks, f = _frame_arrays(frame)
-    ctx, a = prepare(
-        origin=f.origin,
-        x_axis=f.x_axis,
-        y_axis=f.y_axis,
-        z_axis=f.z_axis,
-        vertices=vertices,
-        temperature=temperature,
-        near=near,
-        far=far,
-    )
-    xp = ctx.xp
-    verts = a["vertices"]
-    require_last("vertices", verts, 3, min_ndim=2, hint="vertices are (*batch, N, 3)")
-    if verts.shape[-2] == 0:
-        raise ValueError("vertices: the vertex set is empty (N = 0); a blocker needs vertices")
-    checks = Checks(ctx)
-    checks.invalid = fchecks.invalid
-    checks.require(all_finite(xp, verts, 2), "vertices: contains non-finite values")
+    margins = _margins(map_size, border_texels, margin)
+    ls = _light_space(frame, vertices, temperature=temperature, near=near, far=far)
+    xp = ls.ctx.xp
+    rx, ry = ls.x / ls.safe_z, ls.y / ls.safe_z
 
-    offsets = verts - a["origin"][..., None, :]
-    x = xp.sum(offsets * a["x_axis"][..., None, :], axis=-1)
-    y = xp.sum(offsets * a["y_axis"][..., None, :], axis=-1)
-    z = xp.sum(offsets * a["z_axis"][..., None, :], axis=-1)
-    z_min, z_max = xp.min(z, axis=-1), xp.max(z, axis=-1)
-    # Relative thresholds, as in adaptive_frustum: z and the ratios carry rounding
-    # errors of a few ulps of |V - P|.
-    dist = norm(xp, offsets)
-    checks.require(
-        xp.all(z > 16 * eps(ctx) * dist, axis=-1),
-        "vertices: a blocker vertex is not strictly in front of the light (z <= 0 in light "
-        "coordinates, or within rounding of 0); one frustum cannot cover it",
-    )
-    # A safe z keeps invalid entries (z <= 0) from leaking inf/NaN into gradients.
-    safe_z = xp.where(z > 0, z, xp.ones_like(z))
-    rx, ry = x / safe_z, y / safe_z
-
-    T = a["temperature"]
+    T = ls.args["temperature"]
     if T is None:
         hi_x, lo_x = xp.max(rx, axis=-1), xp.min(rx, axis=-1)
         hi_y, lo_y = xp.max(ry, axis=-1), xp.min(ry, axis=-1)
         if symmetric:
             hi_x, hi_y = xp.maximum(hi_x, -lo_x), xp.maximum(hi_y, -lo_y)
     else:
-        checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
+        ls.checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
         T = xp.where(T > 0, T, xp.ones_like(T))
         if symmetric:
             # The soft max of (r, -r): a smooth upper bound of max |r| (abs is not smooth at 0).
@@ -158,42 +125,10 @@ def _ratio_frustum(
             hi_x, lo_x = _smooth_max(xp, rx, T), -_smooth_max(xp, -rx, T)
             hi_y, lo_y = _smooth_max(xp, ry, T), -_smooth_max(xp, -ry, T)
     if symmetric:
-        half_x, half_y = hi_x, hi_y
-        cx, cy = xp.zeros_like(hi_x), xp.zeros_like(hi_y)
-    else:
-        half_x, half_y = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
-        cx, cy = 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y)
-    noise = 32 * eps(ctx) * xp.max(dist / safe_z, axis=-1)
-    checks.require(
-        (half_x > noise) & (half_y > noise),
-        "vertices: the blocker's silhouette has zero width or height as seen from the light "
-        "(a single point, or a flat blocker seen edge-on); no frustum can be fitted",
-    )
-
-    near_v = a["near"] if a["near"] is not None else z_min * (1 - NEAR_FAR_SLACK)
-    far_v = a["far"] if a["far"] is not None else z_max * (1 + NEAR_FAR_SLACK)
-    for name in ("near", "far"):
-        if a[name] is not None:
-            checks.require(xp.isfinite(a[name]), f"{name}: must be finite")
-    checks.require(near_v > 0, "near: the near plane must lie in front of the light (near > 0)")
-    checks.require(near_v < far_v, "near/far: the near plane must be closer than the far plane")
-
-    shapes = [tuple(v.shape) for v in (half_x, half_y, near_v, far_v)]
-    shape = batch_shape(*shapes, names=("frame", "temperature", "near", "far"))
-
-    def field(v: Array) -> Array:
-        return checks.poison(xp.broadcast_to(v, shape), 0)
-
-    return Frustum(
-        rx_max=field(half_x),
-        ry_max=field(half_y),
-        near=field(near_v),
-        far=field(far_v),
-        margin_x=xp.broadcast_to(ctx.constant(mx), shape),
-        margin_y=xp.broadcast_to(ctx.constant(my), shape),
-        x_offset=field(cx),
-        y_offset=field(cy),
-    )
+        zero = xp.zeros_like(hi_x)
+        return _assemble(ls, margins, hi_x, hi_y, zero, zero)
+    half_x, half_y = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
+    return _assemble(ls, margins, half_x, half_y, 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y))
 
 
 def smooth_frustum(
