@@ -1,0 +1,82 @@
+"""Make the gallery's pictures with the reference renderer (the demo's scene).
+
+Run from the repository root and commit the PNGs (needs the ``render`` extra and
+an OpenGL context; Mesa's llvmpipe through EGL is enough):
+
+    .venv/bin/python docs/figures/make_gallery.py
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from shadowmath.__main__ import main as demo
+
+IMAGES = Path(__file__).resolve().parent.parent / "images"
+SIZE = ("384", "288")
+
+
+def render(tmp: Path, name: str, *args: str) -> tuple[Image.Image, Image.Image | None]:
+    """Run the demo quietly with ``args``; return its picture and its shadow map, if any."""
+    out, shadow_map = tmp / f"{name}.png", tmp / f"{name}_map.png"
+    with contextlib.redirect_stdout(io.StringIO()):
+        demo(["--size", *SIZE, "--output", str(out), "--shadow-map-output", str(shadow_map), *args])
+    picture = Image.open(out).convert("RGB")
+    return picture, Image.open(shadow_map).convert("RGB") if shadow_map.exists() else None
+
+
+def label(image: Image.Image, text: str) -> Image.Image:
+    image = image.copy()
+    draw = ImageDraw.Draw(image)
+    draw.rectangle((0, 0, 8 * len(text) + 10, 18), fill=(255, 255, 255))
+    draw.text((5, 3), text, fill=(0, 0, 0))
+    return image
+
+
+def grid(rows: list[list[Image.Image]]) -> Image.Image:
+    w = max(im.width for row in rows for im in row)
+    h = max(im.height for row in rows for im in row)
+    sheet = Image.new("RGB", (w * max(len(r) for r in rows), h * len(rows)), (255, 255, 255))
+    for i, row in enumerate(rows):
+        for j, im in enumerate(row):
+            sheet.paste(im, (j * w, i * h))
+    return sheet
+
+
+def save(image: Image.Image, name: str) -> None:
+    path = IMAGES / name
+    image.quantize(256, method=Image.Quantize.FASTOCTREE).save(path, optimize=True)
+    print(path)
+
+
+def main() -> None:
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
+        pictures, maps = [], []
+        for size in (16, 32, 64, 256):
+            picture, shadow_map = render(tmp, f"size{size}", "--map-size", str(size))
+            assert shadow_map is not None
+            # Show every map at the same size, texels as blocks (nearest neighbour).
+            big = shadow_map.resize((int(SIZE[1]), int(SIZE[1])), Image.Resampling.NEAREST)
+            edge = np.asarray(shadow_map.convert("L"))
+            border = np.concatenate([edge[0], edge[-1], edge[:, 0], edge[:, -1]])
+            note = "border empty" if border.min() == border.max() else "BORDER DRAWN"
+            maps.append(label(big, f"{size}x{size} map, {note}"))
+            pictures.append(label(picture, f"map {size}x{size}"))
+        save(grid([pictures[:2], pictures[2:], maps[:2], maps[2:]]), "gallery_sizes.png")
+        texture, _ = render(tmp, "texture")
+        planar, _ = render(tmp, "planar", "--method", "planar")
+        save(
+            grid([[label(texture, "projective texture (Nagy)"), label(planar, "planar (Blinn)")]]),
+            "gallery_methods.png",
+        )
+
+
+if __name__ == "__main__":
+    main()
