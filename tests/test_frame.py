@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import assume, given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
@@ -128,7 +128,10 @@ def test_light_to_world_inverts_world_to_light(scene: Any) -> None:
 def test_frame_from_direction(light: np.ndarray, d: np.ndarray) -> None:
     f = light_frame_from_direction(light, d)
     np.testing.assert_allclose(f.z_axis, d / np.linalg.norm(d), rtol=1e-12, atol=1e-15)
-    # same as the MDV frame of a blocker centred along d
+    # same as the MDV frame of a blocker centred along d (when light + d - light is
+    # exactly d: otherwise a rounded direction may fall on the other side of a
+    # helper-axis tie, where the frame legitimately jumps)
+    assume(np.array_equal((light + d) - light, d))
     g = light_frame(light, (light + d)[None, :])
     for a, b in zip(f, g, strict=True):
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-14)
