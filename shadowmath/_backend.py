@@ -193,6 +193,11 @@ class Checks:
         return xp.where(mask, xp.asarray(float("nan"), dtype=value.dtype), value)
 
 
+def non_finite(name: str) -> str:
+    """The message for an argument holding NaN or infinite entries."""
+    return f"{name}: contains non-finite values (NaN or inf); every entry must be a finite number"
+
+
 def all_finite(xp: ModuleType, x: Array, trailing: int) -> Array:
     """True per batch entry when every one of the ``trailing`` dims' entries is finite."""
     ok = xp.isfinite(x)

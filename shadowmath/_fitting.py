@@ -34,6 +34,7 @@ from ._backend import (
     Checks,
     all_finite,
     batch_shape,
+    non_finite,
     prepare,
     require_last,
     require_matrix,
@@ -173,11 +174,9 @@ def receiver_texel_size(
     require_last("points", p, 3)
     require_last("normals", n, 3)
     checks = Checks(ctx)
-    checks.require(
-        xp.all(xp.isfinite(M), axis=(-2, -1)), "world_to_texture: contains non-finite values"
-    )
-    checks.require(all_finite(xp, p, 1), "points: contains non-finite values")
-    checks.require(all_finite(xp, n, 1), "normals: contains non-finite values")
+    checks.require(xp.all(xp.isfinite(M), axis=(-2, -1)), non_finite("world_to_texture"))
+    checks.require(all_finite(xp, p, 1), non_finite("points"))
+    checks.require(all_finite(xp, n, 1), non_finite("normals"))
     n_sq = dot(xp, n, n)
     checks.require(n_sq > 0, "normals: a normal is zero")
     shape = batch_shape(

@@ -18,6 +18,7 @@ from ._backend import (
     all_finite,
     batch_shape,
     eps,
+    non_finite,
     prepare,
     require_last,
 )
@@ -49,8 +50,8 @@ def _check_points(ctx: Context, checks: Checks, light: Array, vertices: Array) -
     if vertices.shape[-2] == 0:
         raise ValueError("vertices: the vertex set is empty (N = 0); a blocker needs vertices")
     xp = ctx.xp
-    checks.require(all_finite(xp, light, 1), "light_position: contains non-finite values")
-    checks.require(all_finite(xp, vertices, 2), "vertices: contains non-finite values")
+    checks.require(all_finite(xp, light, 1), non_finite("light_position"))
+    checks.require(all_finite(xp, vertices, 2), non_finite("vertices"))
 
 
 def mean_direction_vector(light_position: Any, vertices: Any) -> Array:
@@ -118,7 +119,7 @@ def helper_axis(z_axis: Any) -> Array:
     z = a["z_axis"]
     require_last("z_axis", z, 3)
     checks = Checks(ctx)
-    checks.require(all_finite(ctx.xp, z, 1), "z_axis: contains non-finite values")
+    checks.require(all_finite(ctx.xp, z, 1), non_finite("z_axis"))
     return checks.poison(_helper_axis(ctx, z), 1)
 
 
@@ -245,8 +246,8 @@ def light_frame_from_direction(light_position: Any, direction: Any) -> LightFram
     require_last("light_position", light, 3)
     require_last("direction", d, 3)
     checks = Checks(ctx)
-    checks.require(all_finite(ctx.xp, light, 1), "light_position: contains non-finite values")
-    checks.require(all_finite(ctx.xp, d, 1), "direction: contains non-finite values")
+    checks.require(all_finite(ctx.xp, light, 1), non_finite("light_position"))
+    checks.require(all_finite(ctx.xp, d, 1), non_finite("direction"))
     return _frame_from_z(ctx, checks, light, d)
 
 
@@ -257,7 +258,7 @@ def _frame_arrays(frame: LightFrame) -> tuple[Context, Checks, LightFrame]:
     checks = Checks(ctx)
     for name in ("origin", "x_axis", "y_axis", "z_axis"):
         require_last(f"frame.{name}", a[name], 3)
-        checks.require(all_finite(ctx.xp, a[name], 1), f"frame.{name}: contains non-finite values")
+        checks.require(all_finite(ctx.xp, a[name], 1), non_finite(f"frame.{name}"))
     return ctx, checks, LightFrame(a["origin"], a["x_axis"], a["y_axis"], a["z_axis"])
 
 

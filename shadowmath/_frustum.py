@@ -21,6 +21,7 @@ from ._backend import (
     all_finite,
     batch_shape,
     eps,
+    non_finite,
     prepare,
     require_last,
 )
@@ -234,7 +235,7 @@ def _light_space(frame: LightFrame, vertices: Any, **extra: Any) -> _LightSpace:
         raise ValueError("vertices: the vertex set is empty (N = 0); a blocker needs vertices")
     checks = Checks(ctx)
     checks.invalid = fchecks.invalid
-    checks.require(all_finite(xp, verts, 2), "vertices: contains non-finite values")
+    checks.require(all_finite(xp, verts, 2), non_finite("vertices"))
 
     offsets = verts - a["origin"][..., None, :]
     x = xp.sum(offsets * a["x_axis"][..., None, :], axis=-1)

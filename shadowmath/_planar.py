@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ._backend import Array, Checks, all_finite, batch_shape, eps, prepare, require_last
+from ._backend import Array, Checks, all_finite, batch_shape, eps, non_finite, prepare, require_last
 from ._vector import accurate_dot, norm
 
 
@@ -73,8 +73,8 @@ def planar_projection(plane: Any, light: Any) -> Array:
     shape = batch_shape(pi.shape[:-1], L.shape[:-1], names=("plane", "light"))
 
     checks = Checks(ctx)
-    checks.require(all_finite(xp, pi, 1), "plane: contains non-finite values")
-    checks.require(all_finite(xp, L, 1), "light: contains non-finite values")
+    checks.require(all_finite(xp, pi, 1), non_finite("plane"))
+    checks.require(all_finite(xp, L, 1), non_finite("light"))
     n_len = norm(xp, pi[..., :3])
     checks.require(n_len > 0, "plane: the normal (a, b, c) is zero; a plane needs a nonzero normal")
     checks.require(

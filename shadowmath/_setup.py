@@ -9,6 +9,7 @@ from ._backend import (
     Checks,
     all_finite,
     batch_shape,
+    non_finite,
     prepare,
     require_last,
     require_matrix,
@@ -45,7 +46,7 @@ def _transform_points(xp: Any, checks: Checks, M: Array, p: Array) -> Array:
     The checks run before the arithmetic, so that bad input raises its own
     ``ValueError`` rather than a NumPy warning from ``inf * 0`` or ``1 / 0``.
     """
-    checks.require(all_finite(xp, p, 2), "blocker_vertices: contains non-finite values")
+    checks.require(all_finite(xp, p, 2), non_finite("blocker_vertices"))
     w = xp.sum(p * M[..., None, 3, :3], axis=-1) + M[..., None, 3, 3]
     checks.require(
         xp.all(w > 0, axis=-1),
@@ -126,9 +127,7 @@ def fit_shadow(
         world_verts = verts  # no placement: the vertices exactly as given
     else:
         require_matrix("blocker_to_world", B)
-        checks.require(
-            xp.all(xp.isfinite(B), axis=(-2, -1)), "blocker_to_world: contains non-finite values"
-        )
+        checks.require(xp.all(xp.isfinite(B), axis=(-2, -1)), non_finite("blocker_to_world"))
         world_verts = _transform_points(xp, checks, B, verts)
     if method == "mdv":
         frame = light_frame(light, world_verts, aim=aim)
@@ -200,7 +199,5 @@ def receiver_texture_matrix(setup: ShadowSetup, receiver_to_world: Any) -> Array
     R = a["receiver_to_world"]
     require_matrix("receiver_to_world", R)
     checks = Checks(ctx)
-    checks.require(
-        xp.all(xp.isfinite(R), axis=(-2, -1)), "receiver_to_world: contains non-finite values"
-    )
+    checks.require(xp.all(xp.isfinite(R), axis=(-2, -1)), non_finite("receiver_to_world"))
     return checks.poison(xp.matmul(a["world_to_texture"], R), 2)

@@ -25,6 +25,7 @@ from ._backend import (
     all_finite,
     batch_shape,
     eps,
+    non_finite,
     prepare,
     require_last,
 )
@@ -82,7 +83,7 @@ def smooth_max(values: Any, temperature: Any) -> Array:
     if x.ndim < 1 or x.shape[-1] == 0:
         raise ValueError(f"values: expected shape (*batch, N) with N >= 1, got {tuple(x.shape)}")
     checks = Checks(ctx)
-    checks.require(all_finite(xp, x, 1), "values: contains non-finite values")
+    checks.require(all_finite(xp, x, 1), non_finite("values"))
     checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
     shape = batch_shape(tuple(x.shape[:-1]), tuple(T.shape), names=("values", "temperature"))
     x = xp.broadcast_to(x, (*shape, x.shape[-1]))
@@ -294,8 +295,8 @@ def rolled_light_frame(
     require_last("up", U, 3)
     checks = Checks(ctx)
     for name, v in (("light_position", light), ("direction", d), ("up", U)):
-        checks.require(all_finite(xp, v, 1), f"{name}: contains non-finite values")
-    checks.require(xp.isfinite(theta), "roll: contains non-finite values")
+        checks.require(all_finite(xp, v, 1), non_finite(name))
+    checks.require(xp.isfinite(theta), non_finite("roll"))
     return _rolled_frame(ctx, checks, light, d, theta, U)
 
 

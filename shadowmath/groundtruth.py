@@ -23,7 +23,7 @@ def _points(name: str, value: Any) -> NDArray[np.float64]:
     if arr.ndim < 1 or arr.shape[-1] != 3:
         raise ValueError(f"{name}: expected (..., 3) coordinates, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: contains non-finite values")
+        raise ValueError(f"{name}: contains non-finite values (NaN or inf); pass finite numbers")
     return arr
 
 
