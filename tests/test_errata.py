@@ -188,6 +188,17 @@ def test_margins_are_the_articles_constants_at_100_texels_only():
     assert all(1 - 1 / s >= 0.98 for s in (50, 64, 99))
 
 
+def test_texture_coordinates_span_texel_edges():
+    """The margin's edge lands on the edge between border and inner texels, s = b / size."""
+    for size, border in ((16, 1), (100, 1), (256, 2)):
+        m = sm.border_margin(size, border_texels=border)[0]
+        fr = sm.Frustum(rx_max=0.5, ry_max=0.5, near=1.0, far=3.0, margin_x=m, margin_y=m)
+        z = 2.0
+        for x_over_z, s_expected in ((-0.5, border / size), (0.5, 1 - border / size)):
+            stq = sm.receiver_projection(fr) @ np.array([x_over_z * z, 0.0, z, 1.0])
+            assert stq[0] / stq[3] * size == pytest.approx(s_expected * size)
+
+
 # ------------------------------------------------------------- planar projection
 def bentley_ground_matrix(light_point):
     """Seed 001's C code for the ground-plane (z = 0) shadow matrix, as printed."""

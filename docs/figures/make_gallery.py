@@ -66,8 +66,8 @@ def main() -> None:
             big = shadow_map.resize((int(SIZE[1]), int(SIZE[1])), Image.Resampling.NEAREST)
             edge = np.asarray(shadow_map.convert("L"))
             border = np.concatenate([edge[0], edge[-1], edge[:, 0], edge[:, -1]])
-            note = "border empty" if border.min() == border.max() else "BORDER DRAWN"
-            maps.append(label(big, f"{size}x{size} map, {note}"))
+            assert border.min() == border.max(), f"{size}x{size}: the border was drawn"
+            maps.append(label(big, f"{size}x{size} map, border empty"))
             pictures.append(label(picture, f"map {size}x{size}"))
         save(grid([pictures[:2], pictures[2:], maps[:2], maps[2:]]), "gallery_sizes.png")
         texture, _ = render(tmp, "texture")
