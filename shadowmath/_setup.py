@@ -129,29 +129,14 @@ def fit_shadow(
         require_matrix("blocker_to_world", B)
         checks.require(xp.all(xp.isfinite(B), axis=(-2, -1)), non_finite("blocker_to_world"))
         world_verts = _transform_points(xp, checks, B, verts)
+    options = {"border_texels": border_texels, "margin": margin, "near": near, "far": far}
     if method == "mdv":
         frame = light_frame(light, world_verts, aim=aim)
-        frustum = adaptive_frustum(
-            frame,
-            world_verts,
-            map_size,
-            border_texels=border_texels,
-            margin=margin,
-            near=near,
-            far=far,
-        )
+        frustum = adaptive_frustum(frame, world_verts, map_size, **options)
     elif method == "optimized":
         from ._fitting import optimize_frustum
 
-        fit = optimize_frustum(
-            light,
-            world_verts,
-            map_size,
-            border_texels=border_texels,
-            margin=margin,
-            near=near,
-            far=far,
-        )
+        fit = optimize_frustum(light, world_verts, map_size, **options)
         frame, frustum = fit.frame, fit.frustum
     else:
         raise ValueError(f"method: expected 'mdv' or 'optimized', got {method!r}")
