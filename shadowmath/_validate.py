@@ -1,0 +1,247 @@
+"""The public boundary: convert arguments once, check them once, decide error vs NaN once.
+
+Every public function of shadowmath starts with :func:`convert`, which
+
+* picks the array namespace: ``jax.numpy`` if any argument is a JAX array (the
+  others are converted), NumPy otherwise. JAX is never imported here: if ``jax``
+  is not in ``sys.modules`` no argument can be a JAX array. NumPy (>= 2.1) is an
+  array-API namespace itself, so no compatibility wrapper sits in the hot path;
+* picks one floating result dtype: the promoted float dtype of the float
+  arguments, float64 when all are integers (float16 is promoted to float32,
+  since a shadow matrix in half precision is not usable);
+* refuses masked, object and complex arrays with a ``ValueError``.
+
+It then checks shapes (:func:`require_last`, :func:`require_matrix`,
+:func:`batch_shape`: bad shapes raise in every mode, since shapes are static
+while tracing) and values through one :class:`Checks`, and hands the trusted
+arrays to private cores that check nothing. Composite functions call the cores,
+never other public functions, so nothing is converted or checked twice.
+
+Bad *values* follow SciPy's eager-or-lazy rule, decided here and nowhere else:
+
+* ``"raise"``: NumPy or concrete JAX input: a failed check raises ``ValueError``
+  with the message and the first failing batch index;
+* ``"poison"``: a JAX tracer (inside ``jit``, ``vmap``, ``grad``): raising is
+  impossible, so the affected batch entries of every output become NaN, and so
+  do their derivatives (the outputs are *multiplied* by NaN there, never replaced
+  by a constant, so a gradient through them is NaN too, not a silent zero). Each
+  check is also a ``jax.experimental.checkify.debug_check`` with the same message;
+* ``"record"``: inside the cached jit that serves concrete JAX input: the failed
+  checks are returned as boolean masks and raised after one host sync
+  (:func:`raise_recorded`).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from types import ModuleType
+from typing import Any, Literal, TypeAlias
+
+import numpy as np
+
+#: Any array accepted or returned by shadowmath: ``numpy.ndarray`` or ``jax.Array``
+#: (nested sequences and scalars are accepted as inputs and become NumPy arrays).
+Array: TypeAlias = Any
+
+Mode: TypeAlias = Literal["raise", "poison", "record"]
+
+
+def is_jax(value: object) -> bool:
+    """True for a JAX array (concrete or tracer); never imports JAX."""
+    jax = sys.modules.get("jax")
+    return jax is not None and isinstance(value, jax.Array)
+
+
+def is_tracer(value: object) -> bool:
+    core = sys.modules.get("jax.core")
+    return core is not None and isinstance(value, core.Tracer)
+
+
+class Context:
+    """The namespace, dtype and error mode shared by one call's arguments."""
+
+    __slots__ = ("dtype", "is_jax", "lazy", "xp")
+
+    def __init__(self, xp: ModuleType, dtype: Any, lazy: bool, is_jax: bool) -> None:
+        self.xp = xp
+        self.dtype = dtype
+        self.lazy = lazy
+        self.is_jax = is_jax
+
+    def constant(self, value: float | Sequence[Any]) -> Array:
+        """A constant in this call's namespace and dtype."""
+        return self.xp.asarray(value, dtype=self.dtype)
+
+    @property
+    def eps(self) -> float:
+        """Machine epsilon of the working dtype."""
+        return float(np.finfo(self.dtype).eps)
+
+
+def _as_input(name: str, value: Any) -> Any:
+    """Reject what has no unambiguous meaning as an array of coordinates."""
+    if type(value) is np.ndarray or is_jax(value):
+        arr = value
+    elif isinstance(value, np.ma.MaskedArray):
+        raise ValueError(f"{name}: masked arrays are not supported; pass value.filled(...)")
+    else:
+        try:
+            arr = np.asarray(value)
+        except ValueError as err:  # ragged nested sequences
+            raise ValueError(f"{name}: cannot be read as an array of numbers ({err})") from None
+    kind = arr.dtype.kind
+    if kind not in "biuf":
+        raise ValueError(
+            f"{name}: expected real numbers, got an array of dtype {arr.dtype}; "
+            "convert it to float64 or float32 first"
+        )
+    return arr
+
+
+def _result_dtype(inputs: Sequence[Any], use_jax: bool) -> tuple[ModuleType, Any]:
+    if use_jax:
+        import jax.numpy as jnp
+
+        xp: ModuleType = jnp
+        float_default = jnp.zeros(()).dtype  # float64 only when jax_enable_x64 is on
+    else:
+        xp = np
+        float_default = np.dtype(np.float64)
+    float_dtypes = [v.dtype for v in inputs if v.dtype.kind == "f"]
+    if not float_dtypes:
+        return xp, np.dtype(float_default)
+    dtype = np.result_type(*float_dtypes) if len(float_dtypes) > 1 else np.dtype(float_dtypes[0])
+    if dtype == np.float16:
+        dtype = np.dtype(np.float32)
+    if use_jax and dtype.itemsize > np.dtype(float_default).itemsize:
+        dtype = np.dtype(float_default)
+    return xp, dtype
+
+
+def convert(**arrays: Any) -> tuple[Context, tuple[Array, ...]]:
+    """Convert the named arguments to one namespace and one float dtype.
+
+    Returns the :class:`Context` and the converted arrays in the order given
+    (``None`` values stay ``None``). The names only label error messages.
+    """
+    inputs = [_as_input(name, v) for name, v in arrays.items() if v is not None]
+    use_jax = any(is_jax(v) for v in inputs)
+    lazy = use_jax and any(is_tracer(v) for v in inputs)
+    xp, dtype = _result_dtype(inputs, use_jax)
+    ctx = Context(xp, dtype, lazy, use_jax)
+    it = iter(inputs)
+    out = tuple(
+        None if v is None else xp.asarray(next(it), dtype=dtype) for v in arrays.values()
+    )
+    return ctx, out
+
+
+def shape_error(name: str, expected: str, got: tuple[int, ...], hint: str = "") -> ValueError:
+    message = f"{name}: expected shape {expected}, got {got}"
+    return ValueError(f"{message}; {hint}" if hint else message)
+
+
+def require_last(name: str, x: Array, size: int, *, min_ndim: int = 1, hint: str = "") -> None:
+    """Shape check: ``x`` must be ``(*batch, size)`` (with at least ``min_ndim`` dims)."""
+    if x.ndim < min_ndim or x.shape[-1] != size:
+        expected = "(*batch, " + ("N, " if min_ndim == 2 else "") + f"{size})"
+        raise shape_error(name, expected, tuple(x.shape), hint)
+
+
+def require_vertices(name: str, x: Array) -> None:
+    """Shape check for a vertex set: ``(*batch, N, 3)`` with ``N >= 1``."""
+    require_last(name, x, 3, min_ndim=2, hint="vertices are (*batch, N, 3)")
+    if x.shape[-2] == 0:
+        raise ValueError(f"{name}: the vertex set is empty (N = 0); a blocker needs vertices")
+
+
+def require_matrix(name: str, x: Array) -> None:
+    if x.ndim < 2 or tuple(x.shape[-2:]) != (4, 4):
+        raise shape_error(name, "(*batch, 4, 4)", tuple(x.shape))
+
+
+def batch_shape(*shapes: tuple[int, ...], names: Sequence[str]) -> tuple[int, ...]:
+    """NumPy broadcasting of batch shapes, with an error naming the arguments."""
+    try:
+        return tuple(np.broadcast_shapes(*shapes))
+    except ValueError:
+        detail = ", ".join(f"{n} {s}" for n, s in zip(names, shapes, strict=True))
+        raise ValueError(f"batch dimensions do not broadcast: {detail}") from None
+
+
+def non_finite(name: str) -> str:
+    """The message for an argument holding NaN or infinite entries."""
+    return f"{name}: contains non-finite values (NaN or inf); every entry must be a finite number"
+
+
+def all_finite(xp: ModuleType, x: Array, trailing: int) -> Array:
+    """True per batch entry when every one of the ``trailing`` dims' entries is finite."""
+    ok = xp.isfinite(x)
+    return xp.all(ok, axis=tuple(range(-trailing, 0))) if trailing else ok
+
+
+def _raise_first(ok: Any, message: str) -> None:
+    ok_np = np.asarray(ok)
+    if bool(ok_np.all()):
+        return
+    where = ""
+    if ok_np.ndim:
+        first = np.argwhere(~ok_np)[0]
+        where = f" (first at batch index {tuple(int(i) for i in first)})"
+    raise ValueError(message + where)
+
+
+class Checks:
+    """The value checks of one call, in the call's error mode (see the module docstring).
+
+    ``require(ok, message)`` takes a boolean array over (part of) the batch shape,
+    True where the input is valid. :meth:`poison` marks an output invalid where
+    any check failed (NaN value and NaN derivatives).
+    """
+
+    __slots__ = ("ctx", "invalid", "mode", "recorded")
+
+    def __init__(self, ctx: Context, mode: Mode | None = None) -> None:
+        self.ctx = ctx
+        self.mode: Mode = mode if mode is not None else ("poison" if ctx.lazy else "raise")
+        self.invalid: Array | None = None
+        self.recorded: list[tuple[str, Array]] = []
+
+    def require(self, ok: Array, message: str) -> None:
+        if self.mode == "raise":
+            _raise_first(ok, message)
+            return
+        xp = self.ctx.xp
+        bad = xp.logical_not(ok)
+        if self.mode == "record":
+            self.recorded.append((message, bad))
+            return
+        # Under jax.experimental.checkify the failed check becomes an error with
+        # this message; elsewhere debug_check is a no-op and the NaN stays.
+        from jax.experimental import checkify
+
+        checkify.debug_check(xp.all(ok), message)
+        self.invalid = bad if self.invalid is None else xp.logical_or(self.invalid, bad)
+
+    def poison(self, value: Array, trailing: int) -> Array:
+        """``value`` (``(*batch, *trailing_dims)``) times NaN where a check failed.
+
+        A product, not a ``where``: where the entry is invalid its derivative
+        is NaN as well, so an optimizer cannot stall on a silent zero gradient.
+        """
+        if self.invalid is None:
+            return value
+        xp = self.ctx.xp
+        mask = xp.reshape(self.invalid, (*self.invalid.shape, *(1,) * trailing))
+        nan, one = xp.asarray(float("nan"), dtype=value.dtype), xp.asarray(1, dtype=value.dtype)
+        return value * xp.where(mask, nan, one)
+
+
+def raise_recorded(messages: Sequence[str], bad: Array | None) -> None:
+    """Raise the first recorded failure (``bad``: ``(checks, *batch)``) after one host sync."""
+    if bad is None:
+        return
+    bad_np = np.asarray(bad)
+    for message, b in zip(messages, bad_np, strict=True):
+        _raise_first(~b, message)
