@@ -20,7 +20,7 @@ def _png(path) -> np.ndarray:
 
 
 def test_demo_writes_the_picture_and_the_shadow_map(gl, tmp_path, capsys):
-    out, smap = tmp_path / "a" / "shadow.png", tmp_path / "map.png"
+    out, smap = tmp_path / "shadow.png", tmp_path / "map.png"
     args = ["--size", "96", "64", "--map-size", "40x24", "--output", str(out)]
     assert main([*args, "--shadow-map-output", str(smap)]) == 0
     printed = capsys.readouterr().out

@@ -1,0 +1,182 @@
+"""The demo's command line (``python -m shadowmath``): help, option errors, outputs.
+
+Option errors exit with status 2 through ``argparse`` and speak of the options;
+the checks that need no OpenGL run everywhere, the others use the GL fixture.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from shadowmath.__main__ import BUILT_IN_MESHES, main
+from tests.render.conftest import gl as gl  # the shared GL fixture (skips or fails)
+
+ROOT = Path(__file__).resolve().parents[1]
+SMALL = ["--size", "48", "32"]
+
+
+def _error(capsys: pytest.CaptureFixture[str], args: list[str]) -> str:
+    with pytest.raises(SystemExit) as exc:
+        main(args)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("usage: python -m shadowmath")
+    return err.splitlines()[-1]
+
+
+def test_help_is_plain_text_with_every_default(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    text = capsys.readouterr().out
+    assert "``" not in text
+    assert ":mod:" not in text
+    assert ":func:" not in text
+    options = text.split("options:\n")[1].split("\n\n")[0]
+    entries: dict[str, str] = {}
+    for line in options.splitlines():
+        if line.startswith("  -"):
+            name = line.split()[0].rstrip(",")
+            entries[name] = line
+        else:
+            entries[name] += " " + line.strip()
+    for option, default in [
+        ("--mesh", "(default: torus)"),
+        ("--light", "(default: -2.2 3.6 6.0)"),
+        ("--map-size", "(default: 256)"),
+        ("--size", "(default: 640 400)"),
+        ("--method", "(default: texture)"),
+        ("--output", "(default: out/shadow.png)"),
+        ("--shadow-map-output", "(default: not written)"),
+    ]:
+        assert default in " ".join(entries[option].split()), option
+
+
+def test_unknown_mesh_lists_the_built_in_ones(capsys, tmp_path):
+    err = _error(capsys, ["--mesh", "cone", "--output", str(tmp_path / "x.png")])
+    assert "--mesh 'cone'" in err
+    for name in BUILT_IN_MESHES:
+        assert name in err
+
+
+def test_non_mesh_file_is_refused_with_the_readable_types(capsys, tmp_path):
+    err = _error(capsys, ["--mesh", str(ROOT / "README.md"), "--output", str(tmp_path / "x.png")])
+    assert "README.md" in err
+    assert ".obj" in err
+    assert "Error" not in err  # no library exception name leaks through
+
+
+def test_broken_obj_file_is_an_option_error(capsys, tmp_path):
+    obj = tmp_path / "broken.obj"
+    obj.write_text("v 0 0 zero\nf 1 2 3\n")
+    err = _error(capsys, ["--mesh", str(obj), "--output", str(tmp_path / "x.png")])
+    assert err.startswith(f"python -m shadowmath: error: --mesh {obj}: cannot read it as a mesh")
+
+
+@pytest.mark.parametrize(
+    ("light", "where"),
+    [(["0", "2", "-1"], "behind the wall"), (["1", "-0.5", "4"], "below the floor")],
+)
+def test_light_behind_wall_or_below_floor_is_refused(capsys, tmp_path, light, where):
+    for method in ("texture", "planar"):
+        err = _error(
+            capsys, ["--light", *light, "--method", method, "--output", str(tmp_path / "x.png")]
+        )
+        assert f"--light {' '.join(light)}" in err
+        assert where in err
+
+
+def test_light_inside_the_blocker_speaks_of_options(capsys, tmp_path):
+    err = _error(capsys, ["--light", "0", "1.6", "2.2", "--output", str(tmp_path / "x.png")])
+    assert "--light 0 1.6 2.2" in err
+    assert "--method planar" in err
+    assert "light_frame" not in err  # the library's advice is for library callers
+    assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--method", "planar", "--map-size", "64"], "--map-size: --method planar"),
+        (
+            ["--method", "planar", "--shadow-map-output", "m.png"],
+            "--shadow-map-output: --method planar",
+        ),
+        (["--output", "pic.jpg"], "--output pic.jpg: expected a file name ending in .png"),
+        (["--size", "0", "10"], "argument --size: expected a positive integer"),
+        (["--map-size", "2"], "argument --map-size"),
+    ],
+)
+def test_option_combinations(capsys, args, message):
+    assert message in _error(capsys, args)
+
+
+def test_output_folder_must_exist(capsys, tmp_path):
+    missing = tmp_path / "no" / "such"
+    err = _error(capsys, ["--output", str(missing / "x.png")])
+    assert f"the folder {missing} does not exist" in err
+    err = _error(
+        capsys, ["--output", str(tmp_path / "x.png"), "--shadow-map-output", str(missing / "m.png")]
+    )
+    assert err.split(": error: ")[1].startswith("--shadow-map-output")
+    assert not (tmp_path / "no").exists()
+
+
+def test_errors_from_a_subprocess_have_no_traceback(tmp_path):
+    result = subprocess.run(
+        [sys.executable, "-m", "shadowmath", "--mesh", "README.md"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert "--mesh README.md" in result.stderr
+
+
+@pytest.mark.usefixtures("gl")
+def test_default_output_folder_is_created_and_reported(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(SMALL) == 0
+    written = tmp_path / "out" / "shadow.png"
+    assert written.is_file()
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith(f"wrote {written}: a 48x32 PNG")
+    assert "256x256 shadow map" in first
+
+
+@pytest.mark.usefixtures("gl")
+def test_planar_needs_no_light_frame_and_no_map(capsys, tmp_path):
+    from PIL import Image
+
+    out = tmp_path / "planar.png"
+    # A light at the torus's centre: no shadow map can be fitted, Blinn's shadows need none.
+    assert (
+        main([*SMALL, "--method", "planar", "--light", "0", "1.6", "2.2", "--output", str(out)])
+        == 0
+    )
+    printed = capsys.readouterr().out
+    assert f"wrote {out}" in printed
+    assert "shadow map" not in printed
+    assert "blocker_to_clip" not in printed
+    assert "planar_projection onto the wall" in printed
+    assert np.asarray(Image.open(out)).shape == (32, 48, 3)
+
+
+@pytest.mark.usefixtures("gl")
+def test_map_size_beyond_the_driver_limit(capsys, tmp_path):
+    from shadowmath.render import standalone_context
+
+    limit = int(standalone_context().info["GL_MAX_TEXTURE_SIZE"])
+    err = _error(capsys, ["--map-size", f"{limit + 1}x8", "--output", str(tmp_path / "x.png")])
+    assert f"--map-size {limit + 1}x8" in err
+    assert f"maximum texture size, {limit}x{limit}" in err
+    err = _error(capsys, ["--size", str(limit + 1), "8", "--output", str(tmp_path / "x.png")])
+    assert f"--size {limit + 1} 8" in err
+    assert not (tmp_path / "x.png").exists()
