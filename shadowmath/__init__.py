@@ -41,10 +41,7 @@ CONVENTIONS
 
 from ._checks import check_finite as check_finite
 from ._fitting import FrustumFit as FrustumFit
-from ._fitting import cross_section_area as cross_section_area
 from ._fitting import optimize_frustum as optimize_frustum
-from ._fitting import receiver_texel_size as receiver_texel_size
-from ._fitting import silhouette_coverage as silhouette_coverage
 from ._frame import LightFrame as LightFrame
 from ._frame import helper_axis as helper_axis
 from ._frame import light_frame as light_frame
@@ -59,6 +56,9 @@ from ._frustum import blocker_projection as blocker_projection
 from ._frustum import border_margin as border_margin
 from ._frustum import receiver_projection as receiver_projection
 from ._layout import column_major_bytes as column_major_bytes
+from ._measures import cross_section_area as cross_section_area
+from ._measures import receiver_texel_size as receiver_texel_size
+from ._measures import silhouette_coverage as silhouette_coverage
 from ._planar import planar_projection as planar_projection
 from ._setup import ShadowSetup as ShadowSetup
 from ._setup import fit_shadow as fit_shadow

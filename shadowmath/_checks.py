@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ._backend import _is_jax, _is_tracer
+from ._validate import is_jax, is_tracer
 
 
 def _leaves(value: Any, name: str) -> list[tuple[str, Any]]:
@@ -72,7 +72,7 @@ def check_finite(value: Any, *, name: str = "value") -> Any:
         ValueError: M: NaN or infinite entries (first at index (1, 0, 0)): ...
     """
     for label, leaf in _leaves(value, name):
-        if _is_tracer(leaf):
+        if is_tracer(leaf):
             import jax.numpy as jnp
             from jax.experimental import checkify
 
@@ -81,7 +81,7 @@ def check_finite(value: Any, *, name: str = "value") -> Any:
                 f"{label}: NaN or infinite entries (invalid input; see the function's errors)",
             )
             continue
-        arr = np.asarray(leaf) if _is_jax(leaf) or not isinstance(leaf, np.ndarray) else leaf
+        arr = np.asarray(leaf) if is_jax(leaf) or not isinstance(leaf, np.ndarray) else leaf
         if arr.dtype.kind not in "biuf":
             raise ValueError(f"{label}: expected an array of real numbers, got dtype {arr.dtype}")
         finite = np.isfinite(arr)

@@ -1,4 +1,4 @@
-"""What a shadow-map user wants from a frustum, and a gradient-based fitter for it.
+"""A gradient-based fit of the light frame and an off-centre frustum to a blocker.
 
 The article aims the light frame along the mean direction vector (MDV), picks
 its roll by a helper axis, and centres the frustum. None of the three looks at
@@ -6,43 +6,37 @@ how well the blocker's silhouette fills the map: an elongated blocker seen
 diagonally fills a thin band along the map's diagonal, and a blocker whose
 vertices crowd on one side leaves the other side of the map empty.
 :func:`optimize_frustum` turns the frame (direction and roll) to minimise the
-frustum's cross-section, with an off-centre frustum so the silhouette touches
-all four margins, starting from the MDV frame.
+frustum's cross-section (:func:`cross_section_area`), with an off-centre frustum
+so the silhouette touches all four margins, starting from the MDV frame.
 
-Measures:
+The loss is built from the library's own cores: the rolled frame of
+:func:`rolled_light_frame` (``_formulas.rolled_axes``), the light-space pass of
+the frustum (``_passes.extent``) and the soft bounds of :func:`smooth_frustum`.
+Adam is five lines here (optax would add a dependency for them).
 
-* :func:`silhouette_coverage`: the fraction of the usable map (inside the
-  border) the rendered silhouette covers, from a rendered mask;
-* :func:`cross_section_area`: its differentiable proxy, the area of the
-  frustum's usable cross-section at unit distance (coverage is the
-  silhouette's area in that plane divided by this);
-* :func:`receiver_texel_size`: the world-space size of one shadow-map texel
-  where it lands on a receiver.
+Large blockers: the ratios ``x / z``, ``y / z`` in any frame turned about the
+light are linear-fractional functions of the ratios in the MDV frame, so over
+a vertex set their extremes lie on the 2D convex hull of the vertices' MDV
+ratios. The optimizer sees only those vertices (exact, not an approximation,
+for every frame that keeps the blocker in front); the returned frustum is
+fitted to the full set.
 """
 
 from __future__ import annotations
 
 import functools
 import math
-import operator
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._backend import (
-    Array,
-    Checks,
-    all_finite,
-    batch_shape,
-    non_finite,
-    prepare,
-    require_last,
-    require_matrix,
-)
-from ._frame import LightFrame, light_frame
-from ._frustum import Frustum, _frustum_arrays, _texels, adaptive_frustum
-from ._smooth import _ratio_frustum, _rolled_frame
-from ._vector import cross, dot
+from ._formulas import formulas
+from ._frame import LightFrame, _frame, zero_direction_noise
+from ._frustum import Frustum, blocker_reach, bounded_frustum, check_blocker, margins
+from ._passes import extent, spread
+from ._setup import ShadowSetup, setup_from
+from ._smooth import rolled_frame, soft_bounds
+from ._validate import Array, Checks, Context, all_finite, convert, non_finite, require_last
 
 
 class FrustumFit(NamedTuple):
@@ -66,192 +60,48 @@ class FrustumFit(NamedTuple):
     losses: Array
 
 
-def cross_section_area(frustum: Frustum) -> Array:
-    r"""The usable cross-section of the frustum at unit distance from the light.
-
-    .. math:: A = (2 R_x)(2 R_y)
-
-    in ratio units (``x / z``, ``y / z``): the part of the plane ``z = 1`` that
-    maps inside the margins. A silhouette of area ``S`` in that plane covers
-    ``S / A`` of the usable map, so at a fixed frame a smaller ``A`` means a
-    proportionally larger coverage: the differentiable proxy the fitter minimises.
-
-    Arguments:
-        frustum: a :class:`Frustum` with ``(*batch,)`` fields.
-
-    Returns:
-        ``(*batch,)``.
-
-    Example:
-        >>> float(cross_section_area(Frustum(0.5, 0.25, 1.0, 2.0, 0.98, 0.98)))
-        0.5
-    """
-    ctx, a, shape = _frustum_arrays(frustum)
-    xp = ctx.xp
-    return xp.broadcast_to(4 * a["rx_max"] * a["ry_max"], shape)
-
-
-def silhouette_coverage(mask: Any, *, border_texels: int = 1) -> Array:
-    """The fraction of the usable shadow map that the silhouette covers.
-
-    The mean of ``mask`` over the texels inside the border (the border itself
-    must stay empty; it is not counted). Pass a mask rendered by
-    :func:`shadowmath.render.render_shadow_map` (1 under the silhouette).
-
-    Arguments:
-        mask: ``(*batch, height, width)`` values in ``[0, 1]``.
-        border_texels: the border width on each side.
-
-    Returns:
-        ``(*batch,)`` coverage in ``[0, 1]``.
-
-    Raises:
-        ValueError: fewer than 2 dimensions, or a map no larger than its borders.
-
-    Example:
-        >>> m = np.zeros((6, 6)); m[1:3, 1:5] = 1  # half of the 4x4 interior
-        >>> float(silhouette_coverage(m))
-        0.5
-    """
-    ctx, a = prepare(mask=mask)
-    m = a["mask"]
-    if m.ndim < 2:
-        raise ValueError(f"mask: expected shape (*batch, height, width), got {tuple(m.shape)}")
-    try:
-        b = operator.index(border_texels)
-    except TypeError:
-        raise ValueError(f"border_texels: expected an int, got {border_texels!r}") from None
-    h, w = int(m.shape[-2]), int(m.shape[-1])
-    if b < 0 or min(h, w) <= 2 * b:
-        raise ValueError(f"border_texels: {b} leaves no interior in a {w}x{h} mask")
-    inner = m[..., b : h - b, b : w - b]
-    return ctx.xp.mean(ctx.xp.mean(inner, axis=-1), axis=-1)
-
-
-def receiver_texel_size(
-    world_to_texture: Any, points: Any, normals: Any, map_size: int | tuple[int, int]
-) -> Array:
-    r"""The world-space edge length of one shadow-map texel on a receiver surface.
-
-    With ``(s q, t q, r q, q) = M p``, the texture coordinates ``s``, ``t``
-    have world gradients ``grad s = (m_0 - s m_3) / q`` and
-    ``grad t = (m_1 - t m_3) / q`` (``m_i`` the first three entries of row ``i``).
-    On a surface with unit normal ``n`` the map from the tangent plane to
-    ``(s, t)`` has Jacobian determinant ``(grad s x grad t) . n``, so one texel
-    (``1/W`` by ``1/H`` in ``(s, t)``) covers
-
-    .. math:: a = \frac{1}{W H \, |(\nabla s \times \nabla t) \cdot n|}
-
-    of the surface; the result is ``sqrt(a)``, the side of a square of that
-    area. Smaller is sharper. Infinite where the surface is seen edge-on from
-    the light.
-
-    Arguments:
-        world_to_texture: ``(*batch, 4, 4)`` e.g. :attr:`ShadowSetup.world_to_texture`.
-        points: ``(*batch, 3)`` receiver points in world coordinates (in front
-            of the light, ``q > 0``).
-        normals: ``(*batch, 3)`` the surface normals there (need not be unit).
-        map_size: ``size`` or ``(width, height)`` in texels.
-
-    Returns:
-        ``(*batch,)`` lengths in world units.
-
-    Raises:
-        ValueError: wrong shapes, non-finite values, a zero normal, a point
-            behind the light (NaN under JAX transformations).
-
-    Example:
-        >>> s = fit_shadow([0, 0, 0], [[-1, -1, 4], [1, 1, 4], [1, -1, 4], [-1, 1, 4]], 100)
-        >>> # The wall z = 8 is twice as far as the blocker: 2 R z / (m W) = 2 * 0.25 * 8 / 98
-        >>> float(receiver_texel_size(s.world_to_texture, [0, 0, 8], [0, 0, 1], 100).round(6))
-        0.040816
-    """
-    W, H = _texels("map_size", map_size)
-    ctx, a = prepare(world_to_texture=world_to_texture, points=points, normals=normals)
-    xp = ctx.xp
-    M, p, n = a["world_to_texture"], a["points"], a["normals"]
-    require_matrix("world_to_texture", M)
-    require_last("points", p, 3)
-    require_last("normals", n, 3)
-    checks = Checks(ctx)
-    checks.require(xp.all(xp.isfinite(M), axis=(-2, -1)), non_finite("world_to_texture"))
-    checks.require(all_finite(xp, p, 1), non_finite("points"))
-    checks.require(all_finite(xp, n, 1), non_finite("normals"))
-    n_sq = dot(xp, n, n)
-    checks.require(n_sq > 0, "normals: a normal is zero")
-    shape = batch_shape(
-        tuple(M.shape[:-2]),
-        tuple(p.shape[:-1]),
-        tuple(n.shape[:-1]),
-        names=("world_to_texture", "points", "normals"),
-    )
-    hom = M[..., :3] @ p[..., None] + M[..., 3:]  # (*batch, 4, 1)
-    q = hom[..., 3, 0]
-    checks.require(q > 0, "points: a receiver point is behind the light (q <= 0)")
-    safe_q = xp.where(q > 0, q, xp.ones_like(q))
-    s, t = hom[..., 0, 0] / safe_q, hom[..., 1, 0] / safe_q
-    m3 = M[..., 3, :3]
-    grad_s = (M[..., 0, :3] - s[..., None] * m3) / safe_q[..., None]
-    grad_t = (M[..., 1, :3] - t[..., None] * m3) / safe_q[..., None]
-    safe_n_sq = xp.where(n_sq > 0, n_sq, xp.ones_like(n_sq))
-    det = xp.abs(dot(xp, cross(xp, grad_s, grad_t), n)) / xp.sqrt(safe_n_sq)
-    size = 1 / xp.sqrt(W * H * det)
-    return checks.poison(xp.broadcast_to(size, shape), 0)
-
-
-# ---------------------------------------------------------------------------
-# The optimiser (plain JAX: Adam, a soft-max loss, several starting rolls).
-# ---------------------------------------------------------------------------
-
-
 def _pad_size(n: int) -> int:
     """Vertex counts are padded to powers of two (>= 64) so jit compiles once per bucket."""
     return max(64, 1 << (n - 1).bit_length())
 
 
+def _import_jax() -> Any:
+    try:
+        import jax
+    except ImportError:
+        raise ImportError(
+            "optimize_frustum and fit_shadow(method='optimized') need JAX: "
+            "pip install 'shadowmath[jax]'"
+        ) from None
+    return jax
+
+
 @functools.lru_cache(maxsize=8)
 def _optimizer(steps: int, starts: int, symmetric: bool) -> Any:
     """The jitted, batched optimiser for one configuration (compiled once per vertex bucket)."""
-    import jax
+    jax = _import_jax()
     import jax.numpy as jnp
 
-    def frame(p: Any, x0: Any, y0: Any, z0: Any, sx: Any, sy: Any) -> tuple[Any, Any, Any]:
-        d = z0 + p[0] * sx * x0 + p[1] * sy * y0
-        z = d / jnp.linalg.norm(d)
-        # X = Z x Y0 / |.|: the MDV frame's own X at p = 0 (left-handed: Z x Y = X).
-        xa = jnp.cross(z, y0)
-        xa = xa / jnp.linalg.norm(xa)
-        ya = jnp.cross(xa, z)
-        c, s = jnp.cos(p[2]), jnp.sin(p[2])
-        return c * xa + s * ya, c * ya - s * xa, z
-
-    def bounds(r: Any, w: Any, T: Any) -> tuple[Any, Any]:
-        """Soft (T > 0) upper bound of max r and lower bound of min r, padding dropped."""
-        hi = T * jax.nn.logsumexp(r / T, b=w)
-        lo = -T * jax.nn.logsumexp(-r / T, b=w)
-        return hi, lo
+    F = formulas(jnp)
 
     def loss(p: Any, T: Any, data: tuple[Any, ...], hard: bool) -> Any:
         offsets, w, x0, y0, z0, sx, sy = data
-        X, Y, Z = frame(p, x0, y0, z0, sx, sy)
-        z = offsets @ Z
-        valid = jnp.all(jnp.where(w > 0, z, 1.0) > 0)
-        safe_z = jnp.where(z > 0, z, 1.0)
-        rx, ry = (offsets @ X) / safe_z, (offsets @ Y) / safe_z
-        if hard:
-            big = jnp.where(w > 0, 0.0, jnp.inf)
-            hx, lx = jnp.max(rx - big), jnp.min(rx + big)
-            hy, ly = jnp.max(ry - big), jnp.min(ry + big)
+        d = z0 + p[0] * sx * x0 + p[1] * sy * y0
+        # The frame of rolled_light_frame with up = Y0: the MDV frame itself at p = 0.
+        ax = F.rolled_axes(*d, *y0, jnp.cos(p[2]), jnp.sin(p[2]))
+        X, Y, Z = jnp.stack(ax[0:3]), jnp.stack(ax[3:6]), jnp.stack(ax[6:9])
+        ext = extent(jnp, jnp.zeros_like(d), offsets, X, Y, Z)
+        valid = jnp.all(ext.z > 0)
+        if hard:  # padding repeats a real vertex: the hard bounds are unchanged
+            hx, lx, hy, ly = jnp.max(ext.rx), jnp.min(ext.rx), jnp.max(ext.ry), jnp.min(ext.ry)
             if symmetric:
                 hx, hy = jnp.maximum(hx, -lx), jnp.maximum(hy, -ly)
-        elif symmetric:
-            hx = bounds(jnp.concatenate([rx, -rx]), jnp.concatenate([w, w]), T * sx)[0]
-            hy = bounds(jnp.concatenate([ry, -ry]), jnp.concatenate([w, w]), T * sy)[0]
+                lx, ly = -hx, -hy
         else:
-            hx, lx = bounds(rx, w, T * sx)
-            hy, ly = bounds(ry, w, T * sy)
-        width, height = (2 * hx, 2 * hy) if symmetric else (hx - lx, hy - ly)
-        value = jnp.log(width / (2 * sx)) + jnp.log(height / (2 * sy))
+            hx, lx, hy, ly = soft_bounds(
+                jnp, ext.rx, ext.ry, T * jnp.sqrt(sx * sy), symmetric=symmetric, weights=w
+            )
+        value = jnp.log((hx - lx) / (2 * sx)) + jnp.log((hy - ly) / (2 * sy))
         return jnp.where(valid, value, jnp.inf) if hard else value
 
     grad = jax.grad(loss)
@@ -298,6 +148,105 @@ def _optimizer(steps: int, starts: int, symmetric: bool) -> Any:
         return ps[best], losses[best], history[best]
 
     return jax.jit(jax.vmap(one_blocker, in_axes=(0, None)))
+
+
+def _hull_candidates(rx: np.ndarray, ry: np.ndarray) -> list[np.ndarray]:
+    """Per blocker, the indices of the vertices on the 2D convex hull of their MDV ratios."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    out = []
+    for x, y in zip(rx.reshape(-1, rx.shape[-1]), ry.reshape(-1, ry.shape[-1]), strict=True):
+        if x.shape[0] <= 64:
+            out.append(np.arange(x.shape[0]))
+            continue
+        try:
+            out.append(np.sort(ConvexHull(np.stack([x, y], axis=-1)).vertices))
+        except QhullError:  # degenerate (collinear) projections: keep everything
+            out.append(np.arange(x.shape[0]))
+    return out
+
+
+def _optimize_core(
+    ctx: Context,
+    checks: Checks,
+    light: Array,
+    verts: Array,
+    m: tuple[float, float],
+    near: Array | None,
+    far: Array | None,
+    *,
+    symmetric: bool,
+    steps: int,
+    starts: int,
+    learning_rate: float,
+) -> FrustumFit:
+    """:func:`optimize_frustum` on shape-checked arrays (checks the values)."""
+    jax = _import_jax()
+    import jax.numpy as jnp
+
+    xp = ctx.xp
+    checks.require(all_finite(xp, light, 1), non_finite("light_position"))
+    checks.require(all_finite(xp, verts, 2), non_finite("vertices"))
+    check_blocker(checks, verts, near, far)
+    # The MDV frame and frustum: the starting point and the scale of the parameters.
+    s = spread(xp, light, verts, aim="mean")
+    ref = _frame(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
+    ext = extent(xp, light, verts, ref.x_axis, ref.y_axis, ref.z_axis)
+    ref_frustum = bounded_frustum(ctx, checks, ext, s.reach, m, None, None)
+
+    shape = tuple(ref.origin.shape[:-1])
+    flat = int(np.prod(shape, dtype=np.int64))
+    n = int(verts.shape[-2])
+    offsets = xp.broadcast_to(verts - light[..., None, :], (*shape, n, 3))
+    jdtype = jnp.zeros(()).dtype if ctx.dtype == np.float64 else jnp.float32
+    offsets = jnp.reshape(jnp.asarray(offsets, dtype=jdtype), (flat, n, 3))
+    if ctx.lazy:
+        keep = [np.arange(n)] * flat
+    else:
+        rx = np.broadcast_to(np.asarray(ext.rx), (*shape, n))
+        keep = _hull_candidates(rx, np.broadcast_to(np.asarray(ext.ry), (*shape, n)))
+    size = _pad_size(max(len(k) for k in keep))
+    # Padding repeats the first candidate with weight 0: the hard bounds see a
+    # duplicate, the soft ones drop it.
+    index = np.stack([np.concatenate([k, np.full(size - len(k), k[0])]) for k in keep])
+    weights = np.stack([np.arange(size) < len(k) for k in keep]).astype(jdtype)
+    chosen = jnp.take_along_axis(offsets, jnp.asarray(index)[..., None], axis=1)
+
+    def to_jax(v: Array, tail: tuple[int, ...]) -> Any:
+        v = xp.broadcast_to(v, (*shape, *tail))
+        return jnp.reshape(jnp.asarray(v, dtype=jdtype), (flat, *tail))
+
+    data = (
+        chosen,
+        jnp.asarray(weights),
+        to_jax(ref.x_axis, (3,)),
+        to_jax(ref.y_axis, (3,)),
+        to_jax(ref.z_axis, (3,)),
+        to_jax(ref_frustum.rx_max, ()),
+        to_jax(ref_frustum.ry_max, ()),
+    )
+    params, _, history = _optimizer(steps, starts, symmetric)(
+        data, jnp.asarray(learning_rate, jdtype)
+    )
+    if ctx.is_jax:
+        params, history = jnp.asarray(params, ctx.dtype), jnp.asarray(history, ctx.dtype)
+    else:
+        params = np.asarray(jax.device_get(params), dtype=ctx.dtype)
+        history = np.asarray(jax.device_get(history), dtype=ctx.dtype)
+    params = xp.reshape(params, (*shape, 3))
+    history = xp.reshape(history, (*shape, steps))
+
+    alpha, beta, roll = params[..., 0], params[..., 1], params[..., 2]
+    direction = (
+        ref.z_axis
+        + (alpha * ref_frustum.rx_max)[..., None] * ref.x_axis
+        + (beta * ref_frustum.ry_max)[..., None] * ref.y_axis
+    )
+    frame = rolled_frame(ctx, checks, ref.origin, direction, roll, ref.y_axis)
+    ext = extent(xp, light, verts, frame.x_axis, frame.y_axis, frame.z_axis)
+    reach = blocker_reach(xp, light, verts)
+    frustum = bounded_frustum(ctx, checks, ext, reach, m, near, far, symmetric=symmetric)
+    return FrustumFit(frame=frame, frustum=frustum, direction=direction, roll=roll, losses=history)
 
 
 def optimize_frustum(
@@ -368,71 +317,42 @@ def optimize_frustum(
     """
     if steps < 1 or starts < 1:
         raise ValueError(f"steps and starts must be >= 1, got steps={steps}, starts={starts}")
-    import jax.numpy as jnp
-
-    ctx, a = prepare(light_position=light_position, vertices=vertices)
-    xp = ctx.xp
-    light, verts = a["light_position"], a["vertices"]
-    # The MDV frame and frustum validate the inputs and set the scale.
-    ref = light_frame(light, verts)
-    ref_frustum = adaptive_frustum(ref, verts, map_size, border_texels=border_texels, margin=margin)
-
-    shape = tuple(ref.origin.shape[:-1])
-    n = int(verts.shape[-2])
-    flat = int(np.prod(shape, dtype=np.int64))
-    offsets = xp.broadcast_to(verts - light[..., None, :], (*shape, n, 3))
-    jdtype = jnp.zeros(()).dtype if ctx.dtype == np.float64 else jnp.float32
-
-    def to_jax(v: Array, tail: tuple[int, ...]) -> Any:
-        return jnp.reshape(
-            jnp.asarray(xp.broadcast_to(v, (*shape, *tail)), dtype=jdtype), (flat, *tail)
-        )
-
-    j_off = to_jax(offsets, (n, 3))
-    padded = _pad_size(n)
-    # Padding repeats vertex 0 with weight 0: the hard bounds see a duplicate,
-    # the soft ones drop it.
-    j_off = jnp.concatenate([j_off, jnp.repeat(j_off[:, :1], padded - n, axis=1)], axis=1)
-    weights = jnp.concatenate(
-        [jnp.ones((flat, n), jdtype), jnp.zeros((flat, padded - n), jdtype)], axis=1
+    m = margins(map_size, border_texels, margin)
+    ctx, (light, verts, n, f) = convert(
+        light_position=light_position, vertices=vertices, near=near, far=far
     )
-    data = (
-        j_off,
-        weights,
-        to_jax(ref.x_axis, (3,)),
-        to_jax(ref.y_axis, (3,)),
-        to_jax(ref.z_axis, (3,)),
-        to_jax(ref_frustum.rx_max, ()),
-        to_jax(ref_frustum.ry_max, ()),
-    )
-    params, _, history = _optimizer(int(steps), int(starts), bool(symmetric))(
-        data, jnp.asarray(learning_rate, jdtype)
-    )
-    if ctx.xp is jnp or getattr(ctx.xp, "__name__", "") == "jax.numpy":
-        params = jnp.asarray(params, dtype=ctx.dtype)
-        history = jnp.asarray(history, dtype=ctx.dtype)
-    else:
-        params, history = np.asarray(params, dtype=ctx.dtype), np.asarray(history, dtype=ctx.dtype)
-    params = xp.reshape(params, (*shape, 3))
-    history = xp.reshape(history, (*shape, int(steps)))
-
-    alpha, beta, roll = params[..., 0], params[..., 1], params[..., 2]
-    direction = (
-        ref.z_axis
-        + (alpha * ref_frustum.rx_max)[..., None] * ref.x_axis
-        + (beta * ref_frustum.ry_max)[..., None] * ref.y_axis
-    )
-    checks = Checks(ctx)
-    frame = _rolled_frame(ctx, checks, ref.origin, direction, roll, ref.y_axis)
-    frustum = _ratio_frustum(
-        frame,
+    require_last("light_position", light, 3, hint="a light position is (x, y, z)")
+    require_last("vertices", verts, 3, min_ndim=2, hint="vertices are (*batch, N, 3)")
+    if verts.shape[-2] == 0:
+        raise ValueError("vertices: the vertex set is empty (N = 0); a blocker needs vertices")
+    return _optimize_core(
+        ctx,
+        Checks(ctx),
+        light,
         verts,
-        map_size,
-        temperature=None,
-        symmetric=symmetric,
-        border_texels=border_texels,
-        margin=margin,
-        near=near,
-        far=far,
+        m,
+        n,
+        f,
+        symmetric=bool(symmetric),
+        steps=int(steps),
+        starts=int(starts),
+        learning_rate=float(learning_rate),
     )
-    return FrustumFit(frame=frame, frustum=frustum, direction=direction, roll=roll, losses=history)
+
+
+def optimized_setup(
+    ctx: Context,
+    checks: Checks,
+    light: Array,
+    world: Array,
+    B: Array | None,
+    m: tuple[float, float],
+    near: Array | None,
+    far: Array | None,
+) -> ShadowSetup:
+    """``fit_shadow(method="optimized")`` on shape-checked arrays (world-space vertices)."""
+    fit = _optimize_core(
+        ctx, checks, light, world, m, near, far,
+        symmetric=False, steps=80, starts=6, learning_rate=0.1,
+    )  # fmt: skip
+    return setup_from(ctx, checks, fit.frame, fit.frustum, B)

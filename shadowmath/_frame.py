@@ -9,20 +9,23 @@ flipped (the camera looks down its ``-z``, which is our ``+Z``).
 
 from __future__ import annotations
 
+from types import ModuleType
 from typing import Any, Literal, NamedTuple
 
-from ._backend import (
+from . import _messages as msg
+from ._formulas import formulas
+from ._passes import spread
+from ._validate import (
     Array,
     Checks,
     Context,
     all_finite,
     batch_shape,
-    eps,
+    convert,
     non_finite,
-    prepare,
     require_last,
+    require_vertices,
 )
-from ._vector import cross, safe_normalize
 
 
 class LightFrame(NamedTuple):
@@ -44,12 +47,11 @@ class LightFrame(NamedTuple):
     z_axis: Array
 
 
-def _check_points(ctx: Context, checks: Checks, light: Array, vertices: Array) -> None:
+def _check_points(checks: Checks, light: Array, vertices: Array) -> None:
+    """Shapes and finiteness of a light position and a vertex set (the boundary's job)."""
     require_last("light_position", light, 3, hint="a light position is (x, y, z)")
-    require_last("vertices", vertices, 3, min_ndim=2, hint="vertices are (*batch, N, 3)")
-    if vertices.shape[-2] == 0:
-        raise ValueError("vertices: the vertex set is empty (N = 0); a blocker needs vertices")
-    xp = ctx.xp
+    require_vertices("vertices", vertices)
+    xp = checks.ctx.xp
     checks.require(all_finite(xp, light, 1), non_finite("light_position"))
     checks.require(all_finite(xp, vertices, 2), non_finite("vertices"))
 
@@ -78,13 +80,11 @@ def mean_direction_vector(light_position: Any, vertices: Any) -> Array:
         >>> mean_direction_vector([0, 0, 0], [[1, 2, 3], [3, 2, 1]])
         array([2., 2., 2.])
     """
-    ctx, a = prepare(light_position=light_position, vertices=vertices)
-    xp = ctx.xp
-    light, verts = a["light_position"], a["vertices"]
+    ctx, (light, verts) = convert(light_position=light_position, vertices=vertices)
     checks = Checks(ctx)
-    _check_points(ctx, checks, light, verts)
+    _check_points(checks, light, verts)
     batch_shape(light.shape[:-1], verts.shape[:-2], names=("light_position", "vertices"))
-    mdv = xp.mean(verts - light[..., None, :], axis=-2)
+    mdv = ctx.xp.mean(verts - light[..., None, :], axis=-2)
     return checks.poison(mdv, 1)
 
 
@@ -115,48 +115,47 @@ def helper_axis(z_axis: Any) -> Array:
         >>> helper_axis([-0.889, 0.254, 0.381])  # and its second
         array([0., 1., 0.])
     """
-    ctx, a = prepare(z_axis=z_axis)
-    z = a["z_axis"]
+    ctx, (z,) = convert(z_axis=z_axis)
     require_last("z_axis", z, 3)
     checks = Checks(ctx)
     checks.require(all_finite(ctx.xp, z, 1), non_finite("z_axis"))
-    return checks.poison(_helper_axis(ctx, z), 1)
+    v = formulas(ctx.xp).helper_axis3(z[..., 0], z[..., 1], z[..., 2])
+    return checks.poison(ctx.xp.stack(v, axis=-1), 1)
 
 
-def _helper_axis(ctx: Context, z: Array) -> Array:
-    xp = ctx.xp
-    ax, ay, az = xp.abs(z[..., 0]), xp.abs(z[..., 1]), xp.abs(z[..., 2])
-    # Comparisons instead of argmin: ties resolve to the lowest index by the
-    # order of the tests, and the result stays a traceable array.
-    pick_x = (ax <= ay) & (ax <= az)
-    pick_y = xp.logical_not(pick_x) & (ay <= az)
-    pick_z = xp.logical_not(pick_x | pick_y)
-    return xp.astype(xp.stack([pick_x, pick_y, pick_z], axis=-1), ctx.dtype)
-
-
-def _frame_from_z(
+def _frame(
     ctx: Context, checks: Checks, light: Array, direction: Array, noise: Array | float = 0.0
 ) -> LightFrame:
-    """The frame with ``Z`` along ``direction``; ``noise`` bounds its rounding error."""
+    """The frame with ``Z`` along ``direction`` (trusted); ``noise`` bounds its rounding error."""
     xp = ctx.xp
-    z, length = safe_normalize(xp, direction)
-    checks.require(
-        length > noise,
-        "the light's viewing direction is zero: the light sits at the blocker's centre "
-        "(zero mean direction vector, or one within rounding of zero); move the light or "
-        "pass an explicit direction to light_frame_from_direction",
+    axes = formulas(xp).frame_axes(direction[..., 0], direction[..., 1], direction[..., 2])
+    checks.require(axes[9] > noise, msg.ZERO_DIRECTION)
+    shape = batch_shape(
+        light.shape[:-1], direction.shape[:-1], names=("light_position", "direction")
     )
-    v = _helper_axis(ctx, z)
-    x, _ = safe_normalize(xp, cross(xp, z, v))
-    y = cross(xp, x, z)
-    shape = batch_shape(light.shape[:-1], z.shape[:-1], names=("light_position", "direction"))
-    frame = LightFrame(
-        origin=xp.broadcast_to(light, (*shape, 3)),
-        x_axis=xp.broadcast_to(x, (*shape, 3)),
-        y_axis=xp.broadcast_to(y, (*shape, 3)),
-        z_axis=xp.broadcast_to(z, (*shape, 3)),
+    return LightFrame(
+        origin=checks.poison(xp.broadcast_to(light, (*shape, 3)), 1),
+        x_axis=checks.poison(xp.broadcast_to(xp.stack(axes[0:3], axis=-1), (*shape, 3)), 1),
+        y_axis=checks.poison(xp.broadcast_to(xp.stack(axes[3:6], axis=-1), (*shape, 3)), 1),
+        z_axis=checks.poison(xp.broadcast_to(xp.stack(axes[6:9], axis=-1), (*shape, 3)), 1),
     )
-    return LightFrame(*(checks.poison(f, 1) for f in frame))
+
+
+def check_aim(aim: str) -> None:
+    if aim not in ("mean", "bbox"):
+        raise ValueError(f"aim: expected 'mean' or 'bbox', got {aim!r}")
+
+
+def zero_direction_noise(ctx: Context, coords: Array) -> Array:
+    """How short a computed viewing direction may be and still be rounding noise.
+
+    A light at the blocker's centre computed in floating point (e.g. the mean
+    of the vertices) leaves an MDV of rounding noise, a few ulps of the
+    coordinates, pointing anywhere. Relative to the coordinates' size (the
+    precision the scene is stored with), anything that short is treated as
+    zero; any unit of length works.
+    """
+    return 32 * ctx.eps * coords
 
 
 def light_frame(
@@ -196,27 +195,12 @@ def light_frame(
         >>> f.z_axis.round(3)
         array([0.124, 0.   , 0.992])
     """
-    if aim not in ("mean", "bbox"):
-        raise ValueError(f"aim: expected 'mean' or 'bbox', got {aim!r}")
-    ctx, a = prepare(light_position=light_position, vertices=vertices)
-    xp = ctx.xp
-    light, verts = a["light_position"], a["vertices"]
+    check_aim(aim)
+    ctx, (light, verts) = convert(light_position=light_position, vertices=vertices)
     checks = Checks(ctx)
-    _check_points(ctx, checks, light, verts)
-    offsets = verts - light[..., None, :]
-    if aim == "mean":
-        direction = xp.mean(offsets, axis=-2)
-    else:
-        direction = 0.5 * (xp.max(offsets, axis=-2) + xp.min(offsets, axis=-2))
-    # A light at the blocker's centre computed in floating point (e.g. the mean
-    # of the vertices) leaves an MDV of rounding noise, a few ulps of the
-    # coordinates, pointing anywhere. Relative to the coordinates' size (the
-    # precision the scene is stored with), anything that short is treated as
-    # zero; any unit of length works.
-    size = xp.maximum(
-        xp.max(xp.max(xp.abs(verts), axis=-1), axis=-1), xp.max(xp.abs(light), axis=-1)
-    )
-    return _frame_from_z(ctx, checks, light, direction, 32 * eps(ctx) * size)
+    _check_points(checks, light, verts)
+    s = spread(ctx.xp, light, verts, aim=aim)
+    return _frame(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
 
 
 def light_frame_from_direction(light_position: Any, direction: Any) -> LightFrame:
@@ -241,44 +225,56 @@ def light_frame_from_direction(light_position: Any, direction: Any) -> LightFram
         >>> light_frame_from_direction([0, 5, 0], [0, -2, 0]).x_axis + 0.0  # + 0.0: no -0.
         array([0., 0., 1.])
     """
-    ctx, a = prepare(light_position=light_position, direction=direction)
-    light, d = a["light_position"], a["direction"]
+    ctx, (light, d) = convert(light_position=light_position, direction=direction)
     require_last("light_position", light, 3)
     require_last("direction", d, 3)
     checks = Checks(ctx)
     checks.require(all_finite(ctx.xp, light, 1), non_finite("light_position"))
     checks.require(all_finite(ctx.xp, d, 1), non_finite("direction"))
-    return _frame_from_z(ctx, checks, light, d)
+    return _frame(ctx, checks, light, d)
 
 
-def _frame_arrays(frame: LightFrame) -> tuple[Context, Checks, LightFrame]:
+def frame_arrays(
+    frame: LightFrame, **extra: Any
+) -> tuple[Context, Checks, LightFrame, tuple[Array, ...]]:
+    """A user-given frame, and any ``extra`` arrays, converted together and checked.
+
+    The boundary of every frame-taking function: one conversion for the frame's
+    fields and the other arguments (one namespace, one dtype), and the frame's
+    shape and finiteness checks. The extras are converted, not checked.
+    """
     if not isinstance(frame, tuple) or len(frame) != 4:
         raise ValueError("frame: expected a LightFrame (origin, x_axis, y_axis, z_axis)")
-    ctx, a = prepare(origin=frame[0], x_axis=frame[1], y_axis=frame[2], z_axis=frame[3])
+    ctx, arrays = convert(
+        origin=frame[0], x_axis=frame[1], y_axis=frame[2], z_axis=frame[3], **extra
+    )
+    fields = arrays[:4]
     checks = Checks(ctx)
-    for name in ("origin", "x_axis", "y_axis", "z_axis"):
-        require_last(f"frame.{name}", a[name], 3)
-        checks.require(all_finite(ctx.xp, a[name], 1), non_finite(f"frame.{name}"))
-    return ctx, checks, LightFrame(a["origin"], a["x_axis"], a["y_axis"], a["z_axis"])
+    for name, value in zip(LightFrame._fields, fields, strict=True):
+        require_last(f"frame.{name}", value, 3)
+        checks.require(all_finite(ctx.xp, value, 1), non_finite(f"frame.{name}"))
+    batch_shape(*(f.shape[:-1] for f in fields), names=LightFrame._fields)
+    return ctx, checks, LightFrame(*fields), arrays[4:]
 
 
-def _rotation(ctx: Context, frame: LightFrame) -> Array:
-    """``(*batch, 3, 3)`` with rows ``X, Y, Z``: world directions to light directions."""
-    xp = ctx.xp
-    shape = batch_shape(*(f.shape[:-1] for f in frame[1:]), names=("x_axis", "y_axis", "z_axis"))
-    axes = [xp.broadcast_to(f, (*shape, 3)) for f in frame[1:]]
-    return xp.stack(axes, axis=-2)
+def light_entries(xp: ModuleType, frame: LightFrame) -> tuple[Array, ...]:
+    """The 12 entries of ``world_to_light``'s first three rows, from a trusted frame."""
+    o, x, y, z = frame
+    return formulas(xp).light_rows(
+        o[..., 0], o[..., 1], o[..., 2], x[..., 0], x[..., 1], x[..., 2],
+        y[..., 0], y[..., 1], y[..., 2], z[..., 0], z[..., 1], z[..., 2],
+    )  # fmt: skip
 
 
-def _affine(ctx: Context, R: Array, t: Array) -> Array:
-    """Stack ``[[R, t], [0, 0, 0, 1]]`` without writing into an array."""
-    xp = ctx.xp
-    shape = batch_shape(R.shape[:-2], t.shape[:-1], names=("rotation", "translation"))
-    R = xp.broadcast_to(R, (*shape, 3, 3))
-    t = xp.broadcast_to(t, (*shape, 3))
-    top = xp.concat([R, t[..., None]], axis=-1)
-    bottom = xp.broadcast_to(ctx.constant([0.0, 0.0, 0.0, 1.0]), (*shape, 1, 4))
-    return xp.concat([top, bottom], axis=-2)
+def stack_matrix(xp: ModuleType, entries: tuple[Array, ...]) -> Array:
+    """``(*batch, 4, 4)`` from 16 row-major entries (or 12: the last row is ``(0, 0, 0, 1)``)."""
+    if len(entries) == 12:
+        zero = xp.zeros_like(entries[0])
+        entries = (*entries, zero, zero, zero, zero + 1)
+    shape = batch_shape(*(tuple(xp.asarray(e).shape) for e in entries), names=["entry"] * 16)
+    dtype = xp.result_type(*entries)
+    flat = xp.stack([xp.broadcast_to(xp.asarray(e, dtype=dtype), shape) for e in entries], axis=-1)
+    return xp.reshape(flat, (*shape, 4, 4))
 
 
 def world_to_light(frame: LightFrame) -> Array:
@@ -309,10 +305,8 @@ def world_to_light(frame: LightFrame) -> Array:
         >>> world_to_light(f) @ np.array([0, 5, 0, 1.0])  # the light -> origin
         array([0., 0., 0., 1.])
     """
-    ctx, checks, f = _frame_arrays(frame)
-    R = _rotation(ctx, f)
-    t = -ctx.xp.sum(R * f.origin[..., None, :], axis=-1)
-    return checks.poison(_affine(ctx, R, t), 2)
+    ctx, checks, f, _ = frame_arrays(frame)
+    return checks.poison(stack_matrix(ctx.xp, light_entries(ctx.xp, f)), 2)
 
 
 def light_to_world(frame: LightFrame) -> Array:
@@ -329,6 +323,10 @@ def light_to_world(frame: LightFrame) -> Array:
         >>> light_to_world(f)[:3, 3]
         array([1., 2., 3.])
     """
-    ctx, checks, f = _frame_arrays(frame)
-    R = _rotation(ctx, f)
-    return checks.poison(_affine(ctx, ctx.xp.matrix_transpose(R), f.origin), 2)
+    ctx, checks, (o, x, y, z), _ = frame_arrays(frame)
+    entries = (
+        x[..., 0], y[..., 0], z[..., 0], o[..., 0],
+        x[..., 1], y[..., 1], z[..., 1], o[..., 1],
+        x[..., 2], y[..., 2], z[..., 2], o[..., 2],
+    )  # fmt: skip
+    return checks.poison(stack_matrix(ctx.xp, entries), 2)

@@ -10,23 +10,25 @@ border of untouched texels.
 from __future__ import annotations
 
 import operator
+from types import ModuleType
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._backend import (
+from . import _messages as msg
+from ._formulas import formulas
+from ._frame import LightFrame, frame_arrays, stack_matrix
+from ._passes import Extent, extent
+from ._validate import (
     Array,
     Checks,
     Context,
     all_finite,
     batch_shape,
-    eps,
+    convert,
     non_finite,
-    prepare,
-    require_last,
+    require_vertices,
 )
-from ._frame import LightFrame, _frame_arrays
-from ._vector import norm
 
 #: Relative slack of the default near and far planes around the blocker:
 #: ``near = z_min * (1 - NEAR_FAR_SLACK)``, ``far = z_max * (1 + NEAR_FAR_SLACK)``.
@@ -128,7 +130,7 @@ def border_margin(
     return (w - 2 * b) / w, (h - 2 * b) / h
 
 
-def _margins(map_size: Any, border_texels: int, margin: Any) -> tuple[float, float]:
+def margins(map_size: Any, border_texels: int, margin: Any) -> tuple[float, float]:
     derived = border_margin(map_size, border_texels=border_texels)
     if margin is None:
         return derived
@@ -195,96 +197,99 @@ def adaptive_frustum(
         >>> float(fr.rx_max), float(fr.margin_x)
         (0.25, 0.98)
     """
-    margins = _margins(map_size, border_texels, margin)
-    ls = _light_space(frame, vertices, near=near, far=far)
-    xp = ls.ctx.xp
-    rx_max = xp.max(xp.abs(ls.x) / ls.safe_z, axis=-1)
-    ry_max = xp.max(xp.abs(ls.y) / ls.safe_z, axis=-1)
-    zero = xp.zeros_like(rx_max)
-    return _assemble(ls, margins, rx_max, ry_max, zero, zero)
+    m = margins(map_size, border_texels, margin)
+    ctx, checks, f, (verts, n, fa) = frame_arrays(frame, vertices=vertices, near=near, far=far)
+    check_blocker(checks, verts, n, fa)
+    ext = extent(ctx.xp, f.origin, verts, f.x_axis, f.y_axis, f.z_axis)
+    return bounded_frustum(ctx, checks, ext, blocker_reach(ctx.xp, f.origin, verts), m, n, fa)
 
 
-class _LightSpace(NamedTuple):
-    """A validated blocker in light coordinates, shared by every frustum builder."""
-
-    ctx: Context
-    checks: Checks
-    args: dict[str, Array]  # the converted arguments (near, far and any extras)
-    x: Array  # (*batch, N) light-space coordinates of the vertices
-    y: Array
-    z: Array
-    safe_z: Array  # z, with 1 where z <= 0 (those entries are invalid anyway)
-    noise: Array  # (*batch,) the rounding noise of the ratios x / z and y / z
-
-
-def _light_space(frame: LightFrame, vertices: Any, **extra: Any) -> _LightSpace:
-    """The blocker's vertices in light coordinates, with the in-front check done."""
-    _, fchecks, f = _frame_arrays(frame)
-    ctx, a = prepare(
-        origin=f.origin,
-        x_axis=f.x_axis,
-        y_axis=f.y_axis,
-        z_axis=f.z_axis,
-        vertices=vertices,
-        **extra,
-    )
-    xp = ctx.xp
-    verts = a["vertices"]
-    require_last("vertices", verts, 3, min_ndim=2, hint="vertices are (*batch, N, 3)")
-    if verts.shape[-2] == 0:
-        raise ValueError("vertices: the vertex set is empty (N = 0); a blocker needs vertices")
-    checks = Checks(ctx)
-    checks.invalid = fchecks.invalid
+def check_blocker(checks: Checks, verts: Array, near: Array | None, far: Array | None) -> None:
+    """The boundary checks of a frustum's vertex set and its optional near and far planes."""
+    require_vertices("vertices", verts)
+    xp = checks.ctx.xp
     checks.require(all_finite(xp, verts, 2), non_finite("vertices"))
-
-    offsets = verts - a["origin"][..., None, :]
-    x = xp.sum(offsets * a["x_axis"][..., None, :], axis=-1)
-    y = xp.sum(offsets * a["y_axis"][..., None, :], axis=-1)
-    z = xp.sum(offsets * a["z_axis"][..., None, :], axis=-1)
-    # Thresholds relative to each vertex's distance, never absolute: x, y and z
-    # carry rounding errors of a few ulps of |V - P| (the difference and the
-    # axes' own rounding), so a vertex is in front only when z clears that
-    # noise, and a silhouette has width only when its ratios clear it, in any units.
-    dist = norm(xp, offsets)
-    tiny = eps(ctx)
-    checks.require(
-        xp.all(z > 16 * tiny * dist, axis=-1),
-        "vertices: a blocker vertex is not strictly in front of the light (z <= 0 in light "
-        "coordinates, or within rounding of 0); one frustum cannot cover it: move the light "
-        "out of the blocker, or split the blocker (or use an omnidirectional shadow map)",
-    )
-    # Divide by a safe z so that invalid entries (z <= 0) never produce inf/NaN
-    # gradients that leak into valid ones; they are poisoned below.
-    safe_z = xp.where(z > 0, z, xp.ones_like(z))
-    noise = 32 * tiny * xp.max(dist / safe_z, axis=-1)
-    return _LightSpace(ctx, checks, a, x, y, z, safe_z, noise)
+    if near is not None:
+        checks.require(xp.isfinite(near), msg.NEAR_NOT_FINITE)
+    if far is not None:
+        checks.require(xp.isfinite(far), msg.FAR_NOT_FINITE)
 
 
-def _assemble(
-    ls: _LightSpace,
+def blocker_reach(xp: ModuleType, light: Array, verts: Array) -> Array:
+    """``(*batch,)`` the largest coordinate of any ``V - L``: the scale of the rounding noise."""
+    return xp.max(xp.abs(verts - light[..., None, :]), axis=(-2, -1))
+
+
+def bounded_frustum(
+    ctx: Context,
+    checks: Checks,
+    ext: Extent,
+    reach: Array,
     margins: tuple[float, float],
-    half_x: Array,
-    half_y: Array,
-    x_offset: Array,
-    y_offset: Array,
+    near: Array | None,
+    far: Array | None,
+    *,
+    symmetric: bool = True,
+    bounds: tuple[Array, Array, Array, Array] | None = None,
 ) -> Frustum:
-    """The Frustum of given half-extents and centre, with default or checked near/far."""
-    ctx, checks, a = ls.ctx, ls.checks, ls.args
-    xp = ctx.xp
-    checks.require(
-        (half_x > ls.noise) & (half_y > ls.noise),
-        "vertices: the blocker's silhouette has zero width or height as seen from the light "
-        "(a single point, or a flat blocker seen edge-on, within rounding); no frustum can "
-        "be fitted",
-    )
-    near = a["near"] if a["near"] is not None else xp.min(ls.z, axis=-1) * (1 - NEAR_FAR_SLACK)
-    far = a["far"] if a["far"] is not None else xp.max(ls.z, axis=-1) * (1 + NEAR_FAR_SLACK)
-    for name in ("near", "far"):
-        if a[name] is not None:
-            checks.require(xp.isfinite(a[name]), f"{name}: must be finite")
-    checks.require(near > 0, "near: the near plane must lie in front of the light (near > 0)")
-    checks.require(near < far, "near/far: the near plane must be closer than the far plane")
+    """The frustum around the hard bounds of the ratios (or the given ``bounds``).
 
+    ``bounds = (hi_x, lo_x, hi_y, lo_y)`` replaces the hard maxima and minima
+    of the ratios (soft bounds, for :func:`smooth_frustum`).
+    """
+    xp = ctx.xp
+    if bounds is None:
+        bounds = (
+            xp.max(ext.rx, axis=-1),
+            xp.min(ext.rx, axis=-1),
+            xp.max(ext.ry, axis=-1),
+            xp.min(ext.ry, axis=-1),
+        )
+    hi_x, lo_x, hi_y, lo_y = bounds
+    if symmetric:
+        half_x, half_y = xp.maximum(hi_x, -lo_x), xp.maximum(hi_y, -lo_y)
+        cx = cy = xp.zeros_like(half_x)
+    else:
+        half_x, half_y = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
+        cx, cy = 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y)
+    return assemble(ctx, checks, ext.z, reach, margins, (half_x, half_y, cx, cy), near, far)
+
+
+def assemble(
+    ctx: Context,
+    checks: Checks,
+    z: Array,
+    reach: Array,
+    margins: tuple[float, float],
+    extents: tuple[Array, Array, Array, Array],
+    near: Array | None,
+    far: Array | None,
+) -> Frustum:
+    """The Frustum of given half-extents and centre, with default or checked near/far.
+
+    Thresholds relative to the blocker's reach from the light, never absolute:
+    light coordinates carry rounding errors of a few ulps of ``|V - L|`` (the
+    difference and the axes' own rounding), so a vertex is in front only when
+    its ``z`` clears that noise, and a silhouette has width only when its
+    ratios clear it, in any units.
+    """
+    xp = ctx.xp
+    half_x, half_y, cx, cy = extents
+    z_min, z_max = xp.min(z, axis=-1), xp.max(z, axis=-1)
+    noise = 32 * ctx.eps * reach
+    checks.require(z_min > noise, msg.BEHIND_LIGHT)
+    ratio_noise = 2 * noise / xp.where(z_min > 0, z_min, xp.ones_like(z_min))
+    checks.require((half_x > ratio_noise) & (half_y > ratio_noise), msg.ZERO_SILHOUETTE)
+    given_near, given_far = near, far
+    near = z_min * (1 - NEAR_FAR_SLACK) if given_near is None else given_near
+    far = z_max * (1 + NEAR_FAR_SLACK) if given_far is None else given_far
+    if given_near is not None:
+        checks.require(near > 0, msg.NEAR_POSITIVE)
+    checks.require(near < far, msg.NEAR_FAR)
+    if given_near is not None:
+        checks.require(near <= z_min, msg.NEAR_CLIPS)
+    if given_far is not None:
+        checks.require(far >= z_max, msg.FAR_CLIPS)
     shapes = [tuple(v.shape) for v in (half_x, half_y, near, far)]
     shape = batch_shape(*shapes, names=("frame and vertices", "temperature", "near", "far"))
 
@@ -299,65 +304,63 @@ def _assemble(
         far=field(far),
         margin_x=xp.broadcast_to(ctx.constant(mx), shape),
         margin_y=xp.broadcast_to(ctx.constant(my), shape),
-        x_offset=field(x_offset),
-        y_offset=field(y_offset),
+        x_offset=field(cx),
+        y_offset=field(cy),
     )
 
 
-def _frustum_arrays(frustum: Frustum) -> tuple[Context, dict[str, Array], tuple[int, ...]]:
-    if not isinstance(frustum, tuple) or len(frustum) not in (6, 8):
-        raise ValueError("frustum: expected a Frustum (rx_max, ry_max, near, far, margin_x, ...)")
-    names = ("rx_max", "ry_max", "near", "far", "margin_x", "margin_y", "x_offset", "y_offset")
-    values = dict(zip(names, (*frustum, 0.0, 0.0)[:8], strict=True))
-    # A default (Python number) offset must not promote a float32 frustum to float64.
-    defaults = {n: values.pop(n) for n in names[6:] if isinstance(values[n], int | float)}
-    ctx, a = prepare(**values)
-    a.update({n: ctx.constant(float(v)) for n, v in defaults.items()})
-    shape = batch_shape(*(tuple(a[n].shape) for n in names), names=names)
-    return ctx, a, shape
-
-
-def _entries(ctx: Context, rows: list[list[Array | float]], shape: tuple[int, ...]) -> Array:
-    """Stack a 4x4 of scalars and ``(*batch,)`` arrays into ``(*batch, 4, 4)``."""
-    xp = ctx.xp
-    flat = [xp.broadcast_to(ctx.asarray(e), shape) for row in rows for e in row]
-    return xp.reshape(xp.stack(flat, axis=-1), (*shape, 4, 4))
-
-
-def _projection_rows(ctx: Context, a: dict[str, Array]) -> list[list[Array | float]]:
-    n, f = a["near"], a["far"]
-    sx, sy = a["margin_x"] / a["rx_max"], a["margin_y"] / a["ry_max"]
-    return [
-        [sx, 0.0, -sx * a["x_offset"], 0.0],
-        [0.0, sy, -sy * a["y_offset"], 0.0],
-        # -2 n (f / (f - n)) rather than -2 f n / (f - n): no overflow of f n.
-        [0.0, 0.0, (f + n) / (f - n), -2 * n * (f / (f - n))],
-        [0.0, 0.0, 1.0, 0.0],
-    ]
-
-
-def _validated(ctx: Context, a: dict[str, Array], shape: tuple[int, ...]) -> Checks:
-    """The frustum's value checks, run before any entry is computed.
+def frustum_arrays(frustum: Frustum) -> tuple[Context, Checks, Frustum]:
+    """A user-given frustum converted and checked (the boundary of the frustum-taking functions).
 
     Eagerly a bad field raises here, before a division by ``rx_max = 0`` or
     ``far - near = 0`` could emit a NumPy warning; lazily the returned checks
-    poison the matrix.
+    poison the results.
     """
+    if not isinstance(frustum, tuple) or len(frustum) not in (6, 8):
+        raise ValueError("frustum: expected a Frustum (rx_max, ry_max, near, far, margin_x, ...)")
+    values = (*frustum, 0.0, 0.0)[:8]
+    # A default (Python number) offset must not promote a float32 frustum to float64.
+    given = dict(zip(Frustum._fields, values, strict=True))
+    defaults = {n: given.pop(n) for n in Frustum._fields[6:] if isinstance(given[n], int | float)}
+    ctx, arrays = convert(**given)
     xp = ctx.xp
+    converted = dict(zip(given, arrays, strict=True))
+    converted.update({n: ctx.constant(float(v)) for n, v in defaults.items()})
+    fields = [converted[n] for n in Frustum._fields]
+    shape = batch_shape(*(tuple(a.shape) for a in fields), names=Frustum._fields)
     checks = Checks(ctx)
-    for name, v in a.items():
+    for name, v in zip(Frustum._fields, fields, strict=True):
         checks.require(xp.isfinite(v), f"frustum.{name}: must be finite")
+    fr = Frustum(*(xp.broadcast_to(v, shape) for v in fields))
     # At least the smallest normal float, so that margin / rx_max cannot overflow.
     tiny = float(np.finfo(ctx.dtype).tiny)
     checks.require(
-        (a["rx_max"] >= tiny) & (a["ry_max"] >= tiny),
+        (fr.rx_max >= tiny) & (fr.ry_max >= tiny),
         "frustum: rx_max and ry_max must be > 0 (and normal floats)",
     )
-    checks.require(a["near"] > 0, "frustum.near: must be > 0")
-    checks.require(a["near"] < a["far"], "frustum: near must be < far")
+    checks.require(fr.near > 0, "frustum.near: must be > 0")
+    checks.require(fr.near < fr.far, "frustum: near must be < far")
     if checks.invalid is not None:
         checks.invalid = xp.broadcast_to(checks.invalid, shape)
-    return checks
+    return ctx, checks, fr
+
+
+def projection_terms(xp: ModuleType, fr: Frustum) -> tuple[Array, ...]:
+    """``(sx, -sx cx, sy, -sy cy, a, b)``: the nonzero entries of the blocker projection."""
+    sx, sy = fr.margin_x / fr.rx_max, fr.margin_y / fr.ry_max
+    return formulas(xp).projection_rows(sx, sy, fr.x_offset, fr.y_offset, fr.near, fr.far)
+
+
+def _projection_entries(xp: ModuleType, fr: Frustum) -> tuple[Array, ...]:
+    sx, sxc, sy, syc, a, b = projection_terms(xp, fr)
+    zero = xp.zeros_like(sx)
+    one = zero + 1
+    return (
+        sx, zero, sxc, zero,
+        zero, sy, syc, zero,
+        zero, zero, a, b,
+        zero, zero, one, zero,
+    )  # fmt: skip
 
 
 def blocker_projection(frustum: Frustum) -> Array:
@@ -400,9 +403,8 @@ def blocker_projection(frustum: Frustum) -> Array:
         >>> (clip[:3] / clip[3]).round(4)  # on the x and y margins, mid depth
         array([0.98, 0.98, 0.5 ])
     """
-    ctx, a, shape = _frustum_arrays(frustum)
-    checks = _validated(ctx, a, shape)
-    return checks.poison(_entries(ctx, _projection_rows(ctx, a), shape), 2)
+    ctx, checks, fr = frustum_arrays(frustum)
+    return checks.poison(stack_matrix(ctx.xp, _projection_entries(ctx.xp, fr)), 2)
 
 
 def receiver_projection(frustum: Frustum) -> Array:
@@ -442,14 +444,7 @@ def receiver_projection(frustum: Frustum) -> Array:
         >>> (stq[:2] / stq[3]).round(4)  # the right margin: s = 0.5 + 0.49
         array([0.99, 0.5 ])
     """
-    ctx, a, shape = _frustum_arrays(frustum)
-    checks = _validated(ctx, a, shape)
-    P = _projection_rows(ctx, a)
-    half = 0.5
-    rows: list[list[Array | float]] = [
-        [half * P[0][0], 0.0, half * P[0][2] + half, 0.0],
-        [0.0, half * P[1][1], half * P[1][2] + half, 0.0],
-        [0.0, 0.0, half * P[2][2] + half, half * P[2][3]],
-        [0.0, 0.0, 1.0, 0.0],
-    ]
-    return checks.poison(_entries(ctx, rows, shape), 2)
+    ctx, checks, fr = frustum_arrays(frustum)
+    P = _projection_entries(ctx.xp, fr)
+    T = formulas(ctx.xp).texture_rows(P)
+    return checks.poison(stack_matrix(ctx.xp, T), 2)

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from ._backend import require_matrix
+from ._validate import require_matrix
 
 
 def column_major_bytes(matrix: Any) -> bytes:

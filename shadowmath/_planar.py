@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ._backend import Array, Checks, all_finite, batch_shape, eps, non_finite, prepare, require_last
+from ._validate import Array, Checks, all_finite, batch_shape, convert, non_finite, require_last
 from ._vector import accurate_dot, norm
 
 
@@ -63,9 +63,8 @@ def planar_projection(plane: Any, light: Any) -> Array:
         >>> p[:3] / p[3]  # the shadow of (1, 5, 0) lands at x = 2 on the floor
         array([2., 0., 0.])
     """
-    ctx, a = prepare(plane=plane, light=light)
+    ctx, (pi, L) = convert(plane=plane, light=light)
     xp = ctx.xp
-    pi, L = a["plane"], a["light"]
     require_last("plane", pi, 4, hint="a plane is (a, b, c, d) for a x + b y + c z + d = 0")
     require_last(
         "light", L, 4, hint="a light is (x, y, z, w): append w=1 for a point, w=0 for a direction"
@@ -91,7 +90,7 @@ def planar_projection(plane: Any, light: Any) -> Array:
     # far as the rounding of its own coordinates can tell.
     scale = n_len * norm(xp, L[..., :3]) + xp.abs(pi[..., 3] * L[..., 3])
     checks.require(
-        xp.abs(pi_dot_L) > 16 * eps(ctx) * scale,
+        xp.abs(pi_dot_L) > 16 * ctx.eps * scale,
         "light lies in the plane (plane . light = 0): a point light on the plane, or a "
         "directional light parallel to it, collapses the projection; move the light off "
         "the plane or tilt it",

@@ -1,21 +1,42 @@
-"""The whole of Nagy's projective shadow texture set-up in one call."""
+"""The whole of Nagy's projective shadow texture set-up in one call.
+
+:func:`fit_shadow` is a boundary: it converts and checks its arguments once,
+then runs one of three equivalent cores on the trusted arrays:
+
+* NumPy input with Numba installed: the compiled loop of :mod:`._kernels`;
+* concrete JAX input: :func:`fit_core` under a cached ``jax.jit``, with the
+  failed checks read back in one host sync;
+* NumPy without Numba, or JAX inside a transformation: :func:`fit_core`
+  directly, on whole arrays.
+"""
 
 from __future__ import annotations
 
+import functools
+from types import ModuleType
 from typing import Any, Literal, NamedTuple
 
-from ._backend import (
+import numpy as np
+
+from . import _kernels
+from . import _messages as msg
+from ._formulas import formulas
+from ._frame import LightFrame, _frame, check_aim, light_entries, stack_matrix, zero_direction_noise
+from ._frustum import NEAR_FAR_SLACK, Frustum, bounded_frustum, margins, projection_terms
+from ._passes import extent, spread
+from ._validate import (
     Array,
     Checks,
+    Context,
     all_finite,
     batch_shape,
+    convert,
     non_finite,
-    prepare,
+    raise_recorded,
     require_last,
     require_matrix,
+    require_vertices,
 )
-from ._frame import LightFrame, light_frame, world_to_light
-from ._frustum import Frustum, adaptive_frustum, blocker_projection, receiver_projection
 
 
 class ShadowSetup(NamedTuple):
@@ -40,21 +61,72 @@ class ShadowSetup(NamedTuple):
     world_to_texture: Array
 
 
-def _transform_points(xp: Any, checks: Checks, M: Array, p: Array) -> Array:
-    """``(*batch, N, 3)`` points through ``(*batch, 4, 4)``, with the homogeneous divide.
-
-    The checks run before the arithmetic, so that bad input raises its own
-    ``ValueError`` rather than a NumPy warning from ``inf * 0`` or ``1 / 0``.
-    """
-    checks.require(all_finite(xp, p, 2), non_finite("blocker_vertices"))
-    w = xp.sum(p * M[..., None, 3, :3], axis=-1) + M[..., None, 3, 3]
-    checks.require(
-        xp.all(w > 0, axis=-1),
-        "blocker_to_world: sends a blocker vertex to w <= 0 (a projective placement); "
-        "use an affine placement, last row (0, 0, 0, 1)",
-    )
-    h = xp.matmul(p, xp.matrix_transpose(M[..., :3, :3])) + M[..., None, :3, 3]
+def _placed(xp: ModuleType, checks: Checks, B: Array, p: Array) -> Array:
+    """``(*batch, N, 3)`` points through the placement ``B``, with the homogeneous divide."""
+    w = xp.sum(p * B[..., None, 3, :3], axis=-1) + B[..., None, 3, 3]
+    checks.require(xp.all(w > 0, axis=-1), msg.PROJECTIVE_PLACEMENT)
+    h = xp.matmul(p, xp.matrix_transpose(B[..., :3, :3])) + B[..., None, :3, 3]
     return h / xp.where(w > 0, w, xp.ones_like(w))[..., None]
+
+
+def fit_core(
+    ctx: Context,
+    checks: Checks,
+    light: Array,
+    verts: Array,
+    B: Array | None,
+    margins: tuple[float, float],
+    near: Array | None,
+    far: Array | None,
+    aim: str,
+) -> ShadowSetup:
+    """The array path of :func:`fit_shadow` on shape-checked arrays; checks the values."""
+    xp = ctx.xp
+    checks.require(all_finite(xp, light, 1), non_finite("light_position"))
+    checks.require(all_finite(xp, verts, 2), non_finite("blocker_vertices"))
+    world = check_placement(checks, verts, B)
+    s = spread(xp, light, world, aim=aim)
+    frame = _frame(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
+    ext = extent(xp, light, world, frame.x_axis, frame.y_axis, frame.z_axis)
+    if near is not None:
+        checks.require(xp.isfinite(near), msg.NEAR_NOT_FINITE)
+    if far is not None:
+        checks.require(xp.isfinite(far), msg.FAR_NOT_FINITE)
+    frustum = bounded_frustum(ctx, checks, ext, s.reach, margins, near, far)
+    return setup_from(ctx, checks, frame, frustum, B)
+
+
+def check_placement(checks: Checks, verts: Array, B: Array | None) -> Array:
+    """The vertices in world coordinates, with the placement's checks."""
+    xp = checks.ctx.xp
+    if B is None:
+        return verts
+    checks.require(all_finite(xp, B, 2), non_finite("blocker_to_world"))
+    return _placed(xp, checks, B, verts)
+
+
+def setup_from(
+    ctx: Context, checks: Checks, frame: LightFrame, frustum: Frustum, B: Array | None
+) -> ShadowSetup:
+    """The matrices of a trusted frame and frustum, in closed form."""
+    xp = ctx.xp
+    F = formulas(xp)
+    W = light_entries(xp, frame)
+    clip = F.clip_rows(W, projection_terms(xp, frustum))
+    tex = F.texture_rows(clip)
+    if B is not None:
+        b = tuple(B[..., i // 4, i % 4] for i in range(16))
+        clip = F.compose_rows(clip, b)
+    shape = tuple(frustum.near.shape)
+    placement = xp.eye(4, dtype=ctx.dtype) if B is None else B
+    return ShadowSetup(
+        frame=frame,
+        frustum=frustum,
+        world_to_light=checks.poison(stack_matrix(xp, W), 2),
+        blocker_to_world=xp.broadcast_to(placement, (*shape, 4, 4)),
+        blocker_to_clip=checks.poison(stack_matrix(xp, clip), 2),
+        world_to_texture=checks.poison(stack_matrix(xp, tex), 2),
+    )
 
 
 def fit_shadow(
@@ -113,48 +185,172 @@ def fit_shadow(
         >>> float(np.abs(clip[:, 0] / clip[:, 3]).max().round(6))
         0.98
     """
-    ctx, a = prepare(
-        light_position=light_position, vertices=blocker_vertices, blocker_to_world=blocker_to_world
-    )
-    xp = ctx.xp
-    light, verts = a["light_position"], a["vertices"]
-    require_last("light_position", light, 3, hint="a light position is (x, y, z)")
-    require_last("blocker_vertices", verts, 3, min_ndim=2, hint="vertices are (*batch, N, 3)")
-    checks = Checks(ctx)
-    B = a["blocker_to_world"]
-    if B is None:
-        B = xp.eye(4, dtype=ctx.dtype)
-        world_verts = verts  # no placement: the vertices exactly as given
-    else:
-        require_matrix("blocker_to_world", B)
-        checks.require(xp.all(xp.isfinite(B), axis=(-2, -1)), non_finite("blocker_to_world"))
-        world_verts = _transform_points(xp, checks, B, verts)
-    options = {"border_texels": border_texels, "margin": margin, "near": near, "far": far}
-    if method == "mdv":
-        frame = light_frame(light, world_verts, aim=aim)
-        frustum = adaptive_frustum(frame, world_verts, map_size, **options)
-    elif method == "optimized":
-        from ._fitting import optimize_frustum
-
-        fit = optimize_frustum(light, world_verts, map_size, **options)
-        frame, frustum = fit.frame, fit.frustum
-    else:
+    check_aim(aim)
+    if method not in ("mdv", "optimized"):
         raise ValueError(f"method: expected 'mdv' or 'optimized', got {method!r}")
-    W = world_to_light(frame)
-    blocker_to_clip = xp.matmul(blocker_projection(frustum), xp.matmul(W, B))
-    world_to_texture = xp.matmul(receiver_projection(frustum), W)
-    shape = batch_shape(
-        tuple(blocker_to_clip.shape[:-2]), tuple(B.shape[:-2]), names=("setup", "blocker_to_world")
+    m = margins(map_size, border_texels, margin)
+    ctx, (light, verts, B, n, f) = convert(
+        light_position=light_position,
+        blocker_vertices=blocker_vertices,
+        blocker_to_world=blocker_to_world,
+        near=near,
+        far=far,
     )
-    B = xp.broadcast_to(B, (*shape, 4, 4))
+    require_last("light_position", light, 3, hint="a light position is (x, y, z)")
+    require_vertices("blocker_vertices", verts)
+    if B is not None:
+        require_matrix("blocker_to_world", B)
+    shapes = [light.shape[:-1], verts.shape[:-2]]
+    shapes += [B.shape[:-2]] if B is not None else []
+    shapes += [v.shape for v in (n, f) if v is not None]
+    names = ["light_position", "blocker_vertices"]
+    names += ["blocker_to_world"] if B is not None else []
+    names += [name for name, v in (("near", n), ("far", f)) if v is not None]
+    shape = batch_shape(*shapes, names=names)
+    if method == "optimized":
+        from ._fitting import optimized_setup
+
+        checks = Checks(ctx)
+        world = check_placement(checks, verts, B)
+        return optimized_setup(ctx, checks, light, world, B, m, n, f)
+    if ctx.is_jax and not ctx.lazy:
+        run, messages = _jitted_fit(m, aim, B is None, n is None, f is None)
+        setup, bad = run(light, verts, B, n, f)
+        raise_recorded(messages, bad)
+        return setup
+    if not ctx.is_jax and _kernels.available():
+        return _fit_compiled(ctx, shape, light, verts, B, m, n, f, aim)
+    return fit_core(ctx, Checks(ctx), light, verts, B, m, n, f, aim)
+
+
+@functools.cache
+def _jitted_fit(
+    m: tuple[float, float], aim: str, *absent: bool
+) -> tuple[Any, list[str]]:
+    """``fit_core`` under ``jax.jit`` for concrete JAX input, recording its failed checks.
+
+    One per set of static options and absent (None) arguments, so that every
+    trace of it records the same checks in the same order.
+    """
+    import jax
+    import jax.numpy as jnp
+
+    messages: list[str] = []
+
+    def run(light: Any, verts: Any, B: Any, near: Any, far: Any) -> tuple[ShadowSetup, Any]:
+        ctx = Context(jnp, light.dtype, lazy=True, is_jax=True)
+        checks = Checks(ctx, mode="record")
+        setup = fit_core(ctx, checks, light, verts, B, m, near, far, aim)
+        shape = setup.frustum.near.shape
+        messages[:] = [message for message, _ in checks.recorded]
+        bad = jnp.stack([jnp.broadcast_to(b, shape) for _, b in checks.recorded])
+        return setup, bad
+
+    return jax.jit(run), messages
+
+
+# The compiled loop's status bits and the array path's messages, in check order.
+_STATUS_MESSAGES = (
+    (_kernels.NONFINITE_LIGHT, non_finite("light_position")),
+    (_kernels.NONFINITE_VERTICES, non_finite("blocker_vertices")),
+    (_kernels.NONFINITE_PLACEMENT, non_finite("blocker_to_world")),
+    (_kernels.PROJECTIVE_PLACEMENT, msg.PROJECTIVE_PLACEMENT),
+    (_kernels.ZERO_DIRECTION, msg.ZERO_DIRECTION),
+    (_kernels.BEHIND_LIGHT, msg.BEHIND_LIGHT),
+    (_kernels.ZERO_SILHOUETTE, msg.ZERO_SILHOUETTE),
+    (_kernels.NEAR_NOT_FINITE, msg.NEAR_NOT_FINITE),
+    (_kernels.FAR_NOT_FINITE, msg.FAR_NOT_FINITE),
+    (_kernels.NEAR_POSITIVE, msg.NEAR_POSITIVE),
+    (_kernels.NEAR_FAR, msg.NEAR_FAR),
+    (_kernels.NEAR_CLIPS, msg.NEAR_CLIPS),
+    (_kernels.FAR_CLIPS, msg.FAR_CLIPS),
+    (_kernels.OVERFLOW, msg.OVERFLOW),
+)
+
+
+def _flat(a: Array, shape: tuple[int, ...], tail: tuple[int, ...]) -> Array:
+    """``a`` (``(*b, *tail)``, ``b`` broadcasting to ``shape``) as ``(1 or prod(shape), *tail)``."""
+    own = a.shape[: a.ndim - len(tail)]
+    size = int(np.prod(own, dtype=np.int64))
+    if size == 1:
+        return a.reshape(1, *tail)
+    if size == int(np.prod(shape, dtype=np.int64)):
+        return a.reshape(-1, *tail)
+    return np.broadcast_to(a, (*shape, *tail)).reshape(-1, *tail)
+
+
+_IDENTITY = np.eye(4).reshape(1, 4, 4)
+_NONE = np.zeros(1)
+
+
+def _fit_compiled(
+    ctx: Context,
+    shape: tuple[int, ...],
+    light: Array,
+    verts: Array,
+    B: Array | None,
+    m: tuple[float, float],
+    near: Array | None,
+    far: Array | None,
+    aim: str,
+) -> ShadowSetup:
+    """:func:`fit_core`'s results from the compiled loop (NumPy input, Numba installed)."""
+    count = int(np.prod(shape, dtype=np.int64))
+    out = np.empty((count, _kernels.ROW), dtype=ctx.dtype)
+    status = np.empty(count, dtype=np.int32)
+    options = np.array(
+        [
+            aim == "bbox",
+            B is not None,
+            near is not None,
+            far is not None,
+            *m,
+            ctx.eps,
+            NEAR_FAR_SLACK,
+            ctx.dtype == np.float32,
+        ]
+    )
+    _kernels.fit_kernel()(
+        _flat(light, shape, (3,)),
+        _flat(verts, shape, verts.shape[-2:]),
+        _IDENTITY if B is None else _flat(B, shape, (4, 4)),
+        _NONE if near is None else _flat(near, shape, ()),
+        _NONE if far is None else _flat(far, shape, ()),
+        options,
+        out,
+        status,
+    )
+    if status.any():
+        _raise_status(status.reshape(shape), verts)
+    out = out.reshape(*shape, _kernels.ROW)
+    w2l = np.empty((*shape, 4, 4), dtype=ctx.dtype)
+    w2l[..., :3, :] = out[..., 18:30].reshape(*shape, 3, 4)
+    w2l[..., 3, :] = (0.0, 0.0, 0.0, 1.0)
+    frame = LightFrame(out[..., 0:3], out[..., 3:6], out[..., 6:9], out[..., 9:12])
+    mx = np.full(shape, m[0], dtype=ctx.dtype)
+    my = np.full(shape, m[1], dtype=ctx.dtype)
+    f = out[..., 12:18]
+    frustum = Frustum(f[..., 0], f[..., 1], f[..., 2], f[..., 3], mx, my, f[..., 4], f[..., 5])
+    placement = _IDENTITY[0].astype(ctx.dtype) if B is None else B
     return ShadowSetup(
         frame=frame,
         frustum=frustum,
-        world_to_light=checks.poison(W, 2),
-        blocker_to_world=checks.poison(B, 2),
-        blocker_to_clip=checks.poison(blocker_to_clip, 2),
-        world_to_texture=checks.poison(world_to_texture, 2),
+        world_to_light=w2l,
+        blocker_to_world=np.broadcast_to(placement, (*shape, 4, 4)),
+        blocker_to_clip=out[..., 30:46].reshape(*shape, 4, 4),
+        world_to_texture=out[..., 46:62].reshape(*shape, 4, 4),
     )
+
+
+def _raise_status(status: Array, verts: Array) -> None:
+    for bit, message in _STATUS_MESSAGES:
+        bad = (status & bit) != 0
+        if bad.any():
+            if bit == _kernels.NONFINITE_VERTICES and bool(np.isfinite(verts).all()):
+                message = msg.OVERFLOW
+            first = tuple(int(i) for i in np.argwhere(bad)[0]) if bad.ndim else ()
+            where = f" (first at batch index {first})" if bad.ndim else ""
+            raise ValueError(message + where)
 
 
 def receiver_texture_matrix(setup: ShadowSetup, receiver_to_world: Any) -> Array:
@@ -179,10 +375,11 @@ def receiver_texture_matrix(setup: ShadowSetup, receiver_to_world: Any) -> Array
         >>> bool(np.allclose(receiver_texture_matrix(s, np.eye(4)), s.world_to_texture))
         True
     """
-    ctx, a = prepare(world_to_texture=setup.world_to_texture, receiver_to_world=receiver_to_world)
+    ctx, (M, R) = convert(
+        world_to_texture=setup.world_to_texture, receiver_to_world=receiver_to_world
+    )
     xp = ctx.xp
-    R = a["receiver_to_world"]
     require_matrix("receiver_to_world", R)
     checks = Checks(ctx)
-    checks.require(xp.all(xp.isfinite(R), axis=(-2, -1)), non_finite("receiver_to_world"))
-    return checks.poison(xp.matmul(a["world_to_texture"], R), 2)
+    checks.require(all_finite(xp, R, 2), non_finite("receiver_to_world"))
+    return checks.poison(xp.matmul(M, R), 2)

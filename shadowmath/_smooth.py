@@ -18,20 +18,20 @@ from __future__ import annotations
 from types import ModuleType
 from typing import Any
 
-from ._backend import (
+from ._formulas import formulas
+from ._frame import LightFrame, frame_arrays
+from ._frustum import Frustum, blocker_reach, bounded_frustum, check_blocker, margins
+from ._passes import extent
+from ._validate import (
     Array,
     Checks,
     Context,
     all_finite,
     batch_shape,
-    eps,
+    convert,
     non_finite,
-    prepare,
     require_last,
 )
-from ._frame import LightFrame
-from ._frustum import Frustum, _assemble, _light_space, _margins
-from ._vector import cross, dot, safe_normalize
 
 
 def _smooth_max(
@@ -77,9 +77,8 @@ def smooth_max(values: Any, temperature: Any) -> Array:
         >>> float(smooth_max([0.0, 1.0, 1.0], 0.01))  # two tied maxima: 1 + T log 2
         1.0069314718055995
     """
-    ctx, a = prepare(values=values, temperature=temperature)
+    ctx, (x, T) = convert(values=values, temperature=temperature)
     xp = ctx.xp
-    x, T = a["values"], a["temperature"]
     if x.ndim < 1 or x.shape[-1] == 0:
         raise ValueError(f"values: expected shape (*batch, N) with N >= 1, got {tuple(x.shape)}")
     checks = Checks(ctx)
@@ -89,6 +88,33 @@ def smooth_max(values: Any, temperature: Any) -> Array:
     x = xp.broadcast_to(x, (*shape, x.shape[-1]))
     safe_T = xp.where(T > 0, T, xp.ones_like(T))
     return checks.poison(xp.broadcast_to(_smooth_max(xp, x, safe_T), shape), 0)
+
+
+def soft_bounds(
+    xp: ModuleType,
+    rx: Array,
+    ry: Array,
+    T: Array,
+    *,
+    symmetric: bool,
+    weights: Array | None = None,
+) -> tuple[Array, Array, Array, Array]:
+    """``(hi_x, lo_x, hi_y, lo_y)``: soft outer bounds of the ratios at temperature ``T``.
+
+    ``weights`` (0 or 1 per vertex) drop padded entries.
+    """
+    if symmetric:
+        # The soft max of (r, -r): a smooth upper bound of max |r| (abs is not smooth at 0).
+        w2 = None if weights is None else xp.concat([weights, weights], axis=-1)
+        hi_x = _smooth_max(xp, xp.concat([rx, -rx], axis=-1), T, w2)
+        hi_y = _smooth_max(xp, xp.concat([ry, -ry], axis=-1), T, w2)
+        return hi_x, -hi_x, hi_y, -hi_y
+    return (
+        _smooth_max(xp, rx, T, weights),
+        -_smooth_max(xp, -rx, T, weights),
+        _smooth_max(xp, ry, T, weights),
+        -_smooth_max(xp, -ry, T, weights),
+    )
 
 
 def _ratio_frustum(
@@ -104,32 +130,20 @@ def _ratio_frustum(
     far: Any,
 ) -> Frustum:
     """The frustum from bounds of the ratios ``x / z`` and ``y / z`` (hard if T is None)."""
-    margins = _margins(map_size, border_texels, margin)
-    ls = _light_space(frame, vertices, temperature=temperature, near=near, far=far)
-    xp = ls.ctx.xp
-    rx, ry = ls.x / ls.safe_z, ls.y / ls.safe_z
-
-    T = ls.args["temperature"]
-    if T is None:
-        hi_x, lo_x = xp.max(rx, axis=-1), xp.min(rx, axis=-1)
-        hi_y, lo_y = xp.max(ry, axis=-1), xp.min(ry, axis=-1)
-        if symmetric:
-            hi_x, hi_y = xp.maximum(hi_x, -lo_x), xp.maximum(hi_y, -lo_y)
-    else:
-        ls.checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
+    m = margins(map_size, border_texels, margin)
+    ctx, checks, f, (verts, T, n, fa) = frame_arrays(
+        frame, vertices=vertices, temperature=temperature, near=near, far=far
+    )
+    check_blocker(checks, verts, n, fa)
+    xp = ctx.xp
+    ext = extent(xp, f.origin, verts, f.x_axis, f.y_axis, f.z_axis)
+    bounds = None
+    if T is not None:
+        checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
         T = xp.where(T > 0, T, xp.ones_like(T))
-        if symmetric:
-            # The soft max of (r, -r): a smooth upper bound of max |r| (abs is not smooth at 0).
-            hi_x = _smooth_max(xp, xp.concat([rx, -rx], axis=-1), T)
-            hi_y = _smooth_max(xp, xp.concat([ry, -ry], axis=-1), T)
-        else:
-            hi_x, lo_x = _smooth_max(xp, rx, T), -_smooth_max(xp, -rx, T)
-            hi_y, lo_y = _smooth_max(xp, ry, T), -_smooth_max(xp, -ry, T)
-    if symmetric:
-        zero = xp.zeros_like(hi_x)
-        return _assemble(ls, margins, hi_x, hi_y, zero, zero)
-    half_x, half_y = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
-    return _assemble(ls, margins, half_x, half_y, 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y))
+        bounds = soft_bounds(xp, ext.rx, ext.ry, T, symmetric=symmetric)
+    reach = blocker_reach(xp, f.origin, verts)
+    return bounded_frustum(ctx, checks, ext, reach, m, n, fa, symmetric=symmetric, bounds=bounds)
 
 
 def smooth_frustum(
@@ -286,10 +300,11 @@ def rolled_light_frame(
         >>> f.x_axis.round(6) + 0.0, f.y_axis.round(6) + 0.0
         (array([0., 1., 0.]), array([1., 0., 0.]))
     """
-    ctx, a = prepare(light_position=light_position, direction=direction, roll=roll, up=up)
+    ctx, (light, d, theta, U) = convert(
+        light_position=light_position, direction=direction, roll=roll, up=up
+    )
     xp = ctx.xp
-    light, d, theta = a["light_position"], a["direction"], a["roll"]
-    U = a["up"] if a["up"] is not None else ctx.constant([0.0, 1.0, 0.0])
+    U = U if U is not None else ctx.constant([0.0, 1.0, 0.0])
     require_last("light_position", light, 3)
     require_last("direction", d, 3)
     require_last("up", U, 3)
@@ -297,33 +312,29 @@ def rolled_light_frame(
     for name, v in (("light_position", light), ("direction", d), ("up", U)):
         checks.require(all_finite(xp, v, 1), non_finite(name))
     checks.require(xp.isfinite(theta), non_finite("roll"))
-    return _rolled_frame(ctx, checks, light, d, theta, U)
+    return rolled_frame(ctx, checks, light, d, theta, U)
 
 
-def _rolled_frame(
+def rolled_frame(
     ctx: Context, checks: Checks, light: Array, d: Array, theta: Array, U: Array
 ) -> LightFrame:
+    """:func:`rolled_light_frame` on trusted arrays (checks the direction and ``up``)."""
     xp = ctx.xp
-    z, length = safe_normalize(xp, d)
-    checks.require(length > 0, "direction: the light's viewing direction is zero")
-    u, u_len = safe_normalize(xp, U)
-    zxu = cross(xp, z, u)
+    axes = formulas(xp).rolled_axes(
+        d[..., 0], d[..., 1], d[..., 2], U[..., 0], U[..., 1], U[..., 2],
+        xp.cos(theta), xp.sin(theta),
+    )  # fmt: skip
+    checks.require(axes[9] > 0, "direction: the light's viewing direction is zero")
+    u_len = xp.max(xp.abs(U), axis=-1)
     # |Z x U| = sin(angle): below a few hundred ulps the cross product is rounding noise.
     checks.require(
-        (u_len > 0) & (dot(xp, zxu, zxu) > (256 * eps(ctx)) ** 2),
+        (u_len > 0) & (axes[10] > (256 * ctx.eps) ** 2),
         "up: the reference axis is zero or parallel to the direction; pick another up axis",
     )
-    x0, _ = safe_normalize(xp, zxu)
-    y0 = cross(xp, x0, z)
-    c, s = xp.cos(theta)[..., None], xp.sin(theta)[..., None]
-    x = c * x0 + s * y0
-    y = c * y0 - s * x0
     shape = batch_shape(
-        tuple(light.shape[:-1]),
-        tuple(x.shape[:-1]),
-        names=("light_position", "direction/roll/up"),
+        tuple(light.shape[:-1]), tuple(axes[0].shape), names=("light_position", "direction/roll/up")
     )
-    frame = LightFrame(*(xp.broadcast_to(v, (*shape, 3)) for v in (light, x, y, z)))
+    fields = (light, *(xp.stack(axes[3 * i : 3 * i + 3], axis=-1) for i in range(3)))
     if checks.invalid is not None:
         checks.invalid = xp.broadcast_to(checks.invalid, shape)
-    return LightFrame(*(checks.poison(v, 1) for v in frame))
+    return LightFrame(*(checks.poison(xp.broadcast_to(v, (*shape, 3)), 1) for v in fields))

@@ -131,9 +131,7 @@ def convert(**arrays: Any) -> tuple[Context, tuple[Array, ...]]:
     xp, dtype = _result_dtype(inputs, use_jax)
     ctx = Context(xp, dtype, lazy, use_jax)
     it = iter(inputs)
-    out = tuple(
-        None if v is None else xp.asarray(next(it), dtype=dtype) for v in arrays.values()
-    )
+    out = tuple(None if v is None else xp.asarray(next(it), dtype=dtype) for v in arrays.values())
     return ctx, out
 
 

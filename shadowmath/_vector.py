@@ -6,7 +6,7 @@ from types import ModuleType
 
 import numpy as np
 
-from ._backend import Array
+from ._validate import Array
 
 
 def dot(xp: ModuleType, a: Array, b: Array) -> Array:

@@ -1,0 +1,217 @@
+"""Per-entry formulas, one source for every backend: NumPy, JAX and the compiled loop.
+
+Each function here is plain arithmetic on *components* (scalars or arrays of the
+same batch shape), written with three primitives only: ``where``, ``sqrt`` and
+``fabs``. :func:`specialize` binds them to a backend: NumPy's or JAX's array
+functions (the arguments are then ``(*batch,)`` arrays and everything
+broadcasts) or Numba's scalar ones (the compiled loop of :mod:`._kernels` calls
+the same functions once per batch entry). So the frame, the frustum and the
+matrices are written once, and the backends cannot drift apart.
+
+Trusted inputs only: these functions check nothing (the public functions did).
+"""
+
+from __future__ import annotations
+
+import functools
+import types
+from collections.abc import Callable
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+# Placeholders, rebound per backend by specialize(); NumPy's by default.
+where: Callable[..., Any] = np.where
+sqrt: Callable[..., Any] = np.sqrt
+fabs: Callable[..., Any] = np.abs
+
+
+def normalize3(x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any]:
+    """``(x, y, z) / |(x, y, z)|`` and the length, without overflow; zero gives zero.
+
+    Scaled by the largest component first, so float32 vectors of size 1e-25 or
+    1e25 (whose squares leave float32's range) normalize correctly. The double
+    ``where`` keeps reverse-mode derivatives finite at zero: the square root is
+    never differentiated at 0.
+    """
+    ax, ay, az = fabs(x), fabs(y), fabs(z)
+    m = where(ax >= ay, ax, ay)
+    m = where(m >= az, m, az)
+    nonzero = m > 0
+    safe_m = where(nonzero, m, 1.0)
+    bx, by, bz = x / safe_m, y / safe_m, z / safe_m
+    sq = bx * bx + by * by + bz * bz
+    safe_sq = where(nonzero, sq, 1.0)
+    root = sqrt(safe_sq)
+    inv = where(nonzero, 1.0 / root, 0.0)
+    return bx * inv, by * inv, bz * inv, where(nonzero, m * root, 0.0)
+
+
+def helper_axis3(zx: Any, zy: Any, zz: Any) -> tuple[Any, Any, Any]:
+    """The world axis at the smallest ``|z_k|`` (ties to the lowest index), as 0/1 floats."""
+    ax, ay, az = fabs(zx), fabs(zy), fabs(zz)
+    pick_x = (ax <= ay) & (ax <= az)
+    pick_y = (pick_x == 0) & (ay <= az)
+    pick_z = (pick_x == 0) & (pick_y == 0)
+    zero = ax * 0.0  # in z's dtype (a bare 1.0 would be float64 in NumPy's where)
+    one = zero + 1.0
+    return where(pick_x, one, zero), where(pick_y, one, zero), where(pick_z, one, zero)
+
+
+def frame_axes(dx: Any, dy: Any, dz: Any) -> tuple[Any, ...]:
+    """Nagy's light frame for the viewing direction ``d``: ``X, Y, Z`` (9 components), ``|d|``.
+
+    ``Z = d / |d|``, ``X = normalize(Z x V)`` with ``V`` the helper axis of ``Z``,
+    ``Y = X x Z`` (left-handed: ``X x Y = -Z``).
+    """
+    zx, zy, zz, length = normalize3(dx, dy, dz)
+    return (*axes_from_z(zx, zy, zz), zx, zy, zz, length)
+
+
+def axes_from_z(zx: Any, zy: Any, zz: Any) -> tuple[Any, Any, Any, Any, Any, Any]:
+    """``X`` and ``Y`` of the frame with unit ``Z`` (the helper axis decided on ``Z`` as given)."""
+    vx, vy, vz = helper_axis3(zx, zy, zz)
+    xx, xy, xz, _ = normalize3(zy * vz - zz * vy, zz * vx - zx * vz, zx * vy - zy * vx)
+    return xx, xy, xz, xy * zz - xz * zy, xz * zx - xx * zz, xx * zy - xy * zx
+
+
+def rolled_axes(
+    dx: Any, dy: Any, dz: Any, ux: Any, uy: Any, uz: Any, c: Any, s: Any
+) -> tuple[Any, ...]:
+    """The frame of ``Z = d / |d|`` with reference axis ``U``, turned by the angle (``c, s``).
+
+    ``X0 = normalize(Z x U)``, ``Y0 = X0 x Z``, ``X = c X0 + s Y0``,
+    ``Y = c Y0 - s X0`` (``c = cos theta``, ``s = sin theta``). Returns ``X, Y, Z``
+    (9 components), ``|d|`` and ``|Z x U|^2`` (the squared sine of the angle
+    between ``d`` and ``U``; zero when they are parallel).
+    """
+    zx, zy, zz, length = normalize3(dx, dy, dz)
+    vx, vy, vz, _ = normalize3(ux, uy, uz)
+    cx, cy, cz = zy * vz - zz * vy, zz * vx - zx * vz, zx * vy - zy * vx
+    sin_sq = cx * cx + cy * cy + cz * cz
+    ax, ay, az, _ = normalize3(cx, cy, cz)
+    bx, by, bz = ay * zz - az * zy, az * zx - ax * zz, ax * zy - ay * zx
+    return (
+        c * ax + s * bx, c * ay + s * by, c * az + s * bz,
+        c * bx - s * ax, c * by - s * ay, c * bz - s * az,
+        zx, zy, zz, length, sin_sq,
+    )  # fmt: skip
+
+
+def projection_rows(
+    sx: Any, sy: Any, cx: Any, cy: Any, near: Any, far: Any
+) -> tuple[Any, Any, Any, Any, Any, Any]:
+    """The nonzero entries of the blocker projection ``P`` (light to OpenGL clip).
+
+    ``P = [[sx, 0, -sx cx, 0], [0, sy, -sy cy, 0], [0, 0, a, b], [0, 0, 1, 0]]``
+    with ``a = (f + n) / (f - n)`` and ``b = -2 n (f / (f - n))`` (the product
+    ``f n`` is never formed, so it cannot overflow). Returns
+    ``(sx, -sx cx, sy, -sy cy, a, b)``.
+    """
+    ratio = far / (far - near)
+    return sx, -sx * cx, sy, -sy * cy, (far + near) / (far - near), -2.0 * near * ratio
+
+
+def light_rows(
+    ox: Any, oy: Any, oz: Any, xx: Any, xy: Any, xz: Any, yx: Any, yy: Any, yz: Any,
+    zx: Any, zy: Any, zz: Any,
+) -> tuple[Any, ...]:  # fmt: skip
+    """``world_to_light = [[R, -R o], [0, 1]]`` as 12 entries (its first three rows)."""
+    tx = -(xx * ox + xy * oy + xz * oz)
+    ty = -(yx * ox + yy * oy + yz * oz)
+    tz = -(zx * ox + zy * oy + zz * oz)
+    return xx, xy, xz, tx, yx, yy, yz, ty, zx, zy, zz, tz
+
+
+def clip_rows(w: tuple[Any, ...], p: tuple[Any, ...]) -> tuple[Any, ...]:
+    """``P @ world_to_light`` in closed form (16 entries), ``w`` from :func:`light_rows`.
+
+    Row 0 is ``sx (X - cx Z)`` (with its translation), row 1 ``sy (Y - cy Z)``,
+    row 2 ``a Z + (0, 0, 0, b)``, row 3 ``Z``: no 4x4 product is formed.
+    (Written out entry by entry: the compiled loop needs tuples of static length.)
+    """
+    sx, sxc, sy, syc, a, b = p
+    return (
+        sx * w[0] + sxc * w[8], sx * w[1] + sxc * w[9],
+        sx * w[2] + sxc * w[10], sx * w[3] + sxc * w[11],
+        sy * w[4] + syc * w[8], sy * w[5] + syc * w[9],
+        sy * w[6] + syc * w[10], sy * w[7] + syc * w[11],
+        a * w[8], a * w[9], a * w[10], a * w[11] + b,
+        w[8], w[9], w[10], w[11],
+    )  # fmt: skip
+
+
+def texture_rows(c: tuple[Any, ...]) -> tuple[Any, ...]:
+    """OpenGL clip rows to texture rows: ``(s q, t q, r q) = (clip_xyz + w) / 2``, ``q = w``."""
+    return (
+        0.5 * (c[0] + c[12]), 0.5 * (c[1] + c[13]), 0.5 * (c[2] + c[14]), 0.5 * (c[3] + c[15]),
+        0.5 * (c[4] + c[12]), 0.5 * (c[5] + c[13]), 0.5 * (c[6] + c[14]), 0.5 * (c[7] + c[15]),
+        0.5 * (c[8] + c[12]), 0.5 * (c[9] + c[13]), 0.5 * (c[10] + c[14]), 0.5 * (c[11] + c[15]),
+        c[12], c[13], c[14], c[15],
+    )  # fmt: skip
+
+
+def _row_times(m: tuple[Any, ...], i: int, b: tuple[Any, ...]) -> tuple[Any, Any, Any, Any]:
+    """Row ``i`` of ``m @ b`` (both 16 row-major entries)."""
+    m0, m1, m2, m3 = m[4 * i], m[4 * i + 1], m[4 * i + 2], m[4 * i + 3]
+    return (
+        m0 * b[0] + m1 * b[4] + m2 * b[8] + m3 * b[12],
+        m0 * b[1] + m1 * b[5] + m2 * b[9] + m3 * b[13],
+        m0 * b[2] + m1 * b[6] + m2 * b[10] + m3 * b[14],
+        m0 * b[3] + m1 * b[7] + m2 * b[11] + m3 * b[15],
+    )
+
+
+def compose_rows(m: tuple[Any, ...], b: tuple[Any, ...]) -> tuple[Any, ...]:
+    """The product ``m @ b`` of two 4x4 matrices given as 16 row-major entries each."""
+    return (*_row_times(m, 0, b), *_row_times(m, 1, b), *_row_times(m, 2, b), *_row_times(m, 3, b))
+
+
+_FUNCTIONS = (
+    "normalize3",
+    "helper_axis3",
+    "frame_axes",
+    "axes_from_z",
+    "rolled_axes",
+    "projection_rows",
+    "light_rows",
+    "clip_rows",
+    "texture_rows",
+    "_row_times",
+    "compose_rows",
+)
+
+
+def specialize(
+    primitives: dict[str, Any], wrap: Callable[[Any], Any] | None = None
+) -> types.SimpleNamespace:
+    """Copies of this module's formulas with ``where``, ``sqrt``, ``fabs`` bound to a backend.
+
+    ``wrap`` (e.g. ``numba.njit``) is applied to each copy; the copies call one
+    another through the same namespace, so a compiled formula calls compiled ones.
+    """
+    namespace: dict[str, Any] = {**globals(), **primitives}
+    for name in _FUNCTIONS:
+        func = globals()[name]
+        copy = types.FunctionType(func.__code__, namespace, name, func.__defaults__)
+        namespace[name] = wrap(copy) if wrap is not None else copy
+    return types.SimpleNamespace(**{name: namespace[name] for name in _FUNCTIONS})
+
+
+@functools.cache
+def formulas(xp: ModuleType) -> types.SimpleNamespace:
+    """The formulas specialized to the array namespace ``xp`` (NumPy or ``jax.numpy``)."""
+    where = xp.where if xp is not np else _numpy_where
+    return specialize({"where": where, "sqrt": xp.sqrt, "fabs": xp.abs})
+
+
+def _numpy_where(c: Any, a: Any, b: Any) -> Any:
+    """``np.where`` keeping the arrays' dtype: a Python float is weak, as in JAX.
+
+    (``np.where`` turns a Python float into a float64 array, which would
+    promote float32 work to float64.)
+    """
+    dtypes = [v.dtype for v in (a, b) if isinstance(v, np.ndarray | np.generic)]
+    out = np.where(c, a, b)
+    return out.astype(np.result_type(*dtypes), copy=False) if dtypes else out

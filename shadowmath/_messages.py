@@ -1,0 +1,43 @@
+"""The value errors shared by the array path and the compiled loop, word for word.
+
+A check that several functions (and both backends) perform has its message here,
+so that the same bad input gets the same ``ValueError`` whichever path ran.
+"""
+
+ZERO_DIRECTION = (
+    "the light's viewing direction is zero: the light sits at the blocker's centre "
+    "(zero mean direction vector, or one within rounding of zero); move the light or "
+    "pass an explicit direction to light_frame_from_direction"
+)
+BEHIND_LIGHT = (
+    "vertices: a blocker vertex is not strictly in front of the light (z <= 0 in light "
+    "coordinates, or within rounding of 0); one frustum cannot cover it: move the light "
+    "out of the blocker, or split the blocker (or use an omnidirectional shadow map)"
+)
+ZERO_SILHOUETTE = (
+    "vertices: the blocker's silhouette has zero width or height as seen from the light "
+    "(a single point, or a flat blocker seen edge-on, within rounding); no frustum can "
+    "be fitted"
+)
+NEAR_NOT_FINITE = "near: must be finite"
+FAR_NOT_FINITE = "far: must be finite"
+NEAR_POSITIVE = "near: the near plane must lie in front of the light (near > 0)"
+NEAR_FAR = "near/far: the near plane must be closer than the far plane"
+NEAR_CLIPS = (
+    "near: the near plane cuts into the blocker (near > the closest vertex's z in light "
+    "coordinates), so the GPU would clip part of the blocker out of the shadow map; pass "
+    "a smaller near (or None for the default just in front of the blocker)"
+)
+FAR_CLIPS = (
+    "far: the far plane cuts into the blocker (far < the farthest vertex's z in light "
+    "coordinates), so the GPU would clip part of the blocker out of the shadow map; pass "
+    "a larger far (or None for the default just behind the blocker)"
+)
+PROJECTIVE_PLACEMENT = (
+    "blocker_to_world: sends a blocker vertex to w <= 0 (a projective placement); "
+    "use an affine placement, last row (0, 0, 0, 1)"
+)
+OVERFLOW = (
+    "blocker_vertices: the coordinates are too large: their sums overflow the "
+    "floating-point range; scale the scene down"
+)

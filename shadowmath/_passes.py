@@ -1,0 +1,62 @@
+"""The two passes over a blocker's vertices, on whole arrays (NumPy or JAX).
+
+Nagy's algorithm reads the vertices twice: once for the viewing direction
+(the mean direction vector, or the bounding box's centre) and the scene's
+scale, once in light coordinates for the projection ratios and the depth range.
+Here each pass is one expression over the ``(*batch, N, 3)`` array: under
+``jax.jit`` XLA fuses it into one loop; with NumPy the intermediate arrays are
+allocated, which is why large NumPy blockers go through the compiled loop of
+:mod:`._kernels` when Numba is installed. Trusted inputs only.
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+from typing import NamedTuple
+
+from ._validate import Array
+
+
+class Spread(NamedTuple):
+    """Pass 1: where the blocker lies from the light, and the scales of the thresholds."""
+
+    direction: Array  # (*batch, 3) the MDV (mean of V - L) or the bounding box's centre - L
+    coords: Array  # (*batch,) max |coordinate| of the vertices and the light
+    reach: Array  # (*batch,) max |V - L| component over the vertices
+
+
+class Extent(NamedTuple):
+    """Pass 2: the blocker in light coordinates."""
+
+    x: Array  # (*batch, N) light coordinates of each vertex
+    y: Array
+    z: Array
+    rx: Array  # (*batch, N) the ratios x / z and y / z (z replaced by 1 where z <= 0)
+    ry: Array
+
+
+def spread(xp: ModuleType, light: Array, verts: Array, *, aim: str) -> Spread:
+    """Pass 1 over ``verts`` ``(*batch, N, 3)`` seen from ``light`` ``(*batch, 3)``."""
+    offsets = verts - light[..., None, :]
+    if aim == "mean":
+        # The differences before the sum: full precision far from the origin.
+        direction = xp.mean(offsets, axis=-2)
+    else:
+        direction = 0.5 * (xp.max(offsets, axis=-2) + xp.min(offsets, axis=-2))
+    coords = xp.maximum(xp.max(xp.abs(verts), axis=(-2, -1)), xp.max(xp.abs(light), axis=-1))
+    reach = xp.max(xp.abs(offsets), axis=(-2, -1))
+    return Spread(direction, coords, reach)
+
+
+def extent(
+    xp: ModuleType, light: Array, verts: Array, x_axis: Array, y_axis: Array, z_axis: Array
+) -> Extent:
+    """Pass 2: light coordinates and projection ratios of every vertex."""
+    offsets = verts - light[..., None, :]
+    x = xp.sum(offsets * x_axis[..., None, :], axis=-1)
+    y = xp.sum(offsets * y_axis[..., None, :], axis=-1)
+    z = xp.sum(offsets * z_axis[..., None, :], axis=-1)
+    # Divide by a safe z so that invalid entries (z <= 0) never produce inf/NaN
+    # derivatives that leak into valid ones; the checks mark them invalid.
+    safe_z = xp.where(z > 0, z, xp.ones_like(z))
+    return Extent(x, y, z, x / safe_z, y / safe_z)
