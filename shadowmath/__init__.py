@@ -40,6 +40,9 @@ CONVENTIONS
 """
 
 from ._checks import check_finite as check_finite
+from ._conventions import GRAPHICS_APIS as GRAPHICS_APIS
+from ._conventions import ApiConvention as ApiConvention
+from ._conventions import api_convention as api_convention
 from ._fitting import FrustumFit as FrustumFit
 from ._fitting import cross_section_area as cross_section_area
 from ._fitting import optimize_frustum as optimize_frustum
@@ -71,12 +74,15 @@ from ._smooth import smooth_max as smooth_max
 __version__ = "0.1.0"
 
 __all__ = [
+    "GRAPHICS_APIS",
     "NEAR_FAR_SLACK",
+    "ApiConvention",
     "Frustum",
     "FrustumFit",
     "LightFrame",
     "ShadowSetup",
     "adaptive_frustum",
+    "api_convention",
     "blocker_projection",
     "border_margin",
     "check_finite",
