@@ -28,11 +28,11 @@ from ._camera import perspective as perspective
 from ._context import DEBIAN_PACKAGES as DEBIAN_PACKAGES
 from ._context import GLUnavailableError as GLUnavailableError
 from ._context import standalone_context as standalone_context
-from ._scene import MAX_LIGHTS as MAX_LIGHTS
-from ._scene import PLANAR_POLYGON_OFFSET as PLANAR_POLYGON_OFFSET
-from ._scene import Body as Body
+from ._pass_lit import MAX_LIGHTS as MAX_LIGHTS
+from ._pass_planar import PLANAR_POLYGON_OFFSET as PLANAR_POLYGON_OFFSET
+from ._resources import Body as Body
+from ._resources import Light as Light
 from ._scene import Frame as Frame
-from ._scene import Light as Light
 from ._scene import render_scene as render_scene
 from ._shadow_map import render_shadow_map as render_shadow_map
 

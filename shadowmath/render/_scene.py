@@ -1,5 +1,6 @@
-"""Passes 2 to 4: receivers with projective shadow textures or Blinn's planar shadows,
-several lights and several blockers, composed as Nagy's article says."""
+"""The whole method from a camera: the lit pass, then per light its shadow system's mask
+and the subtractive pass. Each shadow system is a pass module (``_pass_texture``,
+``_pass_planar``, ...) behind the :class:`ShadowPass` protocol, picked by ``method``."""
 
 from __future__ import annotations
 
@@ -10,58 +11,25 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._planar import planar_projection
-from shadowmath._setup import ShadowSetup, fit_shadow, receiver_texture_matrix
+from shadowmath._setup import ShadowSetup
 
-from ._context import (
-    check_matrix,
-    check_mesh,
-    program,
-    resolve_context,
-    set_matrix,
-    set_uniform,
-    uniform,
-)
+from ._context import check_matrix, resolve_context
 from ._context import image_size as _image_size
-from ._shadow_map import draw_shadow_map, read_mask
+from ._pass_lit import MAX_LIGHTS, draw_lit, finish, subtract_light
+from ._pass_planar import PlanarPass
+from ._pass_texture import TexturePass
+from ._resources import (
+    Body,
+    GpuScene,
+    Light,
+    ShadowPass,
+    prepare_body,
+    prepare_light,
+    read_texture,
+)
 
-#: The most lights one :func:`render_scene` call lights with (a shader array size).
-MAX_LIGHTS = 8
-
-#: Polygon offset ``(factor, units)`` pulling Blinn's flattened blocker toward the
-#: camera, so that it wins the LEQUAL depth test against its coplanar receiver.
-PLANAR_POLYGON_OFFSET = (-1.0, -4.0)
-
-
-class Body(NamedTuple):
-    """A triangle mesh placed in the world.
-
-    Attributes:
-        vertices: ``(N, 3)`` in the body's local coordinates.
-        triangles: ``(M, 3)`` integer indices, counter-clockwise seen from outside.
-        to_world: ``(4, 4)`` local-to-world placement (``None``: identity).
-        color: RGB albedo in ``[0, 1]``.
-        plane: ``(4,)`` world plane ``(a, b, c, d)`` of a flat receiver, needed by
-            Blinn's method (``method="planar"``); ignored otherwise.
-    """
-
-    vertices: Any
-    triangles: Any
-    to_world: Any = None
-    color: tuple[float, float, float] = (0.8, 0.8, 0.8)
-    plane: Any = None
-
-
-class Light(NamedTuple):
-    """A point light.
-
-    Attributes:
-        position: ``(3,)`` in world coordinates.
-        color: RGB intensity of its diffuse light.
-    """
-
-    position: Any
-    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+#: The shadow systems by ``method`` name.
+PASSES: dict[str, ShadowPass] = {"texture": TexturePass(), "planar": PlanarPass()}
 
 
 class Frame(NamedTuple):
@@ -89,58 +57,6 @@ class Frame(NamedTuple):
     body: NDArray[np.int32]
     setups: tuple[tuple[ShadowSetup, ...], ...]
     shadow_maps: tuple[tuple[NDArray[np.float32], ...], ...]
-
-
-class _Prepared(NamedTuple):
-    vertices: NDArray[np.float64]
-    triangles: NDArray[np.int64]
-    to_world: NDArray[np.float64]
-    color: NDArray[np.float64]
-    plane: NDArray[np.float64] | None
-
-
-def _prepare(name: str, body: Body) -> _Prepared:
-    v, t = check_mesh(name, body.vertices, body.triangles)
-    to_world = (
-        np.eye(4) if body.to_world is None else check_matrix(f"{name}.to_world", body.to_world)
-    )
-    color = np.asarray(body.color, dtype=np.float64)
-    if color.shape != (3,) or not np.all(np.isfinite(color)):
-        raise ValueError(f"{name}.color: expected three finite RGB values, got {body.color!r}")
-    plane = None
-    if body.plane is not None:
-        plane = np.asarray(body.plane, dtype=np.float64)
-        if plane.shape != (4,) or not np.all(np.isfinite(plane)):
-            raise ValueError(f"{name}.plane: expected finite (a, b, c, d), got {body.plane!r}")
-    return _Prepared(v, t, to_world, color, plane)
-
-
-def _vertex_data(body: _Prepared) -> bytes:
-    """Un-indexed triangles, 9 floats per vertex: position, smooth normal, face normal."""
-    v, t = body.vertices, body.triangles
-    corners = v[t]  # (M, 3, 3)
-    face = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    # Area-weighted vertex normals: sum the (length 2 area) face normals at each vertex.
-    smooth = np.zeros_like(v)
-    np.add.at(smooth, t.reshape(-1), np.repeat(face, 3, axis=0))
-    smooth = smooth / np.maximum(np.linalg.norm(smooth, axis=1, keepdims=True), 1e-300)
-    face_unit = face / np.maximum(np.linalg.norm(face, axis=1, keepdims=True), 1e-300)
-    data = np.concatenate(
-        [corners, smooth[t], np.repeat(face_unit[:, None, :], 3, axis=1)], axis=-1
-    )
-    return data.astype(np.float32).tobytes()
-
-
-def _texture(ctx: moderngl.Context, size: tuple[int, int], components: int) -> moderngl.Texture:
-    tex = ctx.texture(size, components, dtype="f4")
-    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    return tex
-
-
-def _read(tex: moderngl.Texture, components: int) -> NDArray[np.float32]:
-    w, h = tex.size
-    data = np.frombuffer(tex.read(), dtype=np.float32).reshape(h, w, components)
-    return np.ascontiguousarray(data[::-1])  # GL's first row is the bottom one
 
 
 def render_scene(
@@ -223,228 +139,55 @@ def render_scene(
         >>> frame.color.shape, frame.shadow.shape
         ((64, 64, 3), (64, 64, 1))
     """
-    if method not in ("texture", "planar"):
-        raise ValueError(f"method: expected 'texture' or 'planar', got {method!r}")
+    if method not in PASSES:
+        raise ValueError(f"method: expected one of {', '.join(map(repr, PASSES))}, got {method!r}")
+    shadow_pass = PASSES[method]
     if not 1 <= len(lights) <= MAX_LIGHTS:
         raise ValueError(f"lights: expected 1 to {MAX_LIGHTS} lights, got {len(lights)}")
     if not (np.isfinite(ambient) and ambient >= 0):
         raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
     camera = check_matrix("world_to_clip", world_to_clip)
     size = _image_size("image_size", image_size)
-    _image_size("map_size", map_size)
-    recv = [_prepare(f"receivers[{i}]", b) for i, b in enumerate(receivers)]
-    block = [_prepare(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
-    if method == "planar":
-        for i, r in enumerate(recv):
-            if r.plane is None:
-                raise ValueError(
-                    f"receivers[{i}].plane: method='planar' needs each receiver's plane"
-                )
-    light_pos = []
-    for i, light in enumerate(lights):
-        p = np.asarray(light.position, dtype=np.float64)
-        if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise ValueError(
-                f"lights[{i}].position: expected finite (x, y, z), got {light.position!r}"
-            )
-        light_pos.append(p)
-    light_col = [np.asarray(light.color, dtype=np.float64) for light in lights]
-    for i, c in enumerate(light_col):
-        if c.shape != (3,) or not np.all(np.isfinite(c)):
-            raise ValueError(f"lights[{i}].color: expected three finite values")
-
+    map_texels = _image_size("map_size", map_size)
+    recv = [prepare_body(f"receivers[{i}]", b) for i, b in enumerate(receivers)]
+    block = [prepare_body(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
+    shadow_pass.check(recv)
+    light_data = [prepare_light(f"lights[{i}]", light) for i, light in enumerate(lights)]
+    count = shadow_pass.setup_count(block)
     if setups is None:
-        all_setups = tuple(
-            tuple(fit_shadow(p, b.vertices, map_size, blocker_to_world=b.to_world) for b in block)
-            for p in light_pos
-        )
+        all_setups = tuple(shadow_pass.fit(recv, block, light, map_texels) for light in light_data)
     else:
         all_setups = tuple(tuple(per_light) for per_light in setups)
-        if len(all_setups) != len(lights) or any(len(s) != len(block) for s in all_setups):
+        if len(all_setups) != len(lights) or any(len(s) != count for s in all_setups):
             raise ValueError(
-                f"setups: expected {len(lights)} lists (one per light) of {len(block)} "
-                "ShadowSetups (one per blocker)"
+                f"setups: expected {len(lights)} lists (one per light) of {count} "
+                f"ShadowSetups each (method={method!r})"
             )
 
     gl = resolve_context(ctx)
-    return _draw(
-        gl, camera, size, map_size, method, ambient, background, recv, block,
-        light_pos, light_col, all_setups,
-    )  # fmt: skip
+    with GpuScene(gl, recv, block, light_data, camera, size, map_texels) as scene:
+        return _draw(scene, shadow_pass, all_setups, ambient, background)
 
 
 def _draw(
-    gl: moderngl.Context,
-    camera: NDArray[np.float64],
-    size: tuple[int, int],
-    map_size: int | tuple[int, int],
-    method: str,
+    scene: GpuScene,
+    shadow_pass: ShadowPass,
+    setups: tuple[tuple[ShadowSetup, ...], ...],
     ambient: float,
     background: tuple[float, float, float],
-    recv: list[_Prepared],
-    block: list[_Prepared],
-    light_pos: list[NDArray[np.float64]],
-    light_col: list[NDArray[np.float64]],
-    setups: tuple[tuple[ShadowSetup, ...], ...],
 ) -> Frame:
-    map_texels = _image_size("map_size", map_size)
-    released: list[Any] = []
-
-    def keep(obj: Any) -> Any:
-        released.append(obj)
-        return obj
-
-    try:
-        color_tex = keep(_texture(gl, size, 4))
-        surface_tex = keep(_texture(gl, size, 4))
-        normal_tex = keep(_texture(gl, size, 4))
-        mask_tex = keep(_texture(gl, size, 1))
-        depth = keep(gl.depth_renderbuffer(size))
-        main_fbo = keep(gl.framebuffer([color_tex, surface_tex, normal_tex], depth))
-        mask_fbo = keep(gl.framebuffer([mask_tex], depth))
-        color_fbo = keep(gl.framebuffer([color_tex], depth))
-
-        surface_prog = program(gl, "surface.vert", "surface_lit.frag")
-        mask_prog = program(gl, "surface.vert", "receiver_mask.frag")
-        planar_prog = program(gl, "planar.vert", "planar_mask.frag")
-        subtract_prog = program(gl, "surface.vert", "receiver_subtract.frag")
-
-        def body_vao(prog: moderngl.Program, body: _Prepared) -> Any:
-            vbo = keep(gl.buffer(_vertex_data(body)))
-            return keep(
-                # skip_errors: a pass whose shaders do not read an attribute (the
-                # linker drops it) still gets the same buffer layout.
-                gl.vertex_array(
-                    prog,
-                    [(vbo, "3f 3f 3f", "position", "normal", "face_normal")],
-                    skip_errors=True,
-                )
-            )
-
-        def plain_vao(prog: moderngl.Program, body: _Prepared) -> Any:
-            vbo = keep(gl.buffer(body.vertices[body.triangles].astype(np.float32).tobytes()))
-            return keep(gl.vertex_array(prog, [(vbo, "3f", "position")]))
-
-        bodies = recv + block
-        set_matrix(surface_prog, "world_to_clip", camera)
-        for prog in (mask_prog, subtract_prog):
-            set_matrix(prog, "world_to_clip", camera)
-        set_matrix(planar_prog, "world_to_clip", camera)
-
-        # Pass 0: the lit scene and the per-pixel record (position + id, face normal).
-        main_fbo.use()
-        main_fbo.viewport = (0, 0, *size)
-        gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
-        gl.enable(moderngl.DEPTH_TEST)
-        gl.depth_func = "<"
-        gl.polygon_offset = (0.0, 0.0)
-        main_fbo.depth_mask = True
-        main_fbo.clear(*background, 0.0, depth=1.0)
-        set_uniform(surface_prog, "light_count", len(light_pos))
-        padding = [np.zeros(3)] * (MAX_LIGHTS - len(light_pos))
-        uniform(surface_prog, "light_position").write(
-            np.array(light_pos + padding, np.float32).tobytes()
-        )
-        uniform(surface_prog, "light_color").write(
-            np.array(light_col + padding, np.float32).tobytes()
-        )
-        set_uniform(surface_prog, "ambient", float(ambient))
-        for i, prepared in enumerate(bodies):
-            set_matrix(surface_prog, "body_to_world", prepared.to_world)
-            set_uniform(surface_prog, "albedo", tuple(prepared.color))
-            set_uniform(surface_prog, "body_id", float(i))
-            body_vao(surface_prog, prepared).render(moderngl.TRIANGLES)
-
-        surface_tex.use(location=1)
-        mask_tex.use(location=2)
-        for prog in (mask_prog, planar_prog, subtract_prog):
-            set_uniform(prog, "surface", 1)
-        set_uniform(mask_prog, "shadow_map", 0)
-        set_uniform(subtract_prog, "mask", 2)
-        mask_vaos = [body_vao(mask_prog, r) for r in recv]
-        subtract_vaos = [body_vao(subtract_prog, r) for r in recv]
-        planar_vaos = [plain_vao(planar_prog, b) for b in block]
-        eye = np.linalg.inv(camera) @ np.array([0.0, 0.0, -1.0, 1.0])  # on the near plane
-
-        shadows = []
-        maps = []
-        for li, (light, lcolor) in enumerate(zip(light_pos, light_col, strict=True)):
-            # Pass 2/3: the light's combined shadow mask, MAX-blended over its blockers.
-            mask_fbo.use()
-            mask_fbo.viewport = (0, 0, *size)
-            mask_fbo.depth_mask = False
-            mask_fbo.clear(0.0, 0.0, 0.0, 0.0)  # depth_mask False: keeps the shared depth
-            gl.enable(moderngl.BLEND)
-            gl.blend_equation = (moderngl.MAX, moderngl.MAX)
-            gl.blend_func = moderngl.ONE, moderngl.ONE
-            gl.depth_func = "<="
-            light_maps = []
-            for bi, blocker in enumerate(block):
-                setup = setups[li][bi]
-                smap = keep(
-                    draw_shadow_map(
-                        gl, blocker.vertices, blocker.triangles,
-                        np.asarray(setup.blocker_to_clip), map_texels,
-                    )
-                )  # fmt: skip
-                light_maps.append(read_mask(smap))
-                mask_fbo.use()
-                mask_fbo.viewport = (0, 0, *size)
-                gl.enable(moderngl.BLEND | moderngl.DEPTH_TEST)
-                if method == "texture":
-                    smap.use(location=0)
-                    set_uniform(mask_prog, "light_position", tuple(light))
-                    for ri, receiver in enumerate(recv):
-                        set_matrix(mask_prog, "body_to_world", receiver.to_world)
-                        set_matrix(
-                            mask_prog,
-                            "body_to_texture",
-                            receiver_texture_matrix(setup, receiver.to_world),
-                        )
-                        set_uniform(mask_prog, "body_id", float(ri))
-                        mask_vaos[ri].render(moderngl.TRIANGLES)
-                else:
-                    gl.polygon_offset = PLANAR_POLYGON_OFFSET
-                    set_matrix(planar_prog, "blocker_to_world", blocker.to_world)
-                    for ri, receiver in enumerate(recv):
-                        plane = receiver.plane
-                        assert plane is not None
-                        side_light = np.dot(plane[:3], light) + plane[3]
-                        side_eye = np.dot(plane, eye) / eye[3]
-                        if side_light * side_eye <= 0:
-                            continue  # the camera sees the face the light does not reach
-                        flatten = planar_projection(plane, np.append(light, 1.0))
-                        set_matrix(planar_prog, "flatten", flatten)
-                        set_uniform(planar_prog, "body_id", float(ri))
-                        planar_vaos[bi].render(moderngl.TRIANGLES)
-                    gl.polygon_offset = (0.0, 0.0)
-            maps.append(tuple(light_maps))
-            shadows.append(_read(mask_tex, 1)[..., 0])
-
-            # Pass 4: subtract this light's diffuse term where its mask is set.
-            color_fbo.use()
-            color_fbo.viewport = (0, 0, *size)
-            color_fbo.depth_mask = False
-            gl.enable(moderngl.BLEND | moderngl.DEPTH_TEST)
-            gl.blend_equation = (moderngl.FUNC_REVERSE_SUBTRACT, moderngl.FUNC_REVERSE_SUBTRACT)
-            gl.blend_func = moderngl.ONE, moderngl.ONE
-            set_uniform(subtract_prog, "light_position", tuple(light))
-            set_uniform(subtract_prog, "light_color", tuple(lcolor))
-            for ri, receiver in enumerate(recv):
-                set_matrix(subtract_prog, "body_to_world", receiver.to_world)
-                set_uniform(subtract_prog, "albedo", tuple(receiver.color))
-                set_uniform(subtract_prog, "body_id", float(ri))
-                subtract_vaos[ri].render(moderngl.TRIANGLES)
-
-        gl.blend_equation = (moderngl.FUNC_ADD, moderngl.FUNC_ADD)
-        gl.disable(moderngl.BLEND)
-        color = _read(color_tex, 4)[..., :3]
-        surface = _read(surface_tex, 4)
-        normal = _read(normal_tex, 4)[..., :3]
-    finally:
-        for obj in reversed(released):
-            obj.release()
-
+    draw_lit(scene, ambient, background)
+    shadowed = shadow_pass.shadowed(scene)
+    shadows, maps = [], []
+    for light, light_setups in zip(scene.lights, setups, strict=True):
+        scene.clear_mask()
+        maps.append(shadow_pass.draw_mask(scene, light, light_setups))
+        shadows.append(read_texture(scene.mask_tex, 1)[..., 0])
+        subtract_light(scene, light, shadowed)
+    finish(scene)
+    color = read_texture(scene.color_tex, 4)[..., :3]
+    surface = read_texture(scene.surface_tex, 4)
+    normal = read_texture(scene.normal_tex, 4)[..., :3]
     body = np.rint(surface[..., 3]).astype(np.int32) - 1
     empty = (body < 0)[..., None]
     return Frame(
