@@ -27,6 +27,7 @@ import datetime
 import json
 import os
 import platform
+import subprocess
 import sys
 import time
 import traceback
@@ -57,6 +58,27 @@ def _cpu() -> str:
     return platform.processor() or platform.machine()
 
 
+def _commit() -> str:
+    """The repository's commit, and whether shadowmath/ differs from it in the working tree."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    try:
+        head = subprocess.run(
+            ["git", "-C", root, "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", root, "status", "--porcelain", "--", "shadowmath"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + (" (shadowmath/ modified in the working tree)" if dirty else "")
+
+
 def environment(cfg: Config) -> dict[str, Any]:
     import jax
     import numpy as np
@@ -74,6 +96,7 @@ def environment(cfg: Config) -> dict[str, Any]:
         "jax_enable_x64": bool(jax.config.read("jax_enable_x64")),
         "pyglm": _version("pyglm"),
         "shadowmath": shadowmath.__file__,
+        "commit": _commit(),
         "tiny": cfg.tiny,
     }
 
@@ -106,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"# shadowmath speed benchmarks{tiny}\n")
     for key in ("date", "machine", "python", "numpy", "jax", "pyglm", "jax_enable_x64"):
         print(f"* {key}: {env[key]}")
-    print(f"* shadowmath: {env['shadowmath']}")
+    print(f"* shadowmath: {env['shadowmath']} (repository at {env['commit']})")
     print()
     sections: dict[str, Section] = {}
     failed = False
