@@ -7,6 +7,7 @@ inline, and this test keeps each copy equal to its file.
 
 from __future__ import annotations
 
+import importlib.util
 import re
 from pathlib import Path
 
@@ -56,3 +57,35 @@ def test_readme_lists_every_notebook():
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     for path in sorted((ROOT / "notebooks").glob("*.ipynb")):
         assert f"notebooks/{path.name}" in text, path.name
+
+
+def _hooks():
+    spec = importlib.util.spec_from_file_location("docs_hooks", DOCS / "hooks.py")
+    assert spec and spec.loader
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_site_loads_no_script_from_another_host():
+    text = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
+    scripts = re.search(r"^extra_javascript:\n((?:  - .*\n)+)", text, re.MULTILINE)
+    assert scripts
+    entries = [line.removeprefix("  - ").strip() for line in scripts.group(1).splitlines()]
+    provided = set(_hooks().mathjax_files())
+    for entry in entries:
+        assert "//" not in entry, entry
+        assert (DOCS / entry).is_file() or entry in provided, entry
+    assert "javascripts/mathjax/tex-mml-chtml.js" in entries
+
+
+def test_mathjax_comes_from_the_pinned_package_with_its_fonts():
+    files = _hooks().mathjax_files()
+    assert files["javascripts/mathjax/tex-mml-chtml.js"].is_file()
+    fonts = [
+        uri for uri in files if uri.startswith("javascripts/mathjax/output/chtml/fonts/woff-v2/")
+    ]
+    assert any(uri.endswith("MathJax_Main-Regular.woff") for uri in fonts)
+    assert not (DOCS / "javascripts" / "mathjax").exists()  # not committed by hand
+    pin = f'"{_hooks().MATHJAX_DIST}=={_hooks().MATHJAX_VERSION}"'
+    assert pin in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
