@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib.util
 import re
+import sys
 from pathlib import Path
 
 import pytest
@@ -89,3 +90,39 @@ def test_mathjax_comes_from_the_pinned_package_with_its_fonts():
     assert not (DOCS / "javascripts" / "mathjax").exists()  # not committed by hand
     pin = f'"{_hooks().MATHJAX_DIST}=={_hooks().MATHJAX_VERSION}"'
     assert pin in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+
+
+def _public_docstring_sections():
+    """Every public object's docstring sections, as mkdocstrings gets them for api.md."""
+    griffe = pytest.importorskip("griffe")
+    sys.path.insert(0, str(DOCS))
+    try:
+        from griffe_rst import RstToMarkdown
+    finally:
+        sys.path.remove(str(DOCS))
+    extensions = griffe.load_extensions(RstToMarkdown())
+    package = griffe.load("shadowmath", extensions=extensions, search_paths=[str(ROOT)])
+    import shadowmath
+    import shadowmath.render
+
+    names = [*shadowmath.__all__, *(f"render.{n}" for n in shadowmath.render.__all__)]
+    for name in names:
+        obj = package[name]
+        if obj.docstring is not None:
+            yield name, obj.docstring.parse("google")
+
+
+def test_api_examples_are_code_not_headings_or_quotes():
+    markdown = pytest.importorskip("markdown")
+    examples = 0
+    for name, sections in _public_docstring_sections():
+        for section in sections:
+            if section.kind.value != "admonition":
+                continue
+            html = markdown.markdown(
+                section.value.contents, extensions=["pymdownx.superfences", "toc"]
+            )
+            examples += ">>>" in section.value.contents
+            assert "<blockquote>" not in html, name
+            assert not re.search(r"<h[1-6]", html), name
+    assert examples > 20
