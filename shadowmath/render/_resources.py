@@ -257,6 +257,13 @@ class GpuScene:
         self._released.clear()
 
 
+class PassOptions(NamedTuple):
+    """The options of :func:`render_scene` that a shadow pass may take."""
+
+    pcf_radius: int = 0
+    depth_bias: tuple[float, float] | None = None
+
+
 class ShadowPass(Protocol):
     """One shadow system: its setups per light, and the light's shadow mask.
 

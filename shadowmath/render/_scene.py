@@ -4,7 +4,7 @@ and the subtractive pass. Each shadow system is a pass module (``_pass_texture``
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, Literal, NamedTuple
 
 import moderngl
@@ -15,6 +15,7 @@ from shadowmath._setup import ShadowSetup
 
 from ._context import check_matrix, resolve_context
 from ._context import image_size as _image_size
+from ._pass_depth import DepthPass
 from ._pass_lit import MAX_LIGHTS, draw_lit, finish, subtract_light
 from ._pass_planar import PlanarPass
 from ._pass_texture import TexturePass
@@ -22,14 +23,20 @@ from ._resources import (
     Body,
     GpuScene,
     Light,
+    PassOptions,
     ShadowPass,
     prepare_body,
     prepare_light,
     read_texture,
 )
 
-#: The shadow systems by ``method`` name.
-PASSES: dict[str, ShadowPass] = {"texture": TexturePass(), "planar": PlanarPass()}
+#: The shadow systems by ``method`` name: each takes the options of :func:`render_scene`
+#: it uses (``pcf_radius``, ``depth_bias``) and ignores the others.
+PASSES: dict[str, Callable[[PassOptions], ShadowPass]] = {
+    "texture": lambda _: TexturePass(),
+    "planar": lambda _: PlanarPass(),
+    "depth": lambda o: DepthPass(o.pcf_radius, o.depth_bias),
+}
 
 
 class Frame(NamedTuple):
@@ -38,16 +45,20 @@ class Frame(NamedTuple):
     Attributes:
         color: ``(H, W, 3)`` float32 in ``[0, 1]``, the final picture.
         shadow: ``(H, W, L)`` float32, light ``l``'s combined shadow mask on the visible
-            receivers (1 shadowed, 0 lit; 0 on blockers and background).
+            receivers (1 shadowed, 0 lit; 0 on blockers and background). With
+            ``method="depth"`` on every visible body, and PCF gives fractions.
         position: ``(H, W, 3)`` float32 world position of the visible surface (NaN on
             the background).
         normal: ``(H, W, 3)`` float32 unit face normal of the visible surface (NaN on
             the background).
         body: ``(H, W)`` int32, which body is visible: ``0 .. R-1`` the receivers,
             ``R .. R+B-1`` the blockers, ``-1`` the background.
-        setups: ``setups[l][b]`` the :class:`ShadowSetup` of light ``l`` and blocker ``b``.
+        setups: ``setups[l][b]`` the :class:`ShadowSetup` of light ``l`` and blocker ``b``
+            (``method="depth"``: ``setups[l][0]``, one per light, fitted to all blockers).
         shadow_maps: ``shadow_maps[l][b]`` the ``(h, w)`` pass-1 mask, as
-            :func:`render_shadow_map` returns it (row 0 is ``t = 0``).
+            :func:`render_shadow_map` returns it (row 0 is ``t = 0``);
+            ``method="depth"``: ``shadow_maps[l][0]`` the light's depth map, window
+            depths in ``[0, 1]`` (1 where nothing was drawn).
     """
 
     color: NDArray[np.float32]
@@ -67,10 +78,12 @@ def render_scene(
     *,
     image_size: int | tuple[int, int] = (512, 384),
     map_size: int | tuple[int, int] = 256,
-    method: Literal["texture", "planar"] = "texture",
+    method: Literal["texture", "planar", "depth"] = "texture",
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.06, 0.07, 0.09),
     setups: Sequence[Sequence[ShadowSetup]] | None = None,
+    pcf_radius: int = 0,
+    depth_bias: tuple[float, float] | None = None,
     ctx: moderngl.Context | None = None,
 ) -> Frame:
     r"""Render receivers in the shadows of blockers, the article's passes on the GPU.
@@ -87,8 +100,15 @@ def render_scene(
        flattened onto each receiver's plane with :func:`planar_projection`, drawn with
        a polygon offset of :data:`PLANAR_POLYGON_OFFSET` against z-fighting, and
        skipped for a light on the other side of the plane than the camera (the
-       visible face is unlit: Blinn's back-face case).
-    3. **Subtractive pass** per light (pass 4): each receiver drawn again with
+       visible face is unlit: Blinn's back-face case). With ``method="depth"``
+       (Williams' shadow z-buffer) one setup per light fits all blockers, its far
+       plane moved out to enclose every body; **every body** (receivers and
+       blockers) is drawn into a depth texture with ``glPolygonOffset(*depth_bias)``
+       and every body is then shadowed by comparing its light depth ``r`` with the
+       map (``sampler2DShadow``) over a ``(2k + 1)^2`` box of texels (PCF,
+       ``k = pcf_radius``); outside the map, behind the light and on faces turned
+       from the light: lit.
+    3. **Subtractive pass** per light (pass 4): each shadowed body drawn again with
        ``FUNC_REVERSE_SUBTRACT`` blending removes that light's diffuse term where its
        mask is set, so the shadows of several lights compose correctly.
 
@@ -110,12 +130,19 @@ def render_scene(
         world_to_clip: ``(4, 4)`` the camera, e.g. ``perspective(...) @ look_at(...)``.
         image_size: ``size`` or ``(width, height)`` of the picture in pixels.
         map_size: ``size`` or ``(width, height)`` of each shadow map in texels.
-        method: ``"texture"`` (Nagy's projective shadow texture) or ``"planar"``
-            (Blinn's planar projection: every receiver needs a ``plane``).
+        method: ``"texture"`` (Nagy's projective shadow texture), ``"planar"``
+            (Blinn's planar projection: every receiver needs a ``plane``) or
+            ``"depth"`` (Williams' shadow z-buffer: every body casts and receives).
         ambient: the ambient term ``a``.
         background: RGB of empty pixels.
         setups: ``setups[l][b]`` to use instead of ``fit_shadow(light, blocker, map_size,
-            blocker_to_world=to_world)`` (e.g. matrices computed with JAX).
+            blocker_to_world=to_world)`` (e.g. matrices computed with JAX);
+            ``method="depth"``: one per light, world coordinates to the light's clip
+            (``blocker_to_clip @ inv(blocker_to_world)``) with a depth range that
+            encloses the receivers.
+        pcf_radius: ``method="depth"``: the PCF kernel's radius ``k`` in texels.
+        depth_bias: ``method="depth"``: ``(factor, units)`` of the depth map's polygon
+            offset (slope-scaled and constant); default ``(2.5 + 2 k, 4.0)``.
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
 
     Returns:
@@ -141,7 +168,7 @@ def render_scene(
     """
     if method not in PASSES:
         raise ValueError(f"method: expected one of {', '.join(map(repr, PASSES))}, got {method!r}")
-    shadow_pass = PASSES[method]
+    shadow_pass = PASSES[method](PassOptions(pcf_radius, depth_bias))
     if not 1 <= len(lights) <= MAX_LIGHTS:
         raise ValueError(f"lights: expected 1 to {MAX_LIGHTS} lights, got {len(lights)}")
     if not (np.isfinite(ambient) and ambient >= 0):
