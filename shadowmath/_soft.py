@@ -41,7 +41,9 @@ _DEGENERATE = (
 
 def _row(xp: ModuleType, normal: Array, point: Array, denominator: Array) -> Array:
     """The matrix row ``(n, -n . point) / denominator``: ``n . (p - point) / denominator``."""
-    return xp.concat([normal, -dot(xp, normal, point)[..., None]], axis=-1) / denominator[..., None]
+    offset = -dot(xp, normal, point)[..., None]
+    normal = xp.broadcast_to(normal, (*offset.shape[:-1], 3))
+    return xp.concat([normal, offset], axis=-1) / denominator[..., None]
 
 
 def _pyramid_to_unit_cube(xp: ModuleType, a: Array, b: Array, eu: Array, ev: Array) -> Array:
@@ -124,7 +126,8 @@ def pyramid_to_unit_cube(apex: Any, corner: Any, edge_u: Any, edge_v: Any) -> Ar
     Raises:
         ValueError: wrong shapes; non-finite values; a degenerate parallelogram
             (a zero edge or parallel edges, relative to their lengths); the apex
-            in the base plane (relative to the pyramid's size). Under JAX
+            in the base plane (its height below ``64 eps`` times the pyramid's size
+            ``|edge_u| + |edge_v| + |corner - apex|``). Under JAX
             transformations the affected matrices are NaN instead.
 
     Example:
@@ -149,10 +152,11 @@ def pyramid_to_unit_cube(apex: Any, corner: Any, edge_u: Any, edge_v: Any) -> Ar
     for name, value in (("apex", a), ("corner", b), ("edge_u", eu), ("edge_v", ev)):
         checks.require(all_finite(xp, value, 1), non_finite(name))
     _require_parallelogram(ctx, checks, eu, ev)
-    len_u, len_v, len_w = norm(xp, eu), norm(xp, ev), norm(xp, b - a)
-    height_volume = dot(xp, cross(xp, ev, eu), b - a)  # = ± area * height of the apex
+    normal = cross(xp, ev, eu)
+    size = norm(xp, eu) + norm(xp, ev) + norm(xp, b - a)
+    # |n . (b - a)| = area * height of the apex above the base plane.
     checks.require(
-        xp.abs(height_volume) > 64 * ctx.eps * len_u * len_v * len_w,
+        xp.abs(dot(xp, normal, b - a)) > 64 * ctx.eps * norm(xp, normal) * size,
         "apex: lies in the base plane of the parallelogram (relative to the pyramid's "
         "size); the pyramid needs its apex off that plane",
     )
