@@ -17,7 +17,7 @@ with ``(s_c, t_c, m_a)`` from the table (face ``i`` is
     face  0 +X   1 -X   2 +Y   3 -Y   4 +Z   5 -Z
     s_c     -z     +z     +x     +x     +x     -x
     t_c     -y     -y     +z     -z     -y     -y
-    m_a     +x     -x     +y     -y     +z     -z
+    m_a      x      x      y      y      z      z
 
 ``t = 0`` is the face image's first row in memory. The views of
 :func:`cube_face_views` are look-at cameras (looking down their ``-z``) whose
@@ -370,16 +370,14 @@ def cube_face(directions: Any) -> CubeFaceCoords:
         s = \tfrac12\left(\frac{s_c}{|m_a|} + 1\right), \qquad
         t = \tfrac12\left(\frac{t_c}{|m_a|} + 1\right).
 
-    ====  =====  =====  =====
-    face  s_c    t_c    m_a
-    ====  =====  =====  =====
-    +X    -z     -y     +x
-    -X    +z     -y     -x
-    +Y    +x     +z     +y
-    -Y    +x     -z     -y
-    +Z    +x     -y     +z
-    -Z    -x     -y     -z
-    ====  =====  =====  =====
+    | face | ``s_c`` | ``t_c`` | ``m_a`` |
+    | ---- | ------- | ------- | ------- |
+    | +X   | ``-z``  | ``-y``  | ``x``   |
+    | -X   | ``+z``  | ``-y``  | ``x``   |
+    | +Y   | ``+x``  | ``+z``  | ``y``   |
+    | -Y   | ``+x``  | ``-z``  | ``y``   |
+    | +Z   | ``+x``  | ``-y``  | ``z``   |
+    | -Z   | ``-x``  | ``-y``  | ``z``   |
 
     **Ties.** The specifications leave the face of a direction with two or
     three equal largest magnitudes (an edge or a corner of the cube) to the
