@@ -72,6 +72,8 @@ from ._frustum import blocker_projection as blocker_projection
 from ._frustum import border_margin as border_margin
 from ._frustum import receiver_projection as receiver_projection
 from ._layout import column_major_bytes as column_major_bytes
+from ._pcf import pcf as pcf
+from ._pcf import pcf_border_texels as pcf_border_texels
 from ._planar import planar_projection as planar_projection
 from ._setup import ShadowSetup as ShadowSetup
 from ._setup import fit_shadow as fit_shadow
@@ -119,6 +121,8 @@ __all__ = [
     "normal_offset",
     "offcenter_frustum",
     "optimize_frustum",
+    "pcf",
+    "pcf_border_texels",
     "planar_projection",
     "pyramid_to_unit_cube",
     "receiver_projection",
