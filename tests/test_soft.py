@@ -227,7 +227,7 @@ def test_one_sample_in_each_cell_of_the_most_nearly_square_grid(count: int) -> N
 
 
 @given(
-    st.integers(1, 40),
+    st.sampled_from([1, 2, 7, 12, 40]),  # few shapes: each new one recompiles JAX's eager ops
     st.integers(0, 2**32 - 1),
     vec3(-10, 10),
     vec3(),
