@@ -12,7 +12,9 @@ does not.
 * :func:`render_scene`: the whole method from a camera: a lit pass, then per
   light the shadow maps of its blockers applied to the receivers as projective
   textures (or Blinn's flattened blockers, ``method="planar"``), combined into
-  one mask per light, and a subtractive pass per light.
+  one mask per light, and a subtractive pass per light. ``method="depth"`` is
+  Williams' shadow z-buffer, ``method="omni"`` a point light's cube depth map
+  sampled with ``samplerCubeShadow``.
 * moderngl 5 has no stencil state. Where the articles use the stencil buffer
   (confining planar shadows to their receiver, darkening overlapping shadows
   once) this renderer records each pixel's body id in the lit pass and

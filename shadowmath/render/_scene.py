@@ -17,6 +17,7 @@ from ._context import check_matrix, resolve_context
 from ._context import image_size as _image_size
 from ._pass_depth import DepthPass
 from ._pass_lit import MAX_LIGHTS, draw_lit, finish, subtract_light
+from ._pass_omni import OmniPass
 from ._pass_planar import PlanarPass
 from ._pass_texture import TexturePass
 from ._resources import (
@@ -36,6 +37,7 @@ PASSES: dict[str, Callable[[PassOptions], ShadowPass]] = {
     "texture": lambda _: TexturePass(),
     "planar": lambda _: PlanarPass(),
     "depth": lambda o: DepthPass(o.pcf_radius, o.depth_bias),
+    "omni": lambda o: OmniPass(o.depth_bias),
 }
 
 
@@ -54,11 +56,13 @@ class Frame(NamedTuple):
         body: ``(H, W)`` int32, which body is visible: ``0 .. R-1`` the receivers,
             ``R .. R+B-1`` the blockers, ``-1`` the background.
         setups: ``setups[l][b]`` the :class:`ShadowSetup` of light ``l`` and blocker ``b``
-            (``method="depth"``: ``setups[l][0]``, one per light, fitted to all blockers).
+            (``method="depth"``: ``setups[l][0]``, one per light, fitted to all blockers;
+            ``method="omni"``: none, ``setups[l] == ()``).
         shadow_maps: ``shadow_maps[l][b]`` the ``(h, w)`` pass-1 mask, as
             :func:`render_shadow_map` returns it (row 0 is ``t = 0``);
             ``method="depth"``: ``shadow_maps[l][0]`` the light's depth map, window
-            depths in ``[0, 1]`` (1 where nothing was drawn).
+            depths in ``[0, 1]`` (1 where nothing was drawn); ``method="omni"``: the six
+            cube faces ``+X, -X, +Y, -Y, +Z, -Z``, window depths, row 0 is ``t = 0``.
     """
 
     color: NDArray[np.float32]
@@ -78,7 +82,7 @@ def render_scene(
     *,
     image_size: int | tuple[int, int] = (512, 384),
     map_size: int | tuple[int, int] = 256,
-    method: Literal["texture", "planar", "depth"] = "texture",
+    method: Literal["texture", "planar", "depth", "omni"] = "texture",
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.06, 0.07, 0.09),
     setups: Sequence[Sequence[ShadowSetup]] | None = None,
@@ -107,7 +111,13 @@ def render_scene(
        and every body is then shadowed by comparing its light depth ``r`` with the
        map (``sampler2DShadow``) over a ``(2k + 1)^2`` box of texels (PCF,
        ``k = pcf_radius``); outside the map, behind the light and on faces turned
-       from the light: lit.
+       from the light: lit. With ``method="omni"`` the light shines in every
+       direction: every body is drawn into a GL **cube depth map**, six square
+       ``map_size`` faces through ``cube_face_projection(near, far, map_size) @
+       cube_face_views(light)[i]`` with ``glPolygonOffset(*depth_bias)``, and every body
+       is shadowed by ``samplerCubeShadow`` along ``p - light`` against its window depth
+       on the selected face (:func:`cube_face_depth`'s ``depth``); ``far`` is just
+       beyond the farthest body vertex, ``near = 1e-3 far``.
     3. **Subtractive pass** per light (pass 4): each shadowed body drawn again with
        ``FUNC_REVERSE_SUBTRACT`` blending removes that light's diffuse term where its
        mask is set, so the shadows of several lights compose correctly.
@@ -132,7 +142,9 @@ def render_scene(
         map_size: ``size`` or ``(width, height)`` of each shadow map in texels.
         method: ``"texture"`` (Nagy's projective shadow texture), ``"planar"``
             (Blinn's planar projection: every receiver needs a ``plane``) or
-            ``"depth"`` (Williams' shadow z-buffer: every body casts and receives).
+            ``"depth"`` (Williams' shadow z-buffer: every body casts and receives) or
+            ``"omni"`` (a cube depth map: every body casts and receives, in every
+            direction from the light; ``map_size`` must be square).
         ambient: the ambient term ``a``.
         background: RGB of empty pixels.
         setups: ``setups[l][b]`` to use instead of ``fit_shadow(light, blocker, map_size,
@@ -141,8 +153,8 @@ def render_scene(
             (``blocker_to_clip @ inv(blocker_to_world)``) with a depth range that
             encloses the receivers.
         pcf_radius: ``method="depth"``: the PCF kernel's radius ``k`` in texels.
-        depth_bias: ``method="depth"``: ``(factor, units)`` of the depth map's polygon
-            offset (slope-scaled and constant); default ``(2.5 + 2 k, 4.0)``.
+        depth_bias: ``method="depth"`` and ``"omni"``: ``(factor, units)`` of the depth
+            map's polygon offset (slope-scaled and constant); default ``(2.5 + 2 k, 4.0)``.
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
 
     Returns:
