@@ -14,7 +14,11 @@ does not.
   textures (or Blinn's flattened blockers, ``method="planar"``), combined into
   one mask per light, and a subtractive pass per light. ``method="depth"`` is
   Williams' shadow z-buffer, ``method="omni"`` a point light's cube depth map
-  sampled with ``samplerCubeShadow``.
+  sampled with ``samplerCubeShadow``; ``method="soft"`` and ``"radiance"`` average
+  the hard shadows of an area light's samples (seed 003's depth maps, Heckbert and
+  Herf's radiance textures).
+* :func:`radiance_texture`: Heckbert and Herf's radiance texture of one receiver
+  parallelogram, as a NumPy array.
 * moderngl 5 has no stencil state. Where the articles use the stencil buffer
   (confining planar shadows to their receiver, darkening overlapping shadows
   once) this renderer records each pixel's body id in the lit pass and
@@ -32,6 +36,7 @@ from ._context import GLUnavailableError as GLUnavailableError
 from ._context import standalone_context as standalone_context
 from ._pass_lit import MAX_LIGHTS as MAX_LIGHTS
 from ._pass_planar import PLANAR_POLYGON_OFFSET as PLANAR_POLYGON_OFFSET
+from ._pass_soft import radiance_texture as radiance_texture
 from ._resources import Body as Body
 from ._resources import Light as Light
 from ._scene import Frame as Frame
@@ -48,6 +53,7 @@ __all__ = [
     "Light",
     "look_at",
     "perspective",
+    "radiance_texture",
     "render_scene",
     "render_shadow_map",
     "standalone_context",

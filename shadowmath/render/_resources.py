@@ -40,15 +40,21 @@ class Body(NamedTuple):
 
 
 class Light(NamedTuple):
-    """A point light.
+    """A point light, or a parallelogram area light centred on ``position``.
 
     Attributes:
-        position: ``(3,)`` in world coordinates.
+        position: ``(3,)`` in world coordinates (an area light's centre).
         color: RGB intensity of its diffuse light.
+        edge_u, edge_v: ``(3,)`` the edges of an area light, the parallelogram
+            ``position + u edge_u + v edge_v`` for ``-1/2 <= u, v <= 1/2``; both or
+            neither. Only the soft-shadow methods (``method="soft"``, ``"radiance"``)
+            sample the area; the lit pass and the other methods light from ``position``.
     """
 
     position: Any
     color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    edge_u: Any = None
+    edge_v: Any = None
 
 
 class Prepared(NamedTuple):
@@ -69,6 +75,16 @@ class Prepared(NamedTuple):
 class PreparedLight(NamedTuple):
     position: NDArray[np.float64]
     color: NDArray[np.float64]
+    #: An area light's ``(edge_u, edge_v)``; None for a point light.
+    edges: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+
+    @property
+    def corner(self) -> NDArray[np.float64]:
+        """An area light's corner ``position - (edge_u + edge_v) / 2`` (a point light's
+        position)."""
+        if self.edges is None:
+            return self.position
+        return np.asarray(self.position - 0.5 * (self.edges[0] + self.edges[1]), np.float64)
 
 
 def prepare_body(name: str, body: Body) -> Prepared:
@@ -94,7 +110,22 @@ def prepare_light(name: str, light: Light) -> PreparedLight:
     c = np.asarray(light.color, dtype=np.float64)
     if c.shape != (3,) or not np.all(np.isfinite(c)):
         raise ValueError(f"{name}.color: expected three finite values")
-    return PreparedLight(p, c)
+    if light.edge_u is None and light.edge_v is None:
+        return PreparedLight(p, c)
+    if light.edge_u is None or light.edge_v is None:
+        raise ValueError(f"{name}: an area light needs both edge_u and edge_v")
+    edges = []
+    for field in ("edge_u", "edge_v"):
+        e = np.asarray(getattr(light, field), dtype=np.float64)
+        if e.shape != (3,) or not np.all(np.isfinite(e)):
+            raise ValueError(f"{name}.{field}: expected finite (x, y, z), got {e!r}")
+        edges.append(e)
+    eu, ev = edges
+    if np.linalg.norm(np.cross(eu, ev)) <= 1e-12 * np.linalg.norm(eu) * np.linalg.norm(ev) or (
+        not np.any(eu) or not np.any(ev)
+    ):
+        raise ValueError(f"{name}: edge_u and edge_v must be non-zero and not parallel")
+    return PreparedLight(p, c, (eu, ev))
 
 
 def vertex_data(vertices: NDArray[np.float64], triangles: NDArray[np.int64]) -> bytes:
@@ -262,6 +293,8 @@ class PassOptions(NamedTuple):
 
     pcf_radius: int = 0
     depth_bias: tuple[float, float] | None = None
+    samples: int = 16
+    seed: int | None = 0
 
 
 class ShadowPass(Protocol):

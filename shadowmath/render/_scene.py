@@ -19,6 +19,7 @@ from ._pass_depth import DepthPass
 from ._pass_lit import MAX_LIGHTS, draw_lit, finish, subtract_light
 from ._pass_omni import OmniPass
 from ._pass_planar import PlanarPass
+from ._pass_soft import RadiancePass, SoftPass
 from ._pass_texture import TexturePass
 from ._resources import (
     Body,
@@ -38,6 +39,8 @@ PASSES: dict[str, Callable[[PassOptions], ShadowPass]] = {
     "planar": lambda _: PlanarPass(),
     "depth": lambda o: DepthPass(o.pcf_radius, o.depth_bias),
     "omni": lambda o: OmniPass(o.depth_bias),
+    "soft": lambda o: SoftPass(o.samples, o.seed, o.pcf_radius, o.depth_bias),
+    "radiance": lambda o: RadiancePass(o.samples, o.seed),
 }
 
 
@@ -57,12 +60,15 @@ class Frame(NamedTuple):
             ``R .. R+B-1`` the blockers, ``-1`` the background.
         setups: ``setups[l][b]`` the :class:`ShadowSetup` of light ``l`` and blocker ``b``
             (``method="depth"``: ``setups[l][0]``, one per light, fitted to all blockers;
-            ``method="omni"``: none, ``setups[l] == ()``).
+            ``method="omni"`` and ``"radiance"``: none, ``setups[l] == ()``;
+            ``method="soft"``: one ``method="depth"`` setup per light sample).
         shadow_maps: ``shadow_maps[l][b]`` the ``(h, w)`` pass-1 mask, as
             :func:`render_shadow_map` returns it (row 0 is ``t = 0``);
             ``method="depth"``: ``shadow_maps[l][0]`` the light's depth map, window
             depths in ``[0, 1]`` (1 where nothing was drawn); ``method="omni"``: the six
-            cube faces ``+X, -X, +Y, -Y, +Z, -Z``, window depths, row 0 is ``t = 0``.
+            cube faces ``+X, -X, +Y, -Y, +Z, -Z``, window depths, row 0 is ``t = 0``;
+            ``method="soft"``: none; ``method="radiance"``: ``shadow_maps[l][r]``
+            receiver ``r``'s visibility texture (:func:`radiance_texture`).
     """
 
     color: NDArray[np.float32]
@@ -82,12 +88,14 @@ def render_scene(
     *,
     image_size: int | tuple[int, int] = (512, 384),
     map_size: int | tuple[int, int] = 256,
-    method: Literal["texture", "planar", "depth", "omni"] = "texture",
+    method: Literal["texture", "planar", "depth", "omni", "soft", "radiance"] = "texture",
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.06, 0.07, 0.09),
     setups: Sequence[Sequence[ShadowSetup]] | None = None,
     pcf_radius: int = 0,
     depth_bias: tuple[float, float] | None = None,
+    samples: int = 16,
+    seed: int | None = 0,
     ctx: moderngl.Context | None = None,
 ) -> Frame:
     r"""Render receivers in the shadows of blockers, the article's passes on the GPU.
@@ -118,6 +126,16 @@ def render_scene(
        is shadowed by ``samplerCubeShadow`` along ``p - light`` against its window depth
        on the selected face (:func:`cube_face_depth`'s ``depth``); ``far`` is just
        beyond the farthest body vertex, ``near = 1e-3 far``.
+       **Soft shadows** need area lights (``Light(centre, edge_u=..., edge_v=...)``),
+       sampled at ``samples`` stratified jittered points
+       (:func:`shadowmath.area_light_samples`, ``seed``); the mask is the blocked
+       fraction of the light. ``method="soft"`` (seed 003): per sample, the
+       ``method="depth"`` map and comparison from that sample (every body casts and
+       receives), added into the mask with weight ``1 / samples``.
+       ``method="radiance"`` (Heckbert and Herf): per receiver (each needs a ``plane``),
+       a radiance texture of ``map_size`` texels over the rectangle around it in its
+       plane (:func:`radiance_texture`), drawn onto it. The lit pass lights from the
+       area light's centre.
     3. **Subtractive pass** per light (pass 4): each shadowed body drawn again with
        ``FUNC_REVERSE_SUBTRACT`` blending removes that light's diffuse term where its
        mask is set, so the shadows of several lights compose correctly.
@@ -144,7 +162,9 @@ def render_scene(
             (Blinn's planar projection: every receiver needs a ``plane``) or
             ``"depth"`` (Williams' shadow z-buffer: every body casts and receives) or
             ``"omni"`` (a cube depth map: every body casts and receives, in every
-            direction from the light; ``map_size`` must be square).
+            direction from the light; ``map_size`` must be square), ``"soft"`` (the
+            averaged depth-map shadows of an area light's samples) or ``"radiance"``
+            (Heckbert and Herf's radiance textures: every receiver needs a ``plane``).
         ambient: the ambient term ``a``.
         background: RGB of empty pixels.
         setups: ``setups[l][b]`` to use instead of ``fit_shadow(light, blocker, map_size,
@@ -155,6 +175,9 @@ def render_scene(
         pcf_radius: ``method="depth"``: the PCF kernel's radius ``k`` in texels.
         depth_bias: ``method="depth"`` and ``"omni"``: ``(factor, units)`` of the depth
             map's polygon offset (slope-scaled and constant); default ``(2.5 + 2 k, 4.0)``.
+        samples: ``method="soft"`` and ``"radiance"``: points per area light, ``>= 1``.
+        seed: ``method="soft"`` and ``"radiance"``: the samples' jitter seed (None: fresh
+            jitter each call).
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
 
     Returns:
@@ -162,8 +185,10 @@ def render_scene(
 
     Raises:
         ValueError: bad meshes, matrices, sizes, colours; no lights or too many; a
-            receiver without a plane under ``method="planar"``; ``setups`` of the wrong
-            shape; and whatever :func:`fit_shadow` raises for a light and a blocker.
+            receiver without a plane under ``method="planar"`` or ``"radiance"``; a
+            point light or bad ``samples`` under ``method="soft"`` or ``"radiance"``;
+            ``setups`` of the wrong shape; and whatever :func:`fit_shadow` raises for a
+            light and a blocker.
         GLUnavailableError: no OpenGL context could be created.
 
     Example:
@@ -180,7 +205,7 @@ def render_scene(
     """
     if method not in PASSES:
         raise ValueError(f"method: expected one of {', '.join(map(repr, PASSES))}, got {method!r}")
-    shadow_pass = PASSES[method](PassOptions(pcf_radius, depth_bias))
+    shadow_pass = PASSES[method](PassOptions(pcf_radius, depth_bias, samples, seed))
     if not 1 <= len(lights) <= MAX_LIGHTS:
         raise ValueError(f"lights: expected 1 to {MAX_LIGHTS} lights, got {len(lights)}")
     if not (np.isfinite(ambient) and ambient >= 0):
