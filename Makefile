@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck pytest docs notebooks bench fuzz clean
+.PHONY: demo test lint typecheck pytest docs notebooks bench bench-coverage fuzz clean
 
 $(STAMP): pyproject.toml
 	@bash tools/ensure_gl.sh
@@ -36,8 +36,13 @@ docs: $(STAMP)
 notebooks: $(STAMP)
 	$(PY) -m pytest --nbmake notebooks
 
-## Coverage of the optimized frustum fit vs the article's MDV set-up (not a test; prints a table).
+## The benchmark suite (not a test; prints tables): speed against PyGLM, NumPy and the memory
+## limit, and the optimized fit's coverage. Options: make bench ARGS="--help" (--only, --tiny, --json).
 bench: $(STAMP)
+	$(PY) benchmarks/run.py $(ARGS)
+
+## Coverage of the optimized frustum fit vs the article's MDV set-up alone (bench's last section).
+bench-coverage: $(STAMP)
 	$(PY) benchmarks/bench_fit.py $(ARGS)
 
 ## The long fuzz run (2000 examples per fuzz test instead of 25); prints the cases tried.

@@ -4,6 +4,10 @@ The docstrings are written for ``help()`` and doctests, so they use reST's
 ``.. math::`` directive and ``:func:`` roles. mkdocstrings renders Markdown; this
 turns the directive into an arithmatex ``$$`` block and the roles into links to the
 API reference (plain code when the target is not a public name).
+
+Doctest blocks (``>>>`` lines and their output, up to a blank line) become fenced
+``pycon`` code: read as Markdown, ``>>>`` opens nested block quotes, in which a
+``>>> # comment`` line is a heading that lands in the page's table of contents.
 """
 
 from __future__ import annotations
@@ -57,6 +61,26 @@ def _math_blocks(text: str) -> str:
     return "\n".join(out)
 
 
+def _doctest_blocks(text: str) -> str:
+    """Each run of doctest lines (from a ``>>>`` line to a blank one) -> a ``pycon`` fence."""
+    lines = text.split("\n")
+    out: list[str] = []
+    i = 0
+    while i < len(lines):
+        stripped = lines[i].lstrip()
+        if stripped != ">>>" and not stripped.startswith(">>> "):
+            out.append(lines[i])
+            i += 1
+            continue
+        indent = lines[i][: len(lines[i]) - len(stripped)]
+        out.append(f"{indent}```pycon")
+        while i < len(lines) and lines[i].strip():
+            out.append(indent + lines[i][len(indent) :])
+            i += 1
+        out.append(f"{indent}```")
+    return "\n".join(out)
+
+
 def _split_grouped_args(text: str) -> str:
     def split(match: re.Match[str]) -> str:
         indent, names, description = match.groups()
@@ -83,5 +107,5 @@ class RstToMarkdown(griffe.Extension):
 
     def on_object(self, *, obj: griffe.Object, **kwargs: Any) -> None:
         if obj.docstring is not None:
-            text = _split_grouped_args(_math_blocks(obj.docstring.value))
+            text = _split_grouped_args(_math_blocks(_doctest_blocks(obj.docstring.value)))
             obj.docstring.value = _roles(text, self.public)

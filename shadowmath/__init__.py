@@ -39,7 +39,20 @@ CONVENTIONS
   wrong matrix.
 """
 
+from ._bias import normal_offset as normal_offset
+from ._bias import slope_scaled_bias as slope_scaled_bias
+from ._bias import texel_world_size as texel_world_size
 from ._checks import check_finite as check_finite
+from ._conventions import GRAPHICS_APIS as GRAPHICS_APIS
+from ._conventions import ApiConvention as ApiConvention
+from ._conventions import api_convention as api_convention
+from ._cube import CubeFaceCoords as CubeFaceCoords
+from ._cube import CubeFaceDepth as CubeFaceDepth
+from ._cube import cube_face as cube_face
+from ._cube import cube_face_depth as cube_face_depth
+from ._cube import cube_face_direction as cube_face_direction
+from ._cube import cube_face_projection as cube_face_projection
+from ._cube import cube_face_views as cube_face_views
 from ._fitting import FrustumFit as FrustumFit
 from ._fitting import optimize_frustum as optimize_frustum
 from ._frame import LightFrame as LightFrame
@@ -59,6 +72,8 @@ from ._layout import column_major_bytes as column_major_bytes
 from ._measures import cross_section_area as cross_section_area
 from ._measures import receiver_texel_size as receiver_texel_size
 from ._measures import silhouette_coverage as silhouette_coverage
+from ._pcf import pcf as pcf
+from ._pcf import pcf_border_texels as pcf_border_texels
 from ._planar import planar_projection as planar_projection
 from ._setup import ShadowSetup as ShadowSetup
 from ._setup import fit_shadow as fit_shadow
@@ -67,36 +82,57 @@ from ._smooth import offcenter_frustum as offcenter_frustum
 from ._smooth import rolled_light_frame as rolled_light_frame
 from ._smooth import smooth_frustum as smooth_frustum
 from ._smooth import smooth_max as smooth_max
+from ._soft import area_light_samples as area_light_samples
+from ._soft import area_light_samples_jax as area_light_samples_jax
+from ._soft import pyramid_to_unit_cube as pyramid_to_unit_cube
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "GRAPHICS_APIS",
     "NEAR_FAR_SLACK",
+    "ApiConvention",
+    "CubeFaceCoords",
+    "CubeFaceDepth",
     "Frustum",
     "FrustumFit",
     "LightFrame",
     "ShadowSetup",
     "adaptive_frustum",
+    "api_convention",
+    "area_light_samples",
+    "area_light_samples_jax",
     "blocker_projection",
     "border_margin",
     "check_finite",
     "column_major_bytes",
     "cross_section_area",
+    "cube_face",
+    "cube_face_depth",
+    "cube_face_direction",
+    "cube_face_projection",
+    "cube_face_views",
     "fit_shadow",
     "helper_axis",
     "light_frame",
     "light_frame_from_direction",
     "light_to_world",
     "mean_direction_vector",
+    "normal_offset",
     "offcenter_frustum",
     "optimize_frustum",
+    "pcf",
+    "pcf_border_texels",
     "planar_projection",
+    "pyramid_to_unit_cube",
     "receiver_projection",
     "receiver_texel_size",
     "receiver_texture_matrix",
     "rolled_light_frame",
     "silhouette_coverage",
+    "slope_scaled_bias",
     "smooth_frustum",
     "smooth_max",
+    "texel_world_size",
     "world_to_light",
 ]

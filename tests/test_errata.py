@@ -304,6 +304,69 @@ def test_jang_first_equation_sign_and_the_generalized_matrix():
     assert dehom(h(P) @ general)[2] == pytest.approx(1.0)
 
 
+def jang_pyramid_printed(a, b, ex, ey, ew):
+    """Seed 004's Heckbert-Herf matrix as printed ("axnxx" read as a_x n_x,x), e_w a parameter:
+    the seed never defines it."""
+    nx, ny, nw = np.cross(ew, ey), np.cross(ex, ew), np.cross(ey, ex)
+    ax, ay, aw = 1 / (nx @ ex), 1 / (ny @ ey), 1 / (nw @ ew)
+    return np.array(
+        [
+            [*(ax * nx), -ax * nx @ b],
+            [*(ay * ny), -ay * ny @ b],
+            [0.0, 0.0, 0.0, 1.0],
+            [*(aw * nw), -aw * nw @ a],
+        ]
+    )
+
+
+PYRAMID = (
+    np.array([0.4, 0.3, 3.0]),  # apex: a light sample
+    np.array([-1.0, -0.5, 0.2]),  # base corner b
+    np.array([2.5, 0.3, 0.0]),  # e_x
+    np.array([-0.2, 1.8, 0.1]),  # e_y
+)
+
+
+def test_jang_pyramid_matrix_needs_ew_from_the_apex_to_the_corner():
+    a, b, ex, ey = PYRAMID
+    inside = a + 0.5 * (b + 0.25 * ex + 0.75 * ey - a)  # halfway down a ray, between a and base
+    far_corner = b + ex + ey
+    # e_w = a - b (the other reading): w < 0 inside the pyramid (clipped away), x, y mirrored.
+    wrong = jang_pyramid_printed(a, b, ex, ey, a - b)
+    assert (wrong @ h(inside))[3] < 0
+    np.testing.assert_allclose(dehom(wrong @ h(far_corner))[:2], [-1.0, -1.0])
+    # e_w = b - a: rows x, y, w are right, and are ours.
+    right = jang_pyramid_printed(a, b, ex, ey, b - a)
+    assert (right @ h(inside))[3] == pytest.approx(0.5)
+    np.testing.assert_allclose(dehom(right @ h(inside))[:2], [0.25, 0.75])
+    ours = sm.pyramid_to_unit_cube(a, b, ex, ey)
+    np.testing.assert_allclose(ours[[0, 1, 3]], right[[0, 1, 3]], rtol=1e-14, atol=1e-15)
+
+
+def test_jang_pyramid_third_row_puts_the_base_at_z_1_not_0():
+    a, b, ex, ey = PYRAMID
+    printed = jang_pyramid_printed(a, b, ex, ey, b - a)
+    ours = sm.pyramid_to_unit_cube(a, b, ex, ey)
+    on_base = b + 0.3 * ex + 0.6 * ey
+    # The text says "the base plane ... maps to zu = 0"; the row (0 0 0 1) gives z = 1/w = 1
+    # there (which is why its pseudocode clips at zu.near = 1 - e).
+    assert dehom(printed @ h(on_base))[2] == pytest.approx(1.0)
+    assert dehom(ours @ h(on_base))[2] == pytest.approx(0.0, abs=1e-15)
+    # Ours is the printed z minus 1 everywhere: Z = 1 - W.
+    for lam in (0.1, 0.5, 1.0, 2.0):
+        p = a + lam * (on_base - a)
+        assert dehom(ours @ h(p))[2] == pytest.approx(dehom(printed @ h(p))[2] - 1)
+
+
+def test_jang_pyramid_matrix_is_column_vector_form_unlike_the_articles_other_matrices():
+    a, b, ex, ey = PYRAMID
+    M = jang_pyramid_printed(a, b, ex, ey, b - a)
+    corner = b + ex
+    np.testing.assert_allclose(dehom(M @ h(corner)), [1.0, 0.0, 1.0], atol=1e-14)  # M p: right
+    row_vector = h(corner) @ M  # the article's own p M convention (its z = 0 matrix)
+    assert not np.allclose(dehom(row_vector), [1.0, 0.0, 1.0], atol=1e-3)
+
+
 # ------------------------------------------------------------------ conventions
 def look_at(eye, center, up):
     """gluLookAt: right-handed view matrix, camera looking down its -z."""

@@ -23,20 +23,26 @@ SIZE = ("384", "288")
 
 
 def render(tmp: Path, name: str, *args: str) -> tuple[Image.Image, Image.Image | None]:
-    """Run the demo quietly with ``args``; return its picture and its shadow map, if any."""
+    """Run the demo quietly with ``args``; return its picture and its shadow map, if any.
+
+    Planar shadows draw no map, and the demo refuses ``--shadow-map-output`` for them.
+    """
     out, shadow_map = tmp / f"{name}.png", tmp / f"{name}_map.png"
+    planar = "planar" in args
+    map_args = [] if planar else ["--shadow-map-output", str(shadow_map)]
     with contextlib.redirect_stdout(io.StringIO()):
-        demo(["--size", *SIZE, "--output", str(out), "--shadow-map-output", str(shadow_map), *args])
+        demo(["--size", *SIZE, "--output", str(out), *map_args, *args])
     picture = Image.open(out).convert("RGB")
-    return picture, Image.open(shadow_map).convert("RGB") if shadow_map.exists() else None
+    return picture, None if planar else Image.open(shadow_map).convert("RGB")
 
 
 def label(image: Image.Image, text: str) -> Image.Image:
-    image = image.copy()
-    draw = ImageDraw.Draw(image)
-    draw.rectangle((0, 0, 8 * len(text) + 10, 18), fill=(255, 255, 255))
-    draw.text((5, 3), text, fill=(0, 0, 0))
-    return image
+    """The image under a caption strip: the caption covers none of its pixels."""
+    strip = 20
+    labelled = Image.new("RGB", (image.width, image.height + strip), (255, 255, 255))
+    labelled.paste(image, (0, strip))
+    ImageDraw.Draw(labelled).text((5, 4), text, fill=(0, 0, 0))
+    return labelled
 
 
 def grid(rows: list[list[Image.Image]]) -> Image.Image:
@@ -51,7 +57,8 @@ def grid(rows: list[list[Image.Image]]) -> Image.Image:
 
 def save(image: Image.Image, name: str) -> None:
     path = IMAGES / name
-    image.quantize(256, method=Image.Quantize.FASTOCTREE).save(path, optimize=True)
+    # Full RGB: a palette of 256 colours would band the lit gradients.
+    image.save(path, optimize=True)
     print(path)
 
 

@@ -12,7 +12,13 @@ does not.
 * :func:`render_scene`: the whole method from a camera: a lit pass, then per
   light the shadow maps of its blockers applied to the receivers as projective
   textures (or Blinn's flattened blockers, ``method="planar"``), combined into
-  one mask per light, and a subtractive pass per light.
+  one mask per light, and a subtractive pass per light. ``method="depth"`` is
+  Williams' shadow z-buffer, ``method="omni"`` a point light's cube depth map
+  sampled with ``samplerCubeShadow``; ``method="soft"`` and ``"radiance"`` average
+  the hard shadows of an area light's samples (seed 003's depth maps, Heckbert and
+  Herf's radiance textures).
+* :func:`radiance_texture`: Heckbert and Herf's radiance texture of one receiver
+  parallelogram, as a NumPy array.
 * moderngl 5 has no stencil state. Where the articles use the stencil buffer
   (confining planar shadows to their receiver, darkening overlapping shadows
   once) this renderer records each pixel's body id in the lit pass and
@@ -28,11 +34,12 @@ from ._camera import perspective as perspective
 from ._context import DEBIAN_PACKAGES as DEBIAN_PACKAGES
 from ._context import GLUnavailableError as GLUnavailableError
 from ._context import standalone_context as standalone_context
-from ._scene import MAX_LIGHTS as MAX_LIGHTS
-from ._scene import PLANAR_POLYGON_OFFSET as PLANAR_POLYGON_OFFSET
-from ._scene import Body as Body
+from ._pass_lit import MAX_LIGHTS as MAX_LIGHTS
+from ._pass_planar import PLANAR_POLYGON_OFFSET as PLANAR_POLYGON_OFFSET
+from ._pass_soft import radiance_texture as radiance_texture
+from ._resources import Body as Body
+from ._resources import Light as Light
 from ._scene import Frame as Frame
-from ._scene import Light as Light
 from ._scene import render_scene as render_scene
 from ._shadow_map import render_shadow_map as render_shadow_map
 
@@ -46,6 +53,7 @@ __all__ = [
     "Light",
     "look_at",
     "perspective",
+    "radiance_texture",
     "render_scene",
     "render_shadow_map",
     "standalone_context",

@@ -1,4 +1,4 @@
-"""Pass 1: the shadow map, the blocker's silhouette as seen from the light."""
+"""The public pass 1: the blocker's silhouette as seen from the light, as a NumPy mask."""
 
 from __future__ import annotations
 
@@ -8,45 +8,9 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from ._context import check_matrix, check_mesh, image_size, program, resolve_context, set_matrix
-
-
-def draw_shadow_map(
-    ctx: moderngl.Context,
-    vertices: NDArray[np.float64],
-    triangles: NDArray[np.int64],
-    blocker_to_clip: NDArray[np.float64],
-    size: tuple[int, int],
-) -> moderngl.Texture:
-    """Draw the mask into a new one-channel 8-bit texture (already-checked inputs)."""
-    tex = ctx.texture(size, 1, dtype="f1")
-    # Clamp to edge: receiver points outside the frustum read the untouched border.
-    tex.repeat_x = False
-    tex.repeat_y = False
-    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    fbo = ctx.framebuffer(color_attachments=[tex])
-    prog = program(ctx, "shadow_map.vert", "shadow_map.frag")
-    set_matrix(prog, "blocker_to_clip", blocker_to_clip)
-    vbo = ctx.buffer(vertices.astype(np.float32).tobytes())
-    ibo = ctx.buffer(triangles.astype(np.int32).tobytes())
-    vao = ctx.vertex_array(prog, [(vbo, "3f", "position")], index_buffer=ibo, index_element_size=4)
-    try:
-        fbo.use()
-        fbo.viewport = (0, 0, *size)
-        ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
-        fbo.clear(0.0, 0.0, 0.0, 0.0)
-        vao.render(moderngl.TRIANGLES)
-    finally:
-        for obj in (vao, ibo, vbo, fbo):
-            obj.release()
-    return tex
-
-
-def read_mask(tex: moderngl.Texture) -> NDArray[np.float32]:
-    """A one-channel 8-bit texture as a ``(height, width)`` float32 array in ``[0, 1]``."""
-    w, h = tex.size
-    data = np.frombuffer(tex.read(alignment=1), dtype=np.uint8).reshape(h, w)
-    return (data / np.float32(255.0)).astype(np.float32)
+from ._context import check_matrix, check_mesh, image_size, resolve_context
+from ._pass_texture import draw_shadow_map, read_mask
+from ._resources import GpuMesh
 
 
 def render_shadow_map(
@@ -99,7 +63,11 @@ def render_shadow_map(
     m = check_matrix("blocker_to_clip", blocker_to_clip)
     size = image_size("map_size", map_size)
     gl = resolve_context(ctx)
-    tex = draw_shadow_map(gl, v, t, m, size)
+    mesh = GpuMesh(gl, v, t)
+    try:
+        tex = draw_shadow_map(gl, mesh, m, size)
+    finally:
+        mesh.release()
     try:
         return read_mask(tex)
     finally:

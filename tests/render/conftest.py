@@ -1,4 +1,5 @@
-"""The GL fixture: a missing context fails under SHADOWMATH_REQUIRE_GL=1 (CI), skips elsewhere."""
+"""The GL and WebGPU fixtures: a missing context or adapter fails under
+SHADOWMATH_REQUIRE_GL=1 (CI, which requires both graphics APIs), skips elsewhere."""
 
 from __future__ import annotations
 
@@ -21,6 +22,25 @@ def gl() -> Any:
             message += (
                 "; install the 'render' extra and the Debian packages libegl1, libgl1 and "
                 "libgl1-mesa-dri (apt-get install -y libegl1 libgl1 libgl1-mesa-dri)"
+            )
+        if os.environ.get("SHADOWMATH_REQUIRE_GL") == "1":
+            pytest.fail(f"SHADOWMATH_REQUIRE_GL=1: {message}")
+        pytest.skip(message)
+
+
+@pytest.fixture(scope="session")
+def wgpu_device() -> Any:
+    """The shared WebGPU device (wgpu over Vulkan; Mesa's llvmpipe without a GPU)."""
+    try:
+        from shadowmath.render.webgpu import wgpu_device
+
+        return wgpu_device()
+    except Exception as err:  # ImportError (no wgpu) or WgpuUnavailableError
+        message = f"no WebGPU adapter for the reference render: {err}"
+        if "mesa-vulkan-drivers" not in message:
+            message += (
+                "; install the 'render' extra (wgpu) and the Debian package "
+                "mesa-vulkan-drivers (apt-get install -y mesa-vulkan-drivers)"
             )
         if os.environ.get("SHADOWMATH_REQUIRE_GL") == "1":
             pytest.fail(f"SHADOWMATH_REQUIRE_GL=1: {message}")

@@ -1,0 +1,157 @@
+"""shadowmath's benchmark suite (``make bench``): speed against PyGLM, NumPy and the memory limit.
+
+Sections (``--only NAME``, repeatable or comma-separated):
+
+* ``single``: one ``fit_shadow`` (8, 1,000, 100,000 vertices), ``planar_projection``, a
+  receiver's texture matrix, eager JAX, ``import shadowmath`` and the first fit in a fresh
+  process; baselines PyGLM ``lookAt`` + ``perspective`` and the one-line NumPy planar matrix.
+* ``batch``: 100,000 fits of 8-vertex blockers, NumPy and jitted JAX, float32 and float64,
+  against a Python loop of PyGLM.
+* ``large``: one 4M-vertex float32 blocker against one flat ``sum`` of the array.
+* ``derivatives``: the jitted gradient of the fitting objective against its forward pass;
+  ``optimize_frustum`` on 1,000 and 500,000 vertices and on a batch of 100 blockers.
+* ``gpu``: the batch and large-blocker figures on a GPU (skipped without one).
+* ``coverage``: ``benchmarks/bench_fit.py``, the optimized fit's coverage (needs OpenGL).
+
+Each prints a Markdown table: median (with its repeat count), the baseline measured in the
+same process, ratio = median / baseline median, the issue's target and an informational
+PASS/MISS. ``--json PATH`` writes every figure; ``--tiny`` runs each benchmark once at a
+tiny size (what ``tests/test_benchmarks.py`` does: the figures must exist, nothing is said
+about time).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+import traceback
+from importlib import metadata
+from typing import Any
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from speed import SECTIONS
+from speed._timing import Config, Section, table
+
+
+def _version(dist: str) -> str:
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def _cpu() -> str:
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def _commit() -> str:
+    """The repository's commit, and whether shadowmath/ differs from it in the working tree."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    try:
+        head = subprocess.run(
+            ["git", "-C", root, "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", root, "status", "--porcelain", "--", "shadowmath"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + (" (shadowmath/ modified in the working tree)" if dirty else "")
+
+
+def environment(cfg: Config) -> dict[str, Any]:
+    import jax
+    import numpy as np
+
+    import shadowmath
+
+    return {
+        "date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
+        "machine": f"{os.cpu_count()} cores, {_cpu()}, {platform.system()} {platform.machine()}",
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "jax": _version("jax"),
+        "jaxlib": _version("jaxlib"),
+        "jax_devices": [str(d) for d in jax.devices()],
+        "jax_enable_x64": bool(jax.config.read("jax_enable_x64")),
+        "pyglm": _version("pyglm"),
+        "shadowmath": shadowmath.__file__,
+        "commit": _commit(),
+        "tiny": cfg.tiny,
+    }
+
+
+def _names(only: list[str] | None) -> list[str]:
+    if not only:
+        return list(SECTIONS)
+    names = [n.strip() for item in only for n in item.split(",") if n.strip()]
+    unknown = [n for n in names if n not in SECTIONS]
+    if unknown:
+        raise SystemExit(f"unknown benchmark(s) {unknown}; choose from {list(SECTIONS)}")
+    return names
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        description=(__doc__ or "").splitlines()[0],
+        epilog="Benchmarks: " + ", ".join(SECTIONS),
+    )
+    parser.add_argument("--only", action="append", metavar="NAME", help="run these only")
+    parser.add_argument("--tiny", action="store_true", help="each once, at a tiny size")
+    parser.add_argument("--json", metavar="PATH", help="write every figure to PATH")
+    parser.add_argument("--seed", type=int, default=2026)
+    args = parser.parse_args(argv)
+    cfg = Config(tiny=args.tiny, seed=args.seed)
+    names = _names(args.only)
+
+    env = environment(cfg)
+    tiny = " (--tiny: sizes and repeats are not real)" if cfg.tiny else ""
+    print(f"# shadowmath speed benchmarks{tiny}\n")
+    for key in ("date", "machine", "python", "numpy", "jax", "pyglm", "jax_enable_x64"):
+        print(f"* {key}: {env[key]}")
+    print(f"* shadowmath: {env['shadowmath']} (repository at {env['commit']})")
+    print()
+    sections: dict[str, Section] = {}
+    failed = False
+    for name in names:
+        module = SECTIONS[name]
+        t0 = time.perf_counter()
+        try:
+            section = module.run(cfg)
+        except Exception:
+            failed = True
+            section = Section(name, module.TITLE, error=traceback.format_exc())
+        sections[name] = section
+        print(table(section))
+        print(f"\n({name}: {time.perf_counter() - t0:.1f} s)\n", flush=True)
+    if args.json:
+        out = {"environment": env, "benchmarks": {n: s.to_json() for n, s in sections.items()}}
+        with open(args.json, "w") as f:
+            json.dump(out, f, indent=2)
+            f.write("\n")
+        print(f"wrote {args.json}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,15 @@
+"""The speed benchmarks of issue 9 (``make bench``), on shadowmath's public API only.
+
+Each module has ``NAME``, ``TITLE`` and ``run(cfg) -> Section``; ``benchmarks/run.py``
+runs them in the order of :data:`SECTIONS`.
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+
+from . import batch, coverage, derivatives, gpu, large, single
+
+SECTIONS: dict[str, ModuleType] = {
+    m.NAME: m for m in (single, batch, large, derivatives, gpu, coverage)
+}

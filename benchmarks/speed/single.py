@@ -1,0 +1,180 @@
+"""1. Single calls: ``fit_shadow``, ``planar_projection``, a receiver's texture matrix, eager JAX,
+``import shadowmath`` and the first fit in a fresh process."""
+
+from __future__ import annotations
+
+from functools import partial
+from typing import Any
+
+import numpy as np
+
+import shadowmath as sm
+
+from ._scenes import MAP_SIZE, blob, boxes, glm_fit, to_glm
+from ._timing import Config, Row, Section, Timing, fmt_time, measure, run_python, synced
+
+NAME = "single"
+TITLE = "1. Single call"
+
+_IMPORT = """
+import json, time
+t0 = time.perf_counter()
+import numpy
+t1 = time.perf_counter()
+import shadowmath
+t2 = time.perf_counter()
+heavy = sorted(m for m in ("jax", "jaxlib", "numba", "torch", "cupy", "tensorflow")
+               if m in sys.modules)
+print(json.dumps({"numpy": t1 - t0, "shadowmath": t2 - t0, "heavy": heavy}))
+"""
+
+_FIRST_FIT = """
+import json, time
+t0 = time.perf_counter()
+import numpy as np
+import shadowmath as sm
+backend = {backend!r}
+light = np.zeros(3, np.float32)
+box = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], np.float32)
+if backend == "jax":
+    import jax, jax.numpy as jnp
+    light, box = jnp.asarray(light), jnp.asarray(box)
+    block = jax.block_until_ready
+else:
+    block = lambda x: x
+t1 = time.perf_counter()
+block(sm.fit_shadow(light, box, 256))
+t2 = time.perf_counter()
+print(json.dumps({{"import": t1 - t0, "first": t2 - t1, "total": t2 - t0}}))
+"""
+
+
+def _fresh(code: str, repeats: int) -> list[dict[str, Any]]:
+    return [run_python(code) for _ in range(repeats)]
+
+
+def _median_timing(values: list[float]) -> Timing:
+    return Timing(float(np.median(values)), len(values), 1)
+
+
+def run(cfg: Config) -> Section:
+    section = Section(NAME, TITLE)
+    rows = section.rows
+    reps, fast = cfg.repeats(7), cfg.min_time
+
+    # fit_shadow, NumPy float64, against the PyGLM bounding-sphere fit of the same blocker.
+    light8, box8 = boxes(1, cfg.seed)
+    sizes = [(8, light8[0], box8[0])]
+    for n in (cfg.size(1_000, 20), cfg.size(100_000, 50)):
+        light, verts = blob(n, cfg.seed)
+        sizes.append((n, light, verts))
+    glm8 = None
+    for n, light, verts in sizes:
+        gl_light, gl_verts = to_glm(light, verts)
+        base = measure(partial(glm_fit, gl_light, gl_verts), repeats=reps, min_time=fast)
+        glm8 = glm8 or base
+        t = measure(partial(sm.fit_shadow, light, verts, MAP_SIZE), repeats=reps, min_time=fast)
+        is8 = n == 8
+        rows.append(
+            Row(
+                f"fit_shadow, {n:,} vertices, NumPy float64",
+                t,
+                "PyGLM lookAt + perspective, bounding sphere",
+                base,
+                target="≤ 1" if is8 else None,
+                limit=1.0 if is8 else None,
+            )
+        )
+    assert glm8 is not None
+
+    # planar_projection against the one-line NumPy formula.
+    plane = np.array([0.0, 1.0, 0.0, 0.0])
+    lamp = np.array([1.0, 10.0, 2.0, 1.0])
+
+    def one_line() -> np.ndarray:
+        d = plane @ lamp
+        return d * np.eye(4) - np.outer(lamp, plane)
+
+    base = measure(one_line, repeats=reps, min_time=fast)
+    t = measure(lambda: sm.planar_projection(plane, lamp), repeats=reps, min_time=fast)
+    rows.append(
+        Row(
+            "planar_projection, NumPy float64",
+            t,
+            "d * eye(4) - outer(L, plane), d = plane · L",
+            base,
+            target="≤ 1",
+            limit=1.0,
+        )
+    )
+
+    # A receiver's texture matrix from a fitted setup, against the plain product.
+    setup = sm.fit_shadow(light8[0], box8[0], MAP_SIZE)
+    placement = np.eye(4)
+    placement[:3, 3] = [0.0, -1.0, 0.0]
+    base = measure(lambda: setup.world_to_texture @ placement, repeats=reps, min_time=fast)
+    t = measure(lambda: sm.receiver_texture_matrix(setup, placement), repeats=reps, min_time=fast)
+    rows.append(
+        Row(
+            "receiver_texture_matrix(setup, receiver_to_world) of a fitted setup",
+            t,
+            "setup.world_to_texture @ receiver_to_world",
+            base,
+        )
+    )
+
+    # Eager JAX on concrete arrays (no jit by the caller).
+    import jax.numpy as jnp
+
+    j_light, j_box = jnp.asarray(light8[0], jnp.float32), jnp.asarray(box8[0], jnp.float32)
+    t = measure(synced(sm.fit_shadow, j_light, j_box, MAP_SIZE), repeats=cfg.repeats(5))
+    rows.append(
+        Row(
+            "fit_shadow, 8 vertices, eager JAX float32 (concrete arrays)",
+            t,
+            "PyGLM lookAt + perspective, bounding sphere",
+            glm8,
+            target="≤ 1 ms",
+            limit=1e-3,
+            limit_on="seconds",
+        )
+    )
+
+    # import shadowmath, and the first fit, in fresh processes.
+    imports = _fresh(_IMPORT, cfg.repeats(5))
+    heavy = sorted({m for r in imports for m in r["heavy"]})
+    rows.append(
+        Row(
+            "import shadowmath (fresh process, NumPy's import included)",
+            _median_timing([float(r["shadowmath"]) for r in imports]),
+            "import numpy (same process)",
+            _median_timing([float(r["numpy"]) for r in imports]),
+            target="≤ 0.15 s",
+            limit=0.15,
+            limit_on="seconds",
+        )
+    )
+    section.notes.append(
+        "after `import shadowmath` these heavy modules were in sys.modules: "
+        + (", ".join(heavy) if heavy else "none (no jax, jaxlib, numba, torch, cupy, tensorflow)")
+    )
+    section.figures["import_heavy_modules"] = float(len(heavy))
+    for backend, label in (("numpy", "NumPy"), ("jax", "eager JAX")):
+        runs = _fresh(_FIRST_FIT.format(backend=backend), cfg.repeats(3))
+        first = _median_timing([float(r["first"]) for r in runs])
+        total = _median_timing([float(r["total"]) for r in runs])
+        rows.append(
+            Row(
+                f"import + first fit_shadow in a fresh process, {label} float32, 8 vertices",
+                total,
+                target="≤ 1 s",
+                limit=1.0,
+                limit_on="seconds",
+                note=f"the first call alone: {fmt_time(first.median)}",
+            )
+        )
+    section.notes.append(
+        "PyGLM's input is a list of glm.vec3 made before timing, shadowmath's a NumPy array; "
+        "ratio = median / baseline median (below 1: faster than the baseline)."
+    )
+    return section

@@ -1,0 +1,165 @@
+"""Williams' shadow z-buffer: the depth of every caster seen from the light, compared
+with each visible point's light depth, with a polygon-offset bias and PCF."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import moderngl
+import numpy as np
+from numpy.typing import NDArray
+
+from shadowmath._setup import ShadowSetup, fit_shadow
+
+from ._context import program, set_matrix, set_uniform
+from ._resources import GpuScene, Prepared, PreparedLight
+
+#: Default ``glPolygonOffset(factor, units)`` of the depth map without PCF: ``factor``
+#: times the depth slope of each caster triangle plus ``units`` times the smallest
+#: resolvable depth step. :func:`depth_bias` widens the factor with the PCF radius.
+DEPTH_POLYGON_OFFSET = (2.5, 4.0)
+
+#: Relative slack of the far plane beyond the farthest receiver vertex.
+_FAR_SLACK = 1e-3
+
+
+def depth_bias(pcf_radius: int) -> tuple[float, float]:
+    """The default polygon offset for a PCF kernel of radius ``k``.
+
+    A tap ``k`` texels from the centre reads the map where a sloped receiver's
+    own depth differs from its ``r`` by up to ``k`` texels of slope along each
+    axis, so the slope factor grows by 2 per unit of radius.
+    """
+    factor, units = DEPTH_POLYGON_OFFSET
+    return factor + 2.0 * pcf_radius, units
+
+
+def fit_depth(
+    receivers: Sequence[Prepared],
+    blockers: Sequence[Prepared],
+    light_position: NDArray[np.float64],
+    map_size: tuple[int, int],
+    pcf_radius: int = 0,
+) -> ShadowSetup:
+    """One setup per light: the sides fit all blockers (in world coordinates), with
+    ``1 + pcf_radius`` border texels so a kernel never reads past the silhouette, and
+    the far plane moved out to the farthest body vertex in front of the light, so that
+    receivers lie in the depth range. A body nearer the light than the blockers' near
+    plane is clipped from the map (it casts nothing; it is lit by this map).
+    """
+    casters = np.concatenate([b.world_vertices() for b in blockers])
+    border = 1 + pcf_radius
+    setup = fit_shadow(light_position, casters, map_size, border_texels=border)
+    everything = np.concatenate([b.world_vertices() for b in (*receivers, *blockers)])
+    z = (
+        everything @ np.asarray(setup.world_to_light)[2, :3]
+        + np.asarray(setup.world_to_light)[2, 3]
+    )
+    far = max(float(z.max()) * (1 + _FAR_SLACK), float(setup.frustum.far))
+    return fit_shadow(light_position, casters, map_size, border_texels=border, far=far)
+
+
+def world_to_light_clip(setup: ShadowSetup) -> NDArray[np.float64]:
+    """``blocker_to_clip @ inverse(blocker_to_world)``: world to the light's OpenGL clip."""
+    b2c = np.asarray(setup.blocker_to_clip, dtype=np.float64)
+    b2w = np.asarray(setup.blocker_to_world, dtype=np.float64)
+    return np.asarray(b2c @ np.linalg.inv(b2w), dtype=np.float64)
+
+
+def draw_depth_map(
+    scene: GpuScene, world_to_clip: NDArray[np.float64], bias: tuple[float, float]
+) -> moderngl.Texture:
+    """Every body's depth from the light into a new depth texture (released with the scene),
+    set up for hardware comparison (``sampler2DShadow``, ``<=``, nearest, clamp to edge)."""
+    gl = scene.ctx
+    tex: moderngl.Texture = scene.keep(gl.depth_texture(scene.map_size))
+    tex.repeat_x = False
+    tex.repeat_y = False
+    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    fbo = gl.framebuffer(depth_attachment=tex)
+    prog = program(gl, "depth_map.vert", "depth_map.frag")
+    try:
+        fbo.use()
+        fbo.viewport = (0, 0, *scene.map_size)
+        gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
+        gl.enable(moderngl.DEPTH_TEST)
+        gl.depth_func = "<"
+        fbo.depth_mask = True
+        fbo.clear(depth=1.0)
+        gl.polygon_offset = bias
+        for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
+            set_matrix(prog, "body_to_clip", world_to_clip @ body.to_world)
+            mesh.render(prog)
+    finally:
+        gl.polygon_offset = (0.0, 0.0)
+        fbo.release()
+    tex.compare_func = "<="
+    return tex
+
+
+def read_depth(tex: moderngl.Texture) -> NDArray[np.float32]:
+    """A depth texture as ``(height, width)`` float32 window depths; row 0 is ``t = 0``."""
+    w, h = tex.size
+    tex.compare_func = ""  # reading back does not compare, but leave no doubt
+    data = np.frombuffer(tex.read(alignment=1), dtype=np.float32).reshape(h, w).copy()
+    tex.compare_func = "<="
+    return data
+
+
+class DepthPass:
+    """``method="depth"``: Williams' shadow z-buffer, one map per light.
+
+    Every body casts and receives (the torus shadows itself and the floor, a box its
+    floor): the map holds the depth of all bodies, drawn through one setup fitted to
+    the blockers (:func:`fit_depth`) with ``glPolygonOffset(*bias)``; the mask pass
+    compares each visible point's ``r`` over a ``(2k + 1)^2`` box of texels.
+    """
+
+    def __init__(self, pcf_radius: int = 0, bias: tuple[float, float] | None = None) -> None:
+        if not isinstance(pcf_radius, int | np.integer) or pcf_radius < 0:
+            raise ValueError(f"pcf_radius: expected an int >= 0, got {pcf_radius!r}")
+        self.pcf_radius = int(pcf_radius)
+        if bias is None:
+            bias = depth_bias(self.pcf_radius)
+        b = tuple(float(v) for v in bias)
+        if len(b) != 2 or not all(np.isfinite(b)):
+            raise ValueError(f"depth_bias: expected finite (factor, units), got {bias!r}")
+        self.bias = (b[0], b[1])
+
+    def check(self, receivers: Sequence[Prepared]) -> None:
+        pass
+
+    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+        return 1
+
+    def fit(
+        self,
+        receivers: Sequence[Prepared],
+        blockers: Sequence[Prepared],
+        light: PreparedLight,
+        map_size: tuple[int, int],
+    ) -> tuple[ShadowSetup, ...]:
+        return (fit_depth(receivers, blockers, light.position, map_size, self.pcf_radius),)
+
+    def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
+        return tuple(range(len(scene.bodies)))
+
+    def draw_mask(
+        self, scene: GpuScene, light: PreparedLight, setups: tuple[ShadowSetup, ...]
+    ) -> tuple[NDArray[np.float32], ...]:
+        (setup,) = setups
+        depth = draw_depth_map(scene, world_to_light_clip(setup), self.bias)
+        prog = program(scene.ctx, "surface.vert", "depth_mask.frag")
+        set_matrix(prog, "world_to_clip", scene.world_to_clip)
+        set_uniform(prog, "depth_map", 0)
+        set_uniform(prog, "light_position", tuple(light.position))
+        set_uniform(prog, "pcf_radius", self.pcf_radius)
+        world_to_texture = np.asarray(setup.world_to_texture, dtype=np.float64)
+        scene.bind_mask()
+        depth.use(location=0)
+        for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
+            set_matrix(prog, "body_to_world", body.to_world)
+            set_matrix(prog, "body_to_texture", world_to_texture @ body.to_world)
+            scene.bind_record(prog, i)
+            mesh.render(prog)
+        return (read_depth(depth),)

@@ -1,0 +1,167 @@
+"""An omnidirectional point light: a real GL cube depth map (six 90-degree faces drawn
+with ``cube_face_projection @ cube_face_views[i]``) sampled with ``samplerCubeShadow``."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import moderngl
+import numpy as np
+from numpy.typing import NDArray
+
+from shadowmath._cube import cube_face_projection, cube_face_views
+from shadowmath._setup import ShadowSetup
+
+from ._context import program, set_matrix, set_uniform
+from ._pass_depth import depth_bias
+from ._resources import GpuScene, Prepared, PreparedLight
+
+#: The near plane as a fraction of the far plane: bodies nearer the light than this (along
+#: a face's axis) are clipped from the map. Window depth keeps ``~2^-24 D^2 / near`` of
+#: precision at distance ``D``: about ``1e-4 far`` at the far plane.
+OMNI_NEAR_FRACTION = 1e-3
+
+#: Relative slack of the far plane beyond the farthest body vertex.
+_FAR_SLACK = 1e-3
+
+
+def omni_depth_range(
+    bodies: Sequence[Prepared], light_position: NDArray[np.float64]
+) -> tuple[float, float]:
+    """``(near, far)`` of the cube faces: ``far`` just beyond the farthest body vertex along
+    any face axis (``max |r_i|``), ``near = OMNI_NEAR_FRACTION * far``."""
+    r = np.concatenate([b.world_vertices() for b in bodies]) - light_position
+    far = float(np.abs(r).max()) * (1 + _FAR_SLACK)
+    if not far > 0:
+        raise ValueError("omni: every body vertex lies at the light")
+    return OMNI_NEAR_FRACTION * far, far
+
+
+def face_to_clip(
+    light_position: NDArray[np.float64], near: float, far: float, map_size: int
+) -> NDArray[np.float64]:
+    """``(6, 4, 4)`` world to each face's OpenGL clip space, faces ``+X, -X, +Y, -Y, +Z, -Z``
+    (the index of ``GL_TEXTURE_CUBE_MAP_POSITIVE_X + i``)."""
+    views = np.asarray(cube_face_views(light_position), dtype=np.float64)
+    proj = np.asarray(cube_face_projection(near, far, map_size=map_size), dtype=np.float64)
+    return np.asarray(proj @ views, dtype=np.float64)
+
+
+def cube_map_side(name: str, map_size: tuple[int, int]) -> int:
+    """The side of a square cube face: a cube map's faces are square."""
+    if map_size[0] != map_size[1]:
+        raise ValueError(f"{name}: cube map faces are square, got {map_size[0]}x{map_size[1]}")
+    return map_size[0]
+
+
+def draw_cube_depth(
+    scene: GpuScene,
+    world_to_clip: NDArray[np.float64],
+    side: int,
+    bias: tuple[float, float],
+) -> tuple[moderngl.TextureCube, NDArray[np.float32]]:
+    """Every body's depth into the six faces, with ``glPolygonOffset(*bias)``.
+
+    moderngl 5 cannot attach a cube face to a framebuffer, so each face is drawn
+    into a 2D depth texture of the same format and copied into face ``i`` of a
+    depth cube texture (``TextureCube.write(i, ...)``, i.e.
+    ``GL_TEXTURE_CUBE_MAP_POSITIVE_X + i``) unchanged: the face's first row in
+    memory is window row 0, NDC ``y = -1``, which the cube-map table reads as
+    ``t = 0``. The cube texture compares with ``<=`` (``samplerCubeShadow``),
+    nearest, and is released with the scene.
+
+    Returns:
+        the cube texture, and ``(6, side, side)`` float32 window depths (row 0 is ``t = 0``;
+        1 where nothing was drawn).
+    """
+    gl = scene.ctx
+    face_tex = gl.depth_texture((side, side))
+    fbo = gl.framebuffer(depth_attachment=face_tex)
+    prog = program(gl, "depth_map.vert", "depth_map.frag")
+    faces = np.empty((6, side, side), dtype=np.float32)
+    try:
+        fbo.use()
+        fbo.viewport = (0, 0, side, side)
+        gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
+        gl.enable(moderngl.DEPTH_TEST)
+        gl.depth_func = "<"
+        fbo.depth_mask = True
+        gl.polygon_offset = bias
+        for i in range(6):
+            fbo.clear(depth=1.0)
+            for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
+                set_matrix(prog, "body_to_clip", world_to_clip[i] @ body.to_world)
+                mesh.render(prog)
+            data = np.frombuffer(face_tex.read(alignment=1), dtype=np.float32)
+            faces[i] = data.reshape(side, side)
+    finally:
+        gl.polygon_offset = (0.0, 0.0)
+        fbo.release()
+        face_tex.release()
+    cube: moderngl.TextureCube = scene.keep(gl.depth_texture_cube((side, side)))
+    for i in range(6):
+        cube.write(i, faces[i].tobytes(), alignment=1)
+    cube.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    cube.compare_func = "<="
+    return cube, faces
+
+
+class OmniPass:
+    """``method="omni"``: a point light that shines in every direction, through a cube map.
+
+    Every body casts and receives. The six faces hold the window depth of every
+    body drawn with ``cube_face_projection(near, far, map_size) @ cube_face_views(light)[i]``
+    and ``glPolygonOffset(*bias)`` (default :func:`depth_bias` ``(0)``); the mask pass
+    compares each visible point's window depth (from ``max |r_i|``, ``r = p - light``)
+    with ``texture(samplerCubeShadow, vec4(r, depth))``. No :class:`ShadowSetup`
+    (``setups[l]`` is empty); ``shadow_maps[l]`` are the six faces' depths.
+    """
+
+    def __init__(self, bias: tuple[float, float] | None = None) -> None:
+        if bias is None:
+            bias = depth_bias(0)
+        b = tuple(float(v) for v in bias)
+        if len(b) != 2 or not all(np.isfinite(b)):
+            raise ValueError(f"depth_bias: expected finite (factor, units), got {bias!r}")
+        self.bias = (b[0], b[1])
+
+    def check(self, receivers: Sequence[Prepared]) -> None:
+        pass
+
+    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+        return 0
+
+    def fit(
+        self,
+        receivers: Sequence[Prepared],
+        blockers: Sequence[Prepared],
+        light: PreparedLight,
+        map_size: tuple[int, int],
+    ) -> tuple[ShadowSetup, ...]:
+        cube_map_side("map_size", map_size)
+        return ()
+
+    def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
+        return tuple(range(len(scene.bodies)))
+
+    def draw_mask(
+        self, scene: GpuScene, light: PreparedLight, setups: tuple[ShadowSetup, ...]
+    ) -> tuple[NDArray[np.float32], ...]:
+        side = cube_map_side("map_size", scene.map_size)
+        near, far = omni_depth_range(scene.bodies, light.position)
+        cube, faces = draw_cube_depth(
+            scene, face_to_clip(light.position, near, far, side), side, self.bias
+        )
+        prog = program(scene.ctx, "surface.vert", "omni_mask.frag")
+        set_matrix(prog, "world_to_clip", scene.world_to_clip)
+        set_uniform(prog, "cube_map", 0)
+        set_uniform(prog, "light_position", tuple(light.position))
+        set_uniform(prog, "near", near)
+        set_uniform(prog, "far", far)
+        scene.bind_mask()
+        cube.use(location=0)
+        for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
+            set_matrix(prog, "body_to_world", body.to_world)
+            scene.bind_record(prog, i)
+            mesh.render(prog)
+        return tuple(faces)

@@ -1,0 +1,81 @@
+"""Blinn's planar shadows: each blocker flattened onto each receiver's plane by
+:func:`planar_projection`, confined to the receiver by the lit pass's body-id record
+(the seeds' stencil test)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from shadowmath._planar import planar_projection
+from shadowmath._setup import ShadowSetup
+
+from ._context import program, set_matrix
+from ._pass_texture import blocker_maps, fit_per_blocker
+from ._resources import GpuScene, Prepared, PreparedLight
+
+#: Polygon offset ``(factor, units)`` pulling Blinn's flattened blocker toward the
+#: camera, so that it wins the LEQUAL depth test against its coplanar receiver.
+PLANAR_POLYGON_OFFSET = (-1.0, -4.0)
+
+
+class PlanarPass:
+    """``method="planar"``: every receiver needs its ``plane``.
+
+    Drawn with a polygon offset of :data:`PLANAR_POLYGON_OFFSET`; a receiver is
+    skipped for a light on the other side of its plane than the camera (the
+    visible face is unlit: Blinn's back-face case). The blockers' silhouette maps
+    are drawn too, from the same set-ups, so that a :class:`Frame` of either
+    method holds them.
+    """
+
+    def check(self, receivers: Sequence[Prepared]) -> None:
+        for i, r in enumerate(receivers):
+            if r.plane is None:
+                raise ValueError(
+                    f"receivers[{i}].plane: method='planar' needs each receiver's plane"
+                )
+
+    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+        return len(blockers)
+
+    def fit(
+        self,
+        receivers: Sequence[Prepared],
+        blockers: Sequence[Prepared],
+        light: PreparedLight,
+        map_size: tuple[int, int],
+    ) -> tuple[ShadowSetup, ...]:
+        return fit_per_blocker(blockers, light, map_size)
+
+    def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
+        return tuple(range(len(scene.receivers)))
+
+    def draw_mask(
+        self, scene: GpuScene, light: PreparedLight, setups: tuple[ShadowSetup, ...]
+    ) -> tuple[NDArray[np.float32], ...]:
+        prog = program(scene.ctx, "planar.vert", "planar_mask.frag")
+        set_matrix(prog, "world_to_clip", scene.world_to_clip)
+        maps = blocker_maps(scene, setups)
+        scene.bind_mask()
+        scene.ctx.polygon_offset = PLANAR_POLYGON_OFFSET
+        offset = len(scene.receivers)
+        try:
+            for bi, blocker in enumerate(scene.blockers):
+                set_matrix(prog, "blocker_to_world", blocker.to_world)
+                for ri, receiver in enumerate(scene.receivers):
+                    plane = receiver.plane
+                    assert plane is not None  # render_scene checks it for this method
+                    side_light = np.dot(plane[:3], light.position) + plane[3]
+                    side_eye = np.dot(plane, scene.eye) / scene.eye[3]
+                    if side_light * side_eye <= 0:
+                        continue  # the camera sees the face the light does not reach
+                    flatten = planar_projection(plane, np.append(light.position, 1.0))
+                    set_matrix(prog, "flatten", flatten)
+                    scene.bind_record(prog, ri)
+                    scene.meshes[offset + bi].render(prog)
+        finally:
+            scene.ctx.polygon_offset = (0.0, 0.0)
+        return tuple(array for _, array in maps)

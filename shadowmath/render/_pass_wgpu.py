@@ -1,0 +1,361 @@
+"""Williams' shadow z-buffer on a second graphics API: WebGPU through ``wgpu``
+(wgpu-native over Vulkan; Mesa's llvmpipe without a GPU).
+
+The same scene, setup and bias as :class:`DepthPass`, with WebGPU's conventions
+(:func:`shadowmath.api_convention` ``api="webgpu"``): clip depth ``0..w``,
+framebuffer and texture origin at the top left. The OpenGL clip matrices of
+:func:`fit_shadow` and the camera are converted by ``C = gl_clip_to_clip``, the
+texture matrix is ``gl_clip_to_texture @ (world to the light's OpenGL clip)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from importlib import resources
+from typing import Any, NamedTuple
+
+import numpy as np
+import wgpu
+from numpy.typing import NDArray
+
+from shadowmath._conventions import api_convention
+from shadowmath._layout import column_major_bytes
+from shadowmath._setup import ShadowSetup
+
+from ._context import check_matrix
+from ._context import image_size as _image_size
+from ._pass_depth import DepthPass, fit_depth, world_to_light_clip
+from ._resources import Body, Light, prepare_body, prepare_light, vertex_data
+
+#: Debian packages that provide a Vulkan driver without a GPU (Mesa's lavapipe/llvmpipe).
+VULKAN_DEBIAN_PACKAGES = ("mesa-vulkan-drivers",)
+
+_devices: list[Any] = []
+
+
+class WgpuUnavailableError(RuntimeError):
+    """No WebGPU adapter could be found (no Vulkan driver)."""
+
+
+class WgpuFrame(NamedTuple):
+    """What :func:`render_depth_wgpu` returns; images have row 0 at the *top*.
+
+    Attributes:
+        shadow: ``(H, W)`` float32 shadow mask of the visible bodies (1 shadowed,
+            PCF fractions, 0 lit and on the background).
+        position: ``(H, W, 3)`` float32 world position of the visible surface (NaN on
+            the background).
+        normal: ``(H, W, 3)`` float32 unit face normal (NaN on the background).
+        body: ``(H, W)`` int32: ``0 .. R-1`` receivers, ``R ..`` blockers, ``-1`` none.
+        setup: the light's :class:`ShadowSetup` (OpenGL conventions, as fitted).
+        depth_map: ``(h, w)`` float32 depths in ``[0, 1]``; row 0 is WebGPU's ``t = 0``,
+            the *top* of the light's view (``depth_map[::-1]`` is OpenGL's layout).
+        adapter: the adapter's description, e.g. ``"llvmpipe (LLVM 15.0.6, 256 bits)"``.
+    """
+
+    shadow: NDArray[np.float32]
+    position: NDArray[np.float32]
+    normal: NDArray[np.float32]
+    body: NDArray[np.int32]
+    setup: ShadowSetup
+    depth_map: NDArray[np.float32]
+    adapter: str
+
+
+def wgpu_device() -> Any:
+    """The shared WebGPU device, created on first use.
+
+    Raises:
+        WgpuUnavailableError: no adapter (on Debian: ``apt-get install -y
+            mesa-vulkan-drivers``).
+    """
+    if not _devices:
+        try:
+            _vulkan_only()
+            adapter = wgpu.gpu.request_adapter_sync(power_preference="high-performance")
+            if adapter is None:
+                raise RuntimeError("request_adapter_sync returned no adapter")
+            device = adapter.request_device_sync()
+        except Exception as err:  # wgpu raises several kinds
+            raise WgpuUnavailableError(
+                f"no WebGPU adapter through wgpu ({err}); on Debian/Ubuntu install "
+                f"{', '.join(VULKAN_DEBIAN_PACKAGES)} "
+                f"(apt-get install -y {' '.join(VULKAN_DEBIAN_PACKAGES)})"
+            ) from err
+        _devices.append((adapter, device))
+    return _devices[0][1]
+
+
+def _vulkan_only() -> None:
+    """Keep wgpu-native off its OpenGL (EGL) backend: probing it makes wgpu's own EGL
+    context current on this thread, and moderngl's shared context then fails."""
+    from wgpu.backends.wgpu_native import extras
+
+    try:
+        extras.set_instance_extras(backends=["Vulkan"])
+    except Exception:  # the instance exists already: keep it
+        return
+
+
+def adapter_description() -> str:
+    """The shared device's adapter, as ``request_adapter_sync`` reports it."""
+    wgpu_device()
+    info = _devices[0][0].info
+    return str(info.get("device", "")) or str(info)
+
+
+def _shader(device: Any, name: str) -> Any:
+    code = (resources.files("shadowmath.render") / "shaders" / name).read_text(encoding="utf-8")
+    return device.create_shader_module(label=name, code=code)
+
+
+def _uniform(device: Any, data: bytes) -> Any:
+    usage = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
+    return device.create_buffer_with_data(data=data, usage=usage)
+
+
+def _scene_uniforms(
+    world_to_clip: NDArray[np.float64],
+    body_to_world: NDArray[np.float64],
+    body_to_texture: NDArray[np.float64],
+    light: NDArray[np.float64],
+    body_id: int,
+    pcf_radius: int,
+) -> bytes:
+    """``struct Body`` of depth_scene.wgsl: four mat4x4 (column-major), vec3 + f32, i32."""
+    normal = np.eye(4)
+    normal[:3, :3] = np.linalg.inv(body_to_world[:3, :3]).T
+    mats = b"".join(
+        column_major_bytes(m) for m in (world_to_clip, body_to_world, normal, body_to_texture)
+    )
+    tail = np.zeros(8, dtype=np.float32)
+    tail[:3] = light
+    tail[3] = body_id
+    tail_bytes = bytearray(tail.tobytes())
+    tail_bytes[16:20] = np.int32(pcf_radius).tobytes()
+    return mats + bytes(tail_bytes)
+
+
+def _read(device: Any, texture: Any, size: tuple[int, int], components: int) -> NDArray[Any]:
+    w, h = size
+    data = device.queue.read_texture(
+        {"texture": texture, "mip_level": 0, "origin": (0, 0, 0)},
+        {"offset": 0, "bytes_per_row": 4 * components * w},
+        (w, h, 1),
+    )
+    return np.frombuffer(data, dtype=np.float32).reshape(h, w, components).copy()
+
+
+def render_depth_wgpu(
+    receivers: Sequence[Body],
+    blockers: Sequence[Body],
+    light: Light,
+    world_to_clip: Any,
+    *,
+    image_size: int | tuple[int, int] = (512, 384),
+    map_size: int | tuple[int, int] = 256,
+    pcf_radius: int = 0,
+    depth_bias: tuple[float, float] | None = None,
+    setup: ShadowSetup | None = None,
+) -> WgpuFrame:
+    """Williams' shadow z-buffer with WebGPU: :func:`render_scene`'s ``method="depth"``
+    on a second graphics API.
+
+    The light's setup is the same as :class:`DepthPass`'s (one frustum fitted to the
+    blockers, its far plane enclosing every body), converted with
+    ``api_convention(api="webgpu")``: the depth map is drawn through
+    ``C @ world_to_light_clip`` into a ``depth32float`` texture with the pipeline's
+    ``depthBias = units`` and ``depthBiasSlopeScale = factor`` (WebGPU's polygon
+    offset), then every body is drawn from the camera (``C @ world_to_clip``) and
+    compared with ``textureSampleCompareLevel`` (``less-equal``) at
+    ``gl_clip_to_texture @ world_to_light_clip``, over a ``(2k + 1)^2`` box.
+
+    Arguments:
+        receivers, blockers: as in :func:`render_scene`; every body casts and
+            receives, the frustum's sides fit the blockers.
+        light: one point light.
+        world_to_clip: ``(4, 4)`` the camera in OpenGL's clip conventions (converted here).
+        image_size, map_size: ``size`` or ``(width, height)`` in pixels and texels.
+        pcf_radius: the PCF kernel's radius ``k`` in texels.
+        depth_bias: ``(factor, units)``; default as :func:`render_scene`'s (WebGPU's
+            ``depthBias`` is an integer: ``units`` is rounded).
+        setup: the light's :class:`ShadowSetup` instead of the fitted one.
+
+    Returns:
+        :class:`WgpuFrame`.
+
+    Raises:
+        ValueError: bad input, as :func:`render_scene`.
+        WgpuUnavailableError: no WebGPU adapter.
+    """
+    camera = check_matrix("world_to_clip", world_to_clip)
+    size = _image_size("image_size", image_size)
+    map_texels = _image_size("map_size", map_size)
+    options = DepthPass(pcf_radius, depth_bias)  # checks both
+    factor, units = options.bias
+    k = options.pcf_radius
+    recv = [prepare_body(f"receivers[{i}]", b) for i, b in enumerate(receivers)]
+    block = [prepare_body(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
+    lit = prepare_light("light", light)
+    if setup is None:
+        setup = fit_depth(recv, block, lit.position, map_texels, k)
+    bodies = recv + block
+    device = wgpu_device()
+    conv = api_convention(api="webgpu")
+    light_clip = world_to_light_clip(setup)
+    light_to_clip = conv.gl_clip_to_clip @ light_clip
+    world_to_texture = conv.gl_clip_to_texture @ light_clip
+    camera_clip = conv.gl_clip_to_clip @ camera
+
+    vbos = [
+        device.create_buffer_with_data(
+            data=vertex_data(b.vertices, b.triangles), usage=wgpu.BufferUsage.VERTEX
+        )
+        for b in bodies
+    ]
+    counts = [3 * len(b.triangles) for b in bodies]
+    layout: dict[str, Any] = {
+        "array_stride": 36,
+        "step_mode": "vertex",
+        "attributes": [
+            {"format": "float32x3", "offset": 0, "shader_location": 0},
+            {"format": "float32x3", "offset": 24, "shader_location": 1},
+        ],
+    }
+
+    # Pass 1: the depth map.
+    depth_tex = device.create_texture(
+        size=(*map_texels, 1),
+        format="depth32float",
+        usage=wgpu.TextureUsage.RENDER_ATTACHMENT
+        | wgpu.TextureUsage.TEXTURE_BINDING
+        | wgpu.TextureUsage.COPY_SRC,
+    )
+    map_shader = _shader(device, "depth_map.wgsl")
+    map_pipeline = device.create_render_pipeline(
+        layout="auto",
+        vertex={
+            "module": map_shader,
+            "entry_point": "vs_main",
+            "buffers": [{**layout, "attributes": layout["attributes"][:1]}],
+        },
+        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        depth_stencil={
+            "format": "depth32float",
+            "depth_write_enabled": True,
+            "depth_compare": "less",
+            "depth_bias": round(units),  # an integer in WebGPU
+            "depth_bias_slope_scale": float(factor),
+            "depth_bias_clamp": 0.0,
+        },
+        fragment=None,
+    )
+    encoder = device.create_command_encoder()
+    rp = encoder.begin_render_pass(
+        color_attachments=[],
+        depth_stencil_attachment={
+            "view": depth_tex.create_view(),
+            "depth_clear_value": 1.0,
+            "depth_load_op": "clear",
+            "depth_store_op": "store",
+        },
+    )
+    rp.set_pipeline(map_pipeline)
+    for b, vbo, count in zip(bodies, vbos, counts, strict=True):
+        buf = _uniform(device, column_major_bytes(light_to_clip @ b.to_world))
+        group = device.create_bind_group(
+            layout=map_pipeline.get_bind_group_layout(0),
+            entries=[{"binding": 0, "resource": {"buffer": buf}}],
+        )
+        rp.set_bind_group(0, group)
+        rp.set_vertex_buffer(0, vbo)
+        rp.draw(count)
+    rp.end()
+    device.queue.submit([encoder.finish()])
+
+    # Pass 2: the bodies from the camera, compared with the map.
+    w, h = size
+    usage = wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC
+    targets = [
+        device.create_texture(size=(w, h, 1), format=fmt, usage=usage)
+        for fmt in ("r32float", "rgba32float", "rgba32float")
+    ]
+    camera_depth = device.create_texture(
+        size=(w, h, 1), format="depth32float", usage=wgpu.TextureUsage.RENDER_ATTACHMENT
+    )
+    scene_shader = _shader(device, "depth_scene.wgsl")
+    scene_pipeline = device.create_render_pipeline(
+        layout="auto",
+        vertex={"module": scene_shader, "entry_point": "vs_main", "buffers": [layout]},
+        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        depth_stencil={
+            "format": "depth32float",
+            "depth_write_enabled": True,
+            "depth_compare": "less",
+        },
+        fragment={
+            "module": scene_shader,
+            "entry_point": "fs_main",
+            "targets": [{"format": t.format} for t in targets],
+        },
+    )
+    sampler = device.create_sampler(
+        compare="less-equal",
+        mag_filter="nearest",
+        min_filter="nearest",
+        address_mode_u="clamp-to-edge",
+        address_mode_v="clamp-to-edge",
+    )
+    encoder = device.create_command_encoder()
+    rp = encoder.begin_render_pass(
+        color_attachments=[
+            {
+                "view": t.create_view(),
+                "clear_value": (0.0, 0.0, 0.0, 0.0),
+                "load_op": "clear",
+                "store_op": "store",
+            }
+            for t in targets
+        ],
+        depth_stencil_attachment={
+            "view": camera_depth.create_view(),
+            "depth_clear_value": 1.0,
+            "depth_load_op": "clear",
+            "depth_store_op": "store",
+        },
+    )
+    rp.set_pipeline(scene_pipeline)
+    depth_view = depth_tex.create_view()
+    for i, (b, vbo, count) in enumerate(zip(bodies, vbos, counts, strict=True)):
+        data = _scene_uniforms(
+            camera_clip, b.to_world, world_to_texture @ b.to_world, lit.position, i, k
+        )
+        group = device.create_bind_group(
+            layout=scene_pipeline.get_bind_group_layout(0),
+            entries=[
+                {"binding": 0, "resource": {"buffer": _uniform(device, data)}},
+                {"binding": 1, "resource": depth_view},
+                {"binding": 2, "resource": sampler},
+            ],
+        )
+        rp.set_bind_group(0, group)
+        rp.set_vertex_buffer(0, vbo)
+        rp.draw(count)
+    rp.end()
+    device.queue.submit([encoder.finish()])
+
+    mask = _read(device, targets[0], size, 1)[..., 0]
+    surface = _read(device, targets[1], size, 4)
+    normal = _read(device, targets[2], size, 4)[..., :3]
+    depth_map = _read(device, depth_tex, map_texels, 1)[..., 0]
+    body = np.rint(surface[..., 3]).astype(np.int32) - 1
+    empty = (body < 0)[..., None]
+    return WgpuFrame(
+        shadow=mask.astype(np.float32),
+        position=np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32),
+        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        body=body,
+        setup=setup,
+        depth_map=depth_map.astype(np.float32),
+        adapter=adapter_description(),
+    )

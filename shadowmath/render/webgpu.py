@@ -1,0 +1,24 @@
+"""Williams' shadow z-buffer on WebGPU (``wgpu``): the reference render's second API.
+
+Importing this module imports ``wgpu`` (in the ``render`` extra); on a machine
+without a GPU it runs on Mesa's software Vulkan driver (Debian:
+``mesa-vulkan-drivers``). :func:`render_depth_wgpu` draws the scene of
+``render_scene(..., method="depth")`` with WebGPU's conventions
+(:func:`shadowmath.api_convention` ``api="webgpu"``).
+"""
+
+from ._pass_wgpu import VULKAN_DEBIAN_PACKAGES as VULKAN_DEBIAN_PACKAGES
+from ._pass_wgpu import WgpuFrame as WgpuFrame
+from ._pass_wgpu import WgpuUnavailableError as WgpuUnavailableError
+from ._pass_wgpu import adapter_description as adapter_description
+from ._pass_wgpu import render_depth_wgpu as render_depth_wgpu
+from ._pass_wgpu import wgpu_device as wgpu_device
+
+__all__ = [
+    "VULKAN_DEBIAN_PACKAGES",
+    "WgpuFrame",
+    "WgpuUnavailableError",
+    "adapter_description",
+    "render_depth_wgpu",
+    "wgpu_device",
+]

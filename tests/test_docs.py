@@ -1,0 +1,128 @@
+"""The docs read completely as raw Markdown, and list everything they claim to list.
+
+A code host shows ``docs/*.md`` raw: include lines (pymdownx.snippets' ``--8<--``)
+show as themselves there, so the renderer guide carries the shaders' text
+inline, and this test keeps each copy equal to its file.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+GUIDE = DOCS / "renderers.md"
+# ```glsl title="shadowmath/render/shaders/x.vert"  ...  ```
+TITLED = re.compile(r'^```(\w+) title="([^"]+)"\n(.*?)^```$', re.MULTILINE | re.DOTALL)
+
+
+def test_renderer_guide_has_no_include_lines():
+    text = GUIDE.read_text(encoding="utf-8")
+    assert "--8<--" not in text
+
+
+def test_renderer_guide_shaders_equal_the_shader_files():
+    shaders = {
+        path: body
+        for _, path, body in TITLED.findall(GUIDE.read_text(encoding="utf-8"))
+        if path.startswith("shadowmath/render/shaders/")
+    }
+    # The shaders of the passes the guide walks through (the lit pass only shades).
+    passes = {
+        f"shadowmath/render/shaders/{name}"
+        for name in (
+            "shadow_map.vert", "shadow_map.frag", "surface.vert", "receiver_mask.frag",
+            "receiver_subtract.frag", "planar.vert", "planar_mask.frag",
+        )
+    }  # fmt: skip
+    assert passes <= set(shaders)
+    for path, body in shaders.items():
+        assert body == (ROOT / path).read_text(encoding="utf-8"), path
+
+
+@pytest.mark.parametrize("page", ["index.md", "getting-started.md"])
+def test_pages_list_every_notebook(page):
+    text = (DOCS / page).read_text(encoding="utf-8")
+    notebooks = sorted(p.name for p in (ROOT / "notebooks").glob("*.ipynb"))
+    assert len(notebooks) >= 3
+    for name in notebooks:
+        assert f"notebooks/{name}" in text, f"{page} does not list {name}"
+
+
+def test_readme_lists_every_notebook():
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    for path in sorted((ROOT / "notebooks").glob("*.ipynb")):
+        assert f"notebooks/{path.name}" in text, path.name
+
+
+def _hooks():
+    spec = importlib.util.spec_from_file_location("docs_hooks", DOCS / "hooks.py")
+    assert spec and spec.loader
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_site_loads_no_script_from_another_host():
+    text = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
+    scripts = re.search(r"^extra_javascript:\n((?:  - .*\n)+)", text, re.MULTILINE)
+    assert scripts
+    entries = [line.removeprefix("  - ").strip() for line in scripts.group(1).splitlines()]
+    provided = set(_hooks().mathjax_files())
+    for entry in entries:
+        assert "//" not in entry, entry
+        assert (DOCS / entry).is_file() or entry in provided, entry
+    assert "javascripts/mathjax/tex-mml-chtml.js" in entries
+
+
+def test_mathjax_comes_from_the_pinned_package_with_its_fonts():
+    files = _hooks().mathjax_files()
+    assert files["javascripts/mathjax/tex-mml-chtml.js"].is_file()
+    fonts = [
+        uri for uri in files if uri.startswith("javascripts/mathjax/output/chtml/fonts/woff-v2/")
+    ]
+    assert any(uri.endswith("MathJax_Main-Regular.woff") for uri in fonts)
+    assert not (DOCS / "javascripts" / "mathjax").exists()  # not committed by hand
+    pin = f'"{_hooks().MATHJAX_DIST}=={_hooks().MATHJAX_VERSION}"'
+    assert pin in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+
+
+def _public_docstring_sections():
+    """Every public object's docstring sections, as mkdocstrings gets them for api.md."""
+    griffe = pytest.importorskip("griffe")
+    sys.path.insert(0, str(DOCS))
+    try:
+        from griffe_rst import RstToMarkdown
+    finally:
+        sys.path.remove(str(DOCS))
+    extensions = griffe.load_extensions(RstToMarkdown())
+    package = griffe.load("shadowmath", extensions=extensions, search_paths=[str(ROOT)])
+    import shadowmath
+    import shadowmath.render
+
+    names = [*shadowmath.__all__, *(f"render.{n}" for n in shadowmath.render.__all__)]
+    for name in names:
+        obj = package[name]
+        if obj.docstring is not None:
+            yield name, obj.docstring.parse("google")
+
+
+def test_api_examples_are_code_not_headings_or_quotes():
+    markdown = pytest.importorskip("markdown")
+    examples = 0
+    for name, sections in _public_docstring_sections():
+        for section in sections:
+            if section.kind.value != "admonition":
+                continue
+            html = markdown.markdown(
+                section.value.contents, extensions=["pymdownx.superfences", "toc"]
+            )
+            examples += ">>>" in section.value.contents
+            assert "<blockquote>" not in html, name
+            assert not re.search(r"<h[1-6]", html), name
+    assert examples > 20
