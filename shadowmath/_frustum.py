@@ -348,7 +348,10 @@ def frustum_arrays(frustum: Frustum) -> tuple[Context, Checks, Frustum]:
 def projection_terms(xp: ModuleType, fr: Frustum) -> tuple[Array, ...]:
     """``(sx, -sx cx, sy, -sy cy, a, b)``: the nonzero entries of the blocker projection."""
     sx, sy = fr.margin_x / fr.rx_max, fr.margin_y / fr.ry_max
-    return formulas(xp).projection_rows(sx, sy, fr.x_offset, fr.y_offset, fr.near, fr.far)
+    terms: tuple[Array, ...] = formulas(xp).projection_rows(
+        sx, sy, fr.x_offset, fr.y_offset, fr.near, fr.far
+    )
+    return terms
 
 
 def _projection_entries(xp: ModuleType, fr: Frustum) -> tuple[Array, ...]:

@@ -215,6 +215,7 @@ def fit_shadow(
         return optimized_setup(ctx, checks, light, world, B, m, n, f)
     if ctx.is_jax and not ctx.lazy:
         run, messages = _jitted_fit(m, aim, B is None, n is None, f is None)
+        setup: ShadowSetup
         setup, bad = run(light, verts, B, n, f)
         raise_recorded(messages, bad)
         return setup
@@ -224,9 +225,7 @@ def fit_shadow(
 
 
 @functools.cache
-def _jitted_fit(
-    m: tuple[float, float], aim: str, *absent: bool
-) -> tuple[Any, list[str]]:
+def _jitted_fit(m: tuple[float, float], aim: str, *absent: bool) -> tuple[Any, list[str]]:
     """``fit_core`` under ``jax.jit`` for concrete JAX input, recording its failed checks.
 
     One per set of static options and absent (None) arguments, so that every
