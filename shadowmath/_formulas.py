@@ -25,6 +25,7 @@ import numpy as np
 where: Callable[..., Any] = np.where
 sqrt: Callable[..., Any] = np.sqrt
 fabs: Callable[..., Any] = np.abs
+isfinite: Callable[..., Any] = np.isfinite
 
 
 def normalize3(x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any]:
@@ -96,6 +97,76 @@ def rolled_axes(
         c * ax + s * bx, c * ay + s * by, c * az + s * bz,
         c * bx - s * ax, c * by - s * ay, c * bz - s * az,
         zx, zy, zz, length, sin_sq,
+    )  # fmt: skip
+
+
+def two_sum(a: Any, b: Any) -> tuple[Any, Any]:
+    """Knuth's error-free sum: ``s + e == a + b`` exactly, ``s = fl(a + b)``."""
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+def two_product(a: Any, b: Any, splitter: float) -> tuple[Any, Any]:
+    """Dekker's error-free product ``p + e == a * b`` (no FMA needed).
+
+    Veltkamp's split cuts each factor into halves whose products are exact. A
+    compiler that fuses ``ah * bh - p`` into an FMA still gets the exact value.
+    """
+    ca, cb = splitter * a, splitter * b
+    ah = ca - (ca - a)
+    bh = cb - (cb - b)
+    al, bl = a - ah, b - bh
+    p = a * b
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def dot2(a: tuple[Any, ...], b: tuple[Any, ...], splitter: float) -> Any:
+    """``sum(a_i b_i)`` as if computed in twice the working precision.
+
+    Ogita, Rump and Oishi's ``Dot2`` ("Accurate sum and dot product", 2005):
+    the exact dot product rounded once, up to a relative error of
+    ``eps + (n eps)^2 cond``. Where the splitting overflows (entries beyond
+    ~1e300 in float64, ~1e30 in float32) the plain sum is returned instead.
+    ``splitter`` is ``2^ceil(p/2) + 1`` for a ``p``-bit significand.
+    """
+    p, s = two_product(a[0], b[0], splitter)
+    plain = a[0] * b[0]
+    for i in range(1, len(a)):
+        h, r = two_product(a[i], b[i], splitter)
+        p, q = two_sum(p, h)
+        s = s + (q + r)
+        plain = plain + a[i] * b[i]
+    compensated = p + s
+    return where(isfinite(compensated), compensated, plain)
+
+
+def planar_entries(pi: tuple[Any, ...], L: tuple[Any, ...], splitter: float) -> tuple[Any, ...]:
+    """Blinn's ``sign(pi.L) ((pi.L) I - L pi^T)`` as 16 entries, then ``pi.L`` and its scale.
+
+    ``pi.L`` cancels for a light close to the plane far from the origin; it is
+    computed compensated (:func:`dot2`), so its sign (which orients the matrix)
+    and size are right. The diagonal entries ``(pi.L) - L_i pi_i`` are the
+    other three terms of ``pi.L``, summed compensated too, where the
+    subtraction would cancel. The scale ``|n| |l| + |d w|`` is the size of the
+    terms of ``pi.L``, for a relative threshold.
+    """
+    d = dot2(pi, L, splitter)
+    one = d * 0.0 + 1.0
+    sign = where(d < 0, -one, one)
+    a0 = sign * dot2((pi[1], pi[2], pi[3]), (L[1], L[2], L[3]), splitter)
+    a1 = sign * dot2((pi[0], pi[2], pi[3]), (L[0], L[2], L[3]), splitter)
+    a2 = sign * dot2((pi[0], pi[1], pi[3]), (L[0], L[1], L[3]), splitter)
+    a3 = sign * dot2((pi[0], pi[1], pi[2]), (L[0], L[1], L[2]), splitter)
+    s0, s1, s2, s3 = -sign * L[0], -sign * L[1], -sign * L[2], -sign * L[3]
+    n_len = normalize3(pi[0], pi[1], pi[2])[3]
+    l_len = normalize3(L[0], L[1], L[2])[3]
+    return (
+        a0, s0 * pi[1], s0 * pi[2], s0 * pi[3],
+        s1 * pi[0], a1, s1 * pi[2], s1 * pi[3],
+        s2 * pi[0], s2 * pi[1], a2, s2 * pi[3],
+        s3 * pi[0], s3 * pi[1], s3 * pi[2], a3,
+        d, n_len * l_len + fabs(pi[3] * L[3]), n_len,
     )  # fmt: skip
 
 
@@ -178,6 +249,10 @@ _FUNCTIONS = (
     "light_rows",
     "clip_rows",
     "texture_rows",
+    "two_sum",
+    "two_product",
+    "dot2",
+    "planar_entries",
     "_row_times",
     "compose_rows",
 )
@@ -203,7 +278,7 @@ def specialize(
 def formulas(xp: ModuleType) -> types.SimpleNamespace:
     """The formulas specialized to the array namespace ``xp`` (NumPy or ``jax.numpy``)."""
     where = xp.where if xp is not np else _numpy_where
-    return specialize({"where": where, "sqrt": xp.sqrt, "fabs": xp.abs})
+    return specialize({"where": where, "sqrt": xp.sqrt, "fabs": xp.abs, "isfinite": xp.isfinite})
 
 
 def _numpy_where(c: Any, a: Any, b: Any) -> Any:

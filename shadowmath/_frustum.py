@@ -9,6 +9,7 @@ border of untouched texels.
 
 from __future__ import annotations
 
+import functools
 import operator
 from types import ModuleType
 from typing import Any, NamedTuple
@@ -131,6 +132,25 @@ def border_margin(
 
 
 def margins(map_size: Any, border_texels: int, margin: Any) -> tuple[float, float]:
+    """The margins of a map: given, or derived from its size (cached for hashable input)."""
+    plain = (type(map_size) is int or (type(map_size) is tuple and _ints(map_size))) and (
+        type(border_texels) is int and (margin is None or type(margin) is float)
+    )
+    if plain:  # exactly typed Python values: safe to cache (True is not 1 here)
+        return _margins_cached(map_size, border_texels, margin)
+    return _margins(map_size, border_texels, margin)
+
+
+def _ints(values: tuple[Any, ...]) -> bool:
+    return all(type(v) is int for v in values)
+
+
+@functools.lru_cache(maxsize=256)
+def _margins_cached(map_size: Any, border_texels: int, margin: Any) -> tuple[float, float]:
+    return _margins(map_size, border_texels, margin)
+
+
+def _margins(map_size: Any, border_texels: int, margin: Any) -> tuple[float, float]:
     derived = border_margin(map_size, border_texels=border_texels)
     if margin is None:
         return derived

@@ -15,9 +15,12 @@ compiled code is cached on disk (``cache=True``).
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import importlib.util
 import math
 import os
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -38,25 +41,37 @@ FAR_CLIPS = 2048
 NEAR_FAR = 4096
 OVERFLOW = 8192
 
-#: Layout of one output row: origin, X, Y, Z (3 each), the six frustum fields,
-#: world_to_light (first 12 entries), blocker_to_clip (16), world_to_texture (16).
-ROW = 12 + 6 + 12 + 16 + 16
+#: Layout of one output row: origin, X, Y, Z (3 each), the eight frustum fields; and
+#: of one matrix block (4, 4, 4): world_to_light, blocker_to_clip, world_to_texture,
+#: blocker_to_world.
+ROW = 12 + 8
 
 
 def available() -> bool:
-    """Numba is installed and not disabled by ``SHADOWMATH_NUMBA=0``."""
-    if os.environ.get("SHADOWMATH_NUMBA", "1") == "0":
-        return False
+    """Numba is installed, not disabled by ``SHADOWMATH_NUMBA=0`` nor by :func:`disabled`."""
+    return _enabled[0]
+
+
+# Read once: whether the compiled loops run (tests switch them with `disabled()`).
+_enabled = [
+    os.environ.get("SHADOWMATH_NUMBA") != "0" and importlib.util.find_spec("numba") is not None
+]
+
+
+@contextlib.contextmanager
+def disabled() -> Iterator[None]:
+    """Within the block, NumPy input runs the array path instead of the compiled loops."""
+    old = _enabled[0]
+    _enabled[0] = False
     try:
-        import numba  # noqa: F401
-    except ImportError:
-        return False
-    return True
+        yield
+    finally:
+        _enabled[0] = old
 
 
 @functools.cache
-def fit_kernel() -> Any:
-    """The compiled batch loop (built on first use)."""
+def compiled_formulas() -> Any:
+    """The formulas of :mod:`._formulas` compiled for scalars (the compiled loops call them)."""
     import numba
 
     from ._formulas import specialize
@@ -65,7 +80,59 @@ def fit_kernel() -> Any:
     def where(c: Any, a: Any, b: Any) -> Any:
         return a if c else b
 
-    F = specialize({"where": where, "sqrt": math.sqrt, "fabs": abs}, wrap=numba.njit(cache=True))
+    primitives = {"where": where, "sqrt": math.sqrt, "fabs": abs, "isfinite": math.isfinite}
+    return specialize(primitives, wrap=numba.njit(cache=True))
+
+
+# Status bits of planar_projection's loop, in the order of its checks.
+PLANAR_NONFINITE_PLANE = 1
+PLANAR_NONFINITE_LIGHT = 2
+PLANAR_ZERO_NORMAL = 4
+PLANAR_ZERO_LIGHT = 8
+PLANAR_IN_PLANE = 16
+
+
+@functools.cache
+def planar_kernel() -> Any:
+    """The compiled batch loop of ``planar_projection`` (built on first use)."""
+    import numba
+
+    planar_entries = compiled_formulas().planar_entries
+
+    @numba.njit(cache=True)
+    def kernel(plane: Any, light: Any, eps: float, out: Any, status: Any) -> None:
+        splitter = 134217729.0  # 2^27 + 1: the loop computes in float64
+        for i in range(out.shape[0]):
+            P, L = plane[i % plane.shape[0]], light[i % light.shape[0]]
+            pi = (float(P[0]), float(P[1]), float(P[2]), float(P[3]))
+            li = (float(L[0]), float(L[1]), float(L[2]), float(L[3]))
+            st = 0
+            for v in pi:
+                if not math.isfinite(v):
+                    st |= PLANAR_NONFINITE_PLANE
+            for v in li:
+                if not math.isfinite(v):
+                    st |= PLANAR_NONFINITE_LIGHT
+            e = planar_entries(pi, li, splitter)
+            if not e[18] > 0:
+                st |= PLANAR_ZERO_NORMAL
+            if li[0] == 0 and li[1] == 0 and li[2] == 0 and li[3] == 0:
+                st |= PLANAR_ZERO_LIGHT
+            if not abs(e[16]) > 16 * eps * e[17]:
+                st |= PLANAR_IN_PLANE
+            status[i] = st
+            for j in range(16):
+                out[i, j] = e[j]
+
+    return kernel
+
+
+@functools.cache
+def fit_kernel() -> Any:
+    """The compiled batch loop (built on first use)."""
+    import numba
+
+    F = compiled_formulas()
     normalize3, axes_from_z, projection_rows = F.normalize3, F.axes_from_z, F.projection_rows
     light_rows, clip_rows, texture_rows, compose_rows = (
         F.light_rows,
@@ -98,6 +165,7 @@ def fit_kernel() -> Any:
         far: Any,
         options: Any,
         out: Any,
+        mats: Any,
         status: Any,
     ) -> None:
         aim_bbox, has_b = options[0] != 0, options[1] != 0
@@ -210,16 +278,18 @@ def fit_kernel() -> Any:
             tex = texture_rows(clip)
             if has_b:
                 clip = compose_rows(clip, b)
-            row = out[i]
+            row, mat = out[i], mats[i]
             row[0], row[1], row[2] = lx, ly, lz
             for j in range(9):
                 row[3 + j] = ax[j]
             row[12], row[13], row[14], row[15] = half_x, half_y, n_near, n_far
-            row[16], row[17] = 0.0, 0.0
+            row[16], row[17], row[18], row[19] = mx, my, 0.0, 0.0
             for j in range(12):
-                row[18 + j] = wl[j]
+                mat[0, j // 4, j % 4] = wl[j]
             for j in range(16):
-                row[30 + j] = clip[j]
-                row[46 + j] = tex[j]
+                mat[1, j // 4, j % 4] = clip[j]
+                mat[2, j // 4, j % 4] = tex[j]
+                mat[3, j // 4, j % 4] = b[j] if has_b else (1.0 if j % 5 == 0 else 0.0)
+            mat[0, 3, 0], mat[0, 3, 1], mat[0, 3, 2], mat[0, 3, 3] = 0.0, 0.0, 0.0, 1.0
 
     return kernel

@@ -2,10 +2,26 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
-from ._validate import Array, Checks, all_finite, batch_shape, convert, non_finite, require_last
-from ._vector import accurate_dot, norm
+import numpy as np
+
+from . import _kernels
+from ._formulas import formulas
+from ._frame import stack_matrix
+from ._validate import (
+    Array,
+    Checks,
+    Context,
+    all_finite,
+    batch_shape,
+    convert,
+    flat_batch,
+    non_finite,
+    raise_status,
+    require_last,
+)
 
 
 def planar_projection(plane: Any, light: Any) -> Array:
@@ -64,46 +80,61 @@ def planar_projection(plane: Any, light: Any) -> Array:
         array([2., 0., 0.])
     """
     ctx, (pi, L) = convert(plane=plane, light=light)
-    xp = ctx.xp
     require_last("plane", pi, 4, hint="a plane is (a, b, c, d) for a x + b y + c z + d = 0")
     require_last(
         "light", L, 4, hint="a light is (x, y, z, w): append w=1 for a point, w=0 for a direction"
     )
     shape = batch_shape(pi.shape[:-1], L.shape[:-1], names=("plane", "light"))
-
+    if not ctx.is_jax and _kernels.available():
+        return _planar_compiled(ctx, shape, pi, L)
+    xp = ctx.xp
     checks = Checks(ctx)
-    checks.require(all_finite(xp, pi, 1), non_finite("plane"))
-    checks.require(all_finite(xp, L, 1), non_finite("light"))
-    n_len = norm(xp, pi[..., :3])
-    checks.require(n_len > 0, "plane: the normal (a, b, c) is zero; a plane needs a nonzero normal")
-    checks.require(
-        xp.any(L != 0, axis=-1),
-        "light: all components are zero; use (x, y, z, 1) for a point light or "
-        "(dx, dy, dz, 0) with a nonzero direction for a directional light",
+    checks.require(all_finite(xp, pi, 1), _MESSAGES[0][1])
+    checks.require(all_finite(xp, L, 1), _MESSAGES[1][1])
+    nmant = np.finfo(ctx.dtype).nmant
+    splitter = float(2 ** ((nmant + 2) // 2) + 1)  # 2^27 + 1 (float64), 2^12 + 1 (float32)
+    e = formulas(xp).planar_entries(
+        tuple(pi[..., i] for i in range(4)), tuple(L[..., i] for i in range(4)), splitter
     )
-    # pi.L cancels for a light close to the plane far from the origin (terms of
-    # size |n||l| and |d w|, a small sum): compensated, it is accurate to an ulp
-    # of itself, so its sign (which orients M) and size are right.
-    pi_dot_L = accurate_dot(xp, pi, L)
+    checks.require(e[18] > 0, _MESSAGES[2][1])
+    checks.require(xp.any(L != 0, axis=-1), _MESSAGES[3][1])
     # The threshold is relative to the terms' size, never an absolute distance:
     # a light within a few ulps of the scene's scale from the plane is in it as
     # far as the rounding of its own coordinates can tell.
-    scale = n_len * norm(xp, L[..., :3]) + xp.abs(pi[..., 3] * L[..., 3])
-    checks.require(
-        xp.abs(pi_dot_L) > 16 * ctx.eps * scale,
+    checks.require(xp.abs(e[16]) > 16 * ctx.eps * e[17], _MESSAGES[4][1])
+    M = xp.broadcast_to(stack_matrix(xp, e[:16]), (*shape, 4, 4))
+    return checks.poison(M, 2)
+
+
+_MESSAGES = (
+    (_kernels.PLANAR_NONFINITE_PLANE, non_finite("plane")),
+    (_kernels.PLANAR_NONFINITE_LIGHT, non_finite("light")),
+    (
+        _kernels.PLANAR_ZERO_NORMAL,
+        "plane: the normal (a, b, c) is zero; a plane needs a nonzero normal",
+    ),
+    (
+        _kernels.PLANAR_ZERO_LIGHT,
+        "light: all components are zero; use (x, y, z, 1) for a point light or "
+        "(dx, dy, dz, 0) with a nonzero direction for a directional light",
+    ),
+    (
+        _kernels.PLANAR_IN_PLANE,
         "light lies in the plane (plane . light = 0): a point light on the plane, or a "
         "directional light parallel to it, collapses the projection; move the light off "
         "the plane or tilt it",
-    )
+    ),
+)
 
-    sign = xp.where(pi_dot_L < 0, ctx.constant(-1.0), ctx.constant(1.0))
-    # Diagonal entries (pi.L) - L_i pi_i are the other three terms of pi.L:
-    # summed directly (compensated) they keep full relative precision where the
-    # subtraction would cancel. Off-diagonal entries are single products.
-    others = xp.ones((4, 4), dtype=ctx.dtype) - xp.eye(4, dtype=ctx.dtype)
-    diagonal = accurate_dot(xp, pi[..., None, :], L[..., None, :] * others)
-    off_diagonal = -(sign[..., None, None] * L[..., :, None]) * pi[..., None, :]
-    is_diagonal = xp.eye(4, dtype=xp.bool)
-    M = xp.where(is_diagonal, (sign[..., None] * diagonal)[..., None, :], off_diagonal)
-    M = xp.broadcast_to(M, (*shape, 4, 4))
-    return checks.poison(M, 2)
+
+def _planar_compiled(ctx: Context, shape: tuple[int, ...], pi: Array, L: Array) -> Array:
+    """:func:`planar_projection` through the compiled loop (NumPy input, Numba installed)."""
+    count = math.prod(shape)
+    out = np.empty((count, 16), dtype=ctx.dtype)
+    status = np.empty(count, dtype=np.int32)
+    _kernels.planar_kernel()(
+        flat_batch(pi, shape, (4,)), flat_batch(L, shape, (4,)), ctx.eps, out, status
+    )
+    if status[0] if count == 1 else status.any():
+        raise_status(status.reshape(shape), _MESSAGES)
+    return out.reshape(*shape, 4, 4)

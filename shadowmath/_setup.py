@@ -13,6 +13,7 @@ then runs one of three equivalent cores on the trusted arrays:
 from __future__ import annotations
 
 import functools
+import math
 from types import ModuleType
 from typing import Any, Literal, NamedTuple
 
@@ -31,8 +32,10 @@ from ._validate import (
     all_finite,
     batch_shape,
     convert,
+    flat_batch,
     non_finite,
     raise_recorded,
+    raise_status,
     require_last,
     require_matrix,
     require_vertices,
@@ -198,15 +201,9 @@ def fit_shadow(
     )
     require_last("light_position", light, 3, hint="a light position is (x, y, z)")
     require_vertices("blocker_vertices", verts)
-    if B is not None:
-        require_matrix("blocker_to_world", B)
-    shapes = [light.shape[:-1], verts.shape[:-2]]
-    shapes += [B.shape[:-2]] if B is not None else []
-    shapes += [v.shape for v in (n, f) if v is not None]
-    names = ["light_position", "blocker_vertices"]
-    names += ["blocker_to_world"] if B is not None else []
-    names += [name for name, v in (("near", n), ("far", f)) if v is not None]
-    shape = batch_shape(*shapes, names=names)
+    shape = light.shape[:-1]
+    if B is not None or n is not None or f is not None or shape != verts.shape[:-2]:
+        shape = _batch_shape(light, verts, B, n, f)
     if method == "optimized":
         from ._fitting import optimized_setup
 
@@ -222,6 +219,17 @@ def fit_shadow(
     if not ctx.is_jax and _kernels.available():
         return _fit_compiled(ctx, shape, light, verts, B, m, n, f, aim)
     return fit_core(ctx, Checks(ctx), light, verts, B, m, n, f, aim)
+
+
+def _batch_shape(
+    light: Array, verts: Array, B: Array | None, near: Array | None, far: Array | None
+) -> tuple[int, ...]:
+    if B is not None:
+        require_matrix("blocker_to_world", B)
+    named = [("light_position", light.shape[:-1]), ("blocker_vertices", verts.shape[:-2])]
+    named += [("blocker_to_world", B.shape[:-2])] if B is not None else []
+    named += [(name, v.shape) for name, v in (("near", near), ("far", far)) if v is not None]
+    return batch_shape(*(s for _, s in named), names=[name for name, _ in named])
 
 
 @functools.cache
@@ -267,17 +275,6 @@ _STATUS_MESSAGES = (
 )
 
 
-def _flat(a: Array, shape: tuple[int, ...], tail: tuple[int, ...]) -> Array:
-    """``a`` (``(*b, *tail)``, ``b`` broadcasting to ``shape``) as ``(1 or prod(shape), *tail)``."""
-    own = a.shape[: a.ndim - len(tail)]
-    size = int(np.prod(own, dtype=np.int64))
-    if size == 1:
-        return a.reshape(1, *tail)
-    if size == int(np.prod(shape, dtype=np.int64)):
-        return a.reshape(-1, *tail)
-    return np.broadcast_to(a, (*shape, *tail)).reshape(-1, *tail)
-
-
 _IDENTITY = np.eye(4).reshape(1, 4, 4)
 _NONE = np.zeros(1)
 
@@ -294,62 +291,57 @@ def _fit_compiled(
     aim: str,
 ) -> ShadowSetup:
     """:func:`fit_core`'s results from the compiled loop (NumPy input, Numba installed)."""
-    count = int(np.prod(shape, dtype=np.int64))
+    count = math.prod(shape)
     out = np.empty((count, _kernels.ROW), dtype=ctx.dtype)
+    mats = np.empty((count, 4, 4, 4), dtype=ctx.dtype)
     status = np.empty(count, dtype=np.int32)
-    options = np.array(
-        [
-            aim == "bbox",
-            B is not None,
-            near is not None,
-            far is not None,
-            *m,
-            ctx.eps,
-            NEAR_FAR_SLACK,
-            ctx.dtype == np.float32,
-        ]
-    )
+    options = _options(aim, B is not None, near is not None, far is not None, m, ctx.dtype)
     _kernels.fit_kernel()(
-        _flat(light, shape, (3,)),
-        _flat(verts, shape, verts.shape[-2:]),
-        _IDENTITY if B is None else _flat(B, shape, (4, 4)),
-        _NONE if near is None else _flat(near, shape, ()),
-        _NONE if far is None else _flat(far, shape, ()),
+        flat_batch(light, shape, (3,)) if shape else light[None],
+        flat_batch(verts, shape, verts.shape[-2:]) if shape else verts[None],
+        _IDENTITY if B is None else flat_batch(B, shape, (4, 4)),
+        _NONE if near is None else flat_batch(near, shape, ()),
+        _NONE if far is None else flat_batch(far, shape, ()),
         options,
         out,
+        mats,
         status,
     )
-    if status.any():
-        _raise_status(status.reshape(shape), verts)
-    out = out.reshape(*shape, _kernels.ROW)
-    w2l = np.empty((*shape, 4, 4), dtype=ctx.dtype)
-    w2l[..., :3, :] = out[..., 18:30].reshape(*shape, 3, 4)
-    w2l[..., 3, :] = (0.0, 0.0, 0.0, 1.0)
-    frame = LightFrame(out[..., 0:3], out[..., 3:6], out[..., 6:9], out[..., 9:12])
-    mx = np.full(shape, m[0], dtype=ctx.dtype)
-    my = np.full(shape, m[1], dtype=ctx.dtype)
-    f = out[..., 12:18]
-    frustum = Frustum(f[..., 0], f[..., 1], f[..., 2], f[..., 3], mx, my, f[..., 4], f[..., 5])
-    placement = _IDENTITY[0].astype(ctx.dtype) if B is None else B
-    return ShadowSetup(
-        frame=frame,
-        frustum=frustum,
-        world_to_light=w2l,
-        blocker_to_world=np.broadcast_to(placement, (*shape, 4, 4)),
-        blocker_to_clip=out[..., 30:46].reshape(*shape, 4, 4),
-        world_to_texture=out[..., 46:62].reshape(*shape, 4, 4),
-    )
+    if status[0] if count == 1 else status.any():
+        raise_status(status.reshape(shape), _status_messages(verts))
+    # Views of the two output blocks (first-axis indexing: the cheapest views NumPy makes).
+    if shape:
+        v = np.moveaxis(out.reshape(*shape, _kernels.ROW), -1, 0)
+        M = np.moveaxis(mats.reshape(*shape, 4, 4, 4), -3, 0)
+        frame = LightFrame(*(np.moveaxis(v[i : i + 3], 0, -1) for i in (0, 3, 6, 9)))
+        frustum = Frustum(*v[12:20])
+    else:
+        v, M = out[0], mats[0]
+        frame = LightFrame(v[0:3], v[3:6], v[6:9], v[9:12])
+        frustum = Frustum(*(v[..., i] for i in range(12, 20)))  # 0-d arrays, not scalars
+    return ShadowSetup(frame, frustum, M[0], M[3], M[1], M[2])
 
 
-def _raise_status(status: Array, verts: Array) -> None:
-    for bit, message in _STATUS_MESSAGES:
-        bad = (status & bit) != 0
-        if bad.any():
-            if bit == _kernels.NONFINITE_VERTICES and bool(np.isfinite(verts).all()):
-                message = msg.OVERFLOW
-            first = tuple(int(i) for i in np.argwhere(bad)[0]) if bad.ndim else ()
-            where = f" (first at batch index {first})" if bad.ndim else ""
-            raise ValueError(message + where)
+@functools.lru_cache(maxsize=64)
+def _options(
+    aim: str, has_b: bool, has_near: bool, has_far: bool, m: tuple[float, float], dtype: Any
+) -> Array:
+    """The compiled loop's options (cached: the same few sets recur every frame)."""
+    eps = float(np.finfo(dtype).eps)
+    flags = [aim == "bbox", has_b, has_near, has_far, *m, eps, NEAR_FAR_SLACK, dtype == np.float32]
+    options = np.array(flags, dtype=np.float64)
+    options.flags.writeable = False
+    return options
+
+
+def _status_messages(verts: Array) -> tuple[tuple[int, str], ...]:
+    """The loop's messages; a non-finite sum of finite vertices is an overflow."""
+    if bool(np.isfinite(verts).all()):
+        return tuple(
+            (bit, msg.OVERFLOW if bit == _kernels.NONFINITE_VERTICES else message)
+            for bit, message in _STATUS_MESSAGES
+        )
+    return _STATUS_MESSAGES
 
 
 def receiver_texture_matrix(setup: ShadowSetup, receiver_to_world: Any) -> Array:

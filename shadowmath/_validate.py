@@ -33,6 +33,7 @@ Bad *values* follow SciPy's eager-or-lazy rule, decided here and nowhere else:
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Sequence
 from types import ModuleType
@@ -111,7 +112,9 @@ def _result_dtype(inputs: Sequence[Any], use_jax: bool) -> tuple[ModuleType, Any
     float_dtypes = [v.dtype for v in inputs if v.dtype.kind == "f"]
     if not float_dtypes:
         return xp, np.dtype(float_default)
-    dtype = np.result_type(*float_dtypes) if len(float_dtypes) > 1 else np.dtype(float_dtypes[0])
+    first = float_dtypes[0]
+    same = all(d == first for d in float_dtypes)
+    dtype = np.dtype(first) if same else np.result_type(*float_dtypes)
     if dtype == np.float16:
         dtype = np.dtype(np.float32)
     if use_jax and dtype.itemsize > np.dtype(float_default).itemsize:
@@ -125,14 +128,48 @@ def convert(**arrays: Any) -> tuple[Context, tuple[Array, ...]]:
     Returns the :class:`Context` and the converted arrays in the order given
     (``None`` values stay ``None``). The names only label error messages.
     """
+    fast = _numpy_fast_path(arrays.values())
+    if fast is not None:
+        return fast, tuple(arrays.values())
     inputs = [_as_input(name, v) for name, v in arrays.items() if v is not None]
     use_jax = any(is_jax(v) for v in inputs)
     lazy = use_jax and any(is_tracer(v) for v in inputs)
     xp, dtype = _result_dtype(inputs, use_jax)
     ctx = Context(xp, dtype, lazy, use_jax)
     it = iter(inputs)
-    out = tuple(None if v is None else xp.asarray(next(it), dtype=dtype) for v in arrays.values())
+    out = tuple(None if v is None else _as_dtype(xp, next(it), dtype) for v in arrays.values())
     return ctx, out
+
+
+_NUMPY_CONTEXTS = {
+    np.dtype(t): Context(np, np.dtype(t), lazy=False, is_jax=False)
+    for t in (np.float32, np.float64)
+}
+
+
+def _numpy_fast_path(values: Any) -> Context | None:
+    """The context when every array is an ndarray of one float32/float64 dtype, else None.
+
+    The per-frame case (a renderer passing its own arrays): nothing to convert.
+    """
+    dtype = None
+    for v in values:
+        if v is None:
+            continue
+        if type(v) is not np.ndarray:
+            return None
+        if dtype is None:
+            dtype = v.dtype
+        elif v.dtype != dtype:
+            return None
+    return None if dtype is None else _NUMPY_CONTEXTS.get(dtype)
+
+
+def _as_dtype(xp: ModuleType, value: Any, dtype: Any) -> Array:
+    # An ndarray already in the dtype is used as it is (asarray would return it too, slower).
+    if type(value) is np.ndarray and value.dtype == dtype and xp is np:
+        return value
+    return xp.asarray(value, dtype=dtype)
 
 
 def shape_error(name: str, expected: str, got: tuple[int, ...], hint: str = "") -> ValueError:
@@ -161,6 +198,9 @@ def require_matrix(name: str, x: Array) -> None:
 
 def batch_shape(*shapes: tuple[int, ...], names: Sequence[str]) -> tuple[int, ...]:
     """NumPy broadcasting of batch shapes, with an error naming the arguments."""
+    first = shapes[0]
+    if all(s == first for s in shapes):  # the common case, without NumPy's machinery
+        return tuple(first)
     try:
         return tuple(np.broadcast_shapes(*shapes))
     except ValueError:
@@ -243,3 +283,23 @@ def raise_recorded(messages: Sequence[str], bad: Array | None) -> None:
     bad_np = np.asarray(bad)
     for message, b in zip(messages, bad_np, strict=True):
         _raise_first(~b, message)
+
+
+def flat_batch(a: Array, shape: tuple[int, ...], tail: tuple[int, ...]) -> Array:
+    """NumPy ``a`` (``(*b, *tail)``, ``b`` broadcasting to ``shape``) as ``(1 or prod, *tail)``.
+
+    For the compiled loops, which read batch entry ``i`` of an operand at
+    ``i % len``: a view when ``b`` has one entry or all of them, else a copy.
+    """
+    size = math.prod(a.shape[: a.ndim - len(tail)])
+    if size == 1:
+        return a.reshape(1, *tail)
+    if size == math.prod(shape):
+        return a.reshape(-1, *tail)
+    return np.broadcast_to(a, (*shape, *tail)).reshape(-1, *tail)
+
+
+def raise_status(status: Array, messages: Sequence[tuple[int, str]]) -> None:
+    """Raise the first failed check of a compiled loop's status words (bits, in check order)."""
+    for bit, message in messages:
+        _raise_first((status & bit) == 0, message)

@@ -21,6 +21,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import shadowmath as sm
+from shadowmath import _kernels
 
 from .strategies import (
     Invalid,
@@ -191,18 +192,9 @@ def test_fuzz_light_frame_from_direction(direction: np.ndarray, length: float) -
 # --- frustum, projections, fit_shadow ----------------------------------------------------
 
 
-@contextlib.contextmanager
-def _array_path() -> Iterator[None]:
-    """Run fit_shadow on whole arrays (no compiled loop) inside the block."""
-    old = os.environ.get("SHADOWMATH_NUMBA")
-    os.environ["SHADOWMATH_NUMBA"] = "0"
-    try:
-        yield
-    finally:
-        if old is None:
-            del os.environ["SHADOWMATH_NUMBA"]
-        else:
-            os.environ["SHADOWMATH_NUMBA"] = old
+def _array_path() -> contextlib.AbstractContextManager[None]:
+    """Run on whole arrays (no compiled loop) inside the block."""
+    return _kernels.disabled()
 
 
 def _check_fit(p: Placement, map_size: Any, border: int, dtype: Any) -> None:

@@ -17,7 +17,6 @@ import re
 import subprocess
 import sys
 import textwrap
-from collections.abc import Iterator
 from typing import Any
 
 import jax
@@ -35,17 +34,9 @@ from .strategies import invalid_placements, placements, sized_maps
 DTYPES = pytest.mark.parametrize("dtype", [np.float64, np.float32], ids=["f64", "f32"])
 
 
-@contextlib.contextmanager
-def array_path() -> Iterator[None]:
-    old = os.environ.get("SHADOWMATH_NUMBA")
-    os.environ["SHADOWMATH_NUMBA"] = "0"
-    try:
-        yield
-    finally:
-        if old is None:
-            del os.environ["SHADOWMATH_NUMBA"]
-        else:
-            os.environ["SHADOWMATH_NUMBA"] = old
+def array_path() -> contextlib.AbstractContextManager[None]:
+    """Run on whole arrays (no compiled loop) inside the block."""
+    return _kernels.disabled()
 
 
 def test_numba_is_installed_for_the_compiled_path() -> None:
