@@ -22,6 +22,8 @@ import math
 from types import ModuleType
 from typing import Any, Literal
 
+import numpy as np
+
 from ._validate import (
     Array,
     Checks,
@@ -46,8 +48,8 @@ DEFAULT_CONSTANT_BIAS = 2.0
 def _map_size(map_size: object) -> tuple[int, int]:
     """``(W, H)`` from ``size`` or ``(width, height)``; ``ValueError`` otherwise."""
     sizes = list(map_size) if isinstance(map_size, tuple | list) else [map_size, map_size]
-    ints = [v for v in sizes if isinstance(v, int) and not isinstance(v, bool) and v >= 1]
-    if len(sizes) != 2 or len(ints) != 2:
+    ints = [int(v) for v in sizes if isinstance(v, int | np.integer) and not isinstance(v, bool)]
+    if len(sizes) != 2 or len(ints) != 2 or min(ints) < 1:
         raise ValueError(
             f"map_size: expected an integer >= 1 or (width, height) of them, got {map_size!r}"
         )
@@ -55,10 +57,10 @@ def _map_size(map_size: object) -> tuple[int, int]:
 
 
 def _check_kernel(radius: object, filter: object) -> tuple[int, PcfFilter]:
-    if not isinstance(radius, int) or isinstance(radius, bool) or radius < 0:
+    if not isinstance(radius, int | np.integer) or isinstance(radius, bool) or radius < 0:
         raise ValueError(f"radius: expected an integer >= 0, got {radius!r}")
     if filter == "box" or filter == "bilinear":
-        return radius, filter
+        return int(radius), filter
     raise ValueError(f"filter: expected 'box' or 'bilinear', got {filter!r}")
 
 
@@ -386,7 +388,9 @@ def normal_offset(
     (``tan theta``) does not. ``scale = 1`` is the exact minimum for a directional
     light; for point and spot lights it is exact to first order in the texel's
     angular size (their depth is planar distance, not distance along the ray,
-    which the formula takes into account through ``grad r``).
+    which the formula takes into account through ``grad r``): of 1500 random
+    planes and maps the worst needed ``scale = 1.02`` (a 189 x 26 map), so use a
+    few percent more there.
 
     Too small: acne. Too large: the lookup point leaves the surface, so shadows
     shift toward the light (peter-panning) and thin casters or contact corners leak

@@ -53,6 +53,12 @@ def test_help_is_plain_text_with_every_default(capsys):
         ("--method", "(default: texture)"),
         ("--output", "(default: out/shadow.png)"),
         ("--shadow-map-output", "(default: not written)"),
+        ("--pcf", "(default: 0, no filtering)"),
+        ("--depth-bias", "(default: 2.5+2K 4, K the --pcf radius)"),
+        ("--area-light", "(default: 1 1 with those methods)"),
+        ("--samples", "(default: 16)"),
+        ("--seed", "(default: 0)"),
+        ("--api", "(default: opengl)"),
     ]:
         assert default in " ".join(entries[option].split()), option
 
@@ -114,6 +120,99 @@ def test_light_inside_the_blocker_speaks_of_options(capsys, tmp_path):
 )
 def test_option_combinations(capsys, args, message):
     assert message in _error(capsys, args)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--method", "shadow-volume"], "argument --method: invalid choice"),
+        (["--api", "vulkan"], "argument --api: invalid choice"),
+        (["--api", "webgpu"], "--api webgpu: the demo's WebGPU renderer draws --method depth only"),
+        (["--api", "webgpu", "--method", "omni"], "not --method omni"),
+        (["--method", "texture", "--pcf", "1"], "--pcf 1: --method texture compares no depths"),
+        (["--method", "omni", "--pcf", "1"], "--pcf 1: the omni pass samples one cube-map texel"),
+        (["--method", "radiance", "--pcf", "1"], "--pcf 1: --method radiance"),
+        (["--method", "depth", "--pcf", "-1"], "argument --pcf: expected an integer >= 0"),
+        (["--method", "planar", "--depth-bias", "1", "2"], "--depth-bias 1 2: --method planar"),
+        (["--method", "radiance", "--depth-bias", "1", "2"], "--depth-bias 1 2: --method radiance"),
+        (
+            ["--method", "depth", "--depth-bias", "nan", "2"],
+            "argument --depth-bias: expected a finite",
+        ),
+        (
+            ["--method", "depth", "--depth-bias", "one", "2"],
+            "argument --depth-bias: expected a number",
+        ),
+        (["--method", "depth", "--area-light", "1", "1"], "--area-light 1 1: --method depth"),
+        (["--area-light", "1", "1"], "--area-light 1 1: --method texture lights from a point"),
+        (["--method", "omni", "--samples", "4"], "--samples 4: --method omni"),
+        (["--method", "depth", "--seed", "3"], "--seed 3: --method depth"),
+        (
+            ["--method", "soft", "--area-light", "0", "1"],
+            "argument --area-light: expected a number > 0",
+        ),
+        (["--method", "soft", "--samples", "0"], "argument --samples: expected a positive integer"),
+        (["--method", "soft", "--seed", "-2"], "argument --seed: expected an integer >= 0"),
+        (
+            ["--method", "omni", "--map-size", "64x32"],
+            "--map-size 64x32: --method omni's cube faces are square",
+        ),
+        (
+            ["--method", "soft", "--shadow-map-output", "m.png"],
+            "--shadow-map-output: --method soft",
+        ),
+        (
+            ["--method", "radiance", "--shadow-map-output", "m.png"],
+            "--shadow-map-output: --method radiance",
+        ),
+    ],
+)
+def test_options_that_do_not_apply_to_the_method_are_refused(capsys, tmp_path, args, message):
+    err = _error(capsys, [*args, "--output", str(tmp_path / "x.png")])
+    assert message in err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_area_light_must_stay_above_the_floor_and_before_the_wall(capsys, tmp_path):
+    out = ["--output", str(tmp_path / "x.png")]
+    # The default light is 3.6 above the floor; a 9-high light facing the torus reaches below.
+    err = _error(capsys, ["--method", "soft", "--area-light", "1", "9", *out])
+    assert err.split(": error: ")[1].startswith("--area-light 1 9: the light's corner")
+    assert "below the floor" in err
+    err = _error(
+        capsys, ["--method", "radiance", "--light", "0", "3", "1", "--area-light", "1", "4", *out]
+    )
+    assert "--area-light 1 4" in err
+    assert "behind the wall" in err
+
+
+def test_area_light_edges_face_the_blocker():
+    from shadowmath.__main__ import BLOCKER_CENTRE, DEFAULT_LIGHT, _area_light_edges
+
+    light = np.array(DEFAULT_LIGHT)
+    edge_u, edge_v = _area_light_edges(light, (1.5, 0.5))
+    d = np.array(BLOCKER_CENTRE) - light
+    assert np.linalg.norm(edge_u) == pytest.approx(1.5)
+    assert np.linalg.norm(edge_v) == pytest.approx(0.5)
+    for edge in (edge_u, edge_v):
+        assert edge @ d == pytest.approx(0.0, abs=1e-12)  # perpendicular to the light's aim
+    assert edge_u[1] == 0.0  # W horizontal
+    assert edge_v[1] > 0.0  # H upward
+    # Straight above the blocker: W along x, H along -z (still perpendicular to the aim).
+    edge_u, edge_v = _area_light_edges(np.array(BLOCKER_CENTRE) + [0, 3, 0], (1.0, 1.0))
+    np.testing.assert_allclose(edge_u, [1, 0, 0])
+    assert edge_v @ [0, 1, 0] == pytest.approx(0.0)
+
+
+@pytest.mark.parametrize("method", ["depth", "soft"])
+def test_light_inside_the_blocker_with_depth_maps(capsys, tmp_path, method):
+    args = ["--method", method, "--light", "0", "1.6", "2.2", "--output", str(tmp_path / "x.png")]
+    if method == "soft":
+        args += ["--area-light", "0.2", "0.2"]
+    err = _error(capsys, args)
+    option = "--light 0 1.6 2.2" if method == "depth" else "--area-light 0.2 0.2"
+    assert err.split(": error: ")[1].startswith(f"{option}: --method {method} needs the whole")
+    assert "--method planar or omni" in err
 
 
 def test_output_folder_must_exist(capsys, tmp_path):

@@ -144,3 +144,159 @@ def test_camera_helpers():
         look_at([0, 0, 0], [0, 0, 1], [0, 0, 2])
     with pytest.raises(ValueError, match="near"):
         perspective(60.0, 1.0, 0.0, 1.0)
+
+
+# The demo's shadow systems (--method, --pcf, --depth-bias, --area-light, --api): each
+# run records the frame the renderer returned, so the checks read its shadow mask.
+SMALL = ["--size", "96", "72", "--map-size", "128"]
+
+
+@pytest.fixture
+def demo_frames(gl, tmp_path, monkeypatch, capsys):
+    """Run the demo at 96x72 with 128-texel maps; return its frame and printed summary."""
+    import shadowmath.render
+
+    frames: list = []
+    render = shadowmath.render.render_scene
+
+    def recording(*args, **kwargs):
+        frames.append(render(*args, **kwargs))
+        return frames[-1]
+
+    monkeypatch.setattr(shadowmath.render, "render_scene", recording)
+
+    def run(*args: str):
+        out = tmp_path / "demo.png"
+        assert main([*SMALL, "--output", str(out), *args]) == 0
+        summary = capsys.readouterr().out.splitlines()[0]
+        assert summary.startswith(f"wrote {out}: a 96x72 PNG")
+        assert _png(out).shape == (72, 96, 3)
+        return frames[-1], summary
+
+    return run
+
+
+def _receiver_shadow(frame) -> tuple[np.ndarray, np.ndarray]:
+    """The shadow mask on the wall and the floor (bodies 0 and 1), and where they are seen."""
+    receivers = (frame.body == 0) | (frame.body == 1)
+    return frame.shadow[..., 0], receivers
+
+
+def _shadowed(frame) -> np.ndarray:
+    shadow, receivers = _receiver_shadow(frame)
+    return (shadow > 0.5) & receivers
+
+
+def _penumbra(frame) -> np.ndarray:
+    shadow, receivers = _receiver_shadow(frame)
+    return (shadow > 0) & (shadow < 1) & receivers
+
+
+def _agreement(a: np.ndarray, b: np.ndarray) -> float:
+    return float((a & b).sum() / (a | b).sum())
+
+
+def test_depth_and_omni_shadow_the_receivers_where_texture_does(demo_frames):
+    texture, said = demo_frames("--method", "texture")
+    assert "projective shadow texture from a 128x128 shadow map" in said
+    depth, said = demo_frames("--method", "depth")
+    assert "Williams' depth shadow map (128x128, PCF radius 0, depth bias 2.5 4)" in said
+    assert "OpenGL" in said
+    omni, said = demo_frames("--method", "omni")
+    assert "omnidirectional cube depth map (six 128x128 faces" in said
+    hard = _shadowed(texture)
+    assert hard.sum() > 300  # the torus's shadow on the wall and the floor
+    assert _agreement(hard, _shadowed(depth)) > 0.97  # measured 1.0 (627 pixels)
+    assert _agreement(hard, _shadowed(omni)) > 0.95  # measured 0.97 (17 edge pixels differ)
+    for frame in (texture, depth, omni):
+        assert not _penumbra(frame).any()  # hard shadows: every pixel 0 or 1
+
+
+def test_pcf_softens_the_depth_shadow_edge_and_bias_prevents_acne(demo_frames):
+    plain, _ = demo_frames("--method", "depth")
+    filtered, said = demo_frames("--method", "depth", "--pcf", "2")
+    assert "PCF radius 2, depth bias 6.5 4" in said  # the bias's default grows with K
+    assert _penumbra(filtered).sum() > 100  # measured 200 fractional pixels
+    assert _agreement(_shadowed(plain), _shadowed(filtered)) > 0.95
+    acne, said = demo_frames("--method", "depth", "--depth-bias", "0", "0")
+    assert "depth bias 0 0" in said
+    # Without the polygon offset lit surfaces shadow themselves (measured 855 against 627).
+    assert _shadowed(acne).sum() > 1.2 * _shadowed(plain).sum()
+
+
+def _edge_length(mask: np.ndarray) -> int:
+    """Pixels of ``mask`` with a 4-neighbour outside it: the hard shadow's edge, in pixels."""
+    padded = np.pad(mask, 1, constant_values=False)
+    inner = padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:]
+    return int((mask & ~inner).sum())
+
+
+def test_soft_shadows_have_a_penumbra_wider_than_the_hard_edge(demo_frames):
+    hard, _ = demo_frames("--method", "depth")
+    soft, said = demo_frames("--method", "soft", "--samples", "16")
+    assert "1x1 area light centred at (-2.2, 3.6, 6.0)" in said
+    assert "average of 16 samples' depth shadow maps" in said
+    assert len(soft.setups[0]) == 16  # one depth map per light sample
+    edge = _edge_length(_shadowed(hard))
+    penumbra = _penumbra(soft).sum()
+    # The penumbra's mean width across the hard edge, in pixels (measured about 3).
+    assert penumbra / edge > 2.0
+    # The same shadow overall: its darker half lies where the hard shadow is.
+    assert _agreement(_shadowed(hard), _shadowed(soft)) > 0.9
+    # A larger light widens the penumbra (measured 251, 608, 970 pixels).
+    small, said = demo_frames("--method", "soft", "--area-light", "0.4", "0.4")
+    assert "0.4x0.4 area light" in said
+    big, _ = demo_frames("--method", "soft", "--area-light", "1.6", "1.6")
+    assert _penumbra(small).sum() < penumbra < _penumbra(big).sum()
+
+
+def test_radiance_textures_agree_with_averaged_depth_maps(demo_frames):
+    soft, _ = demo_frames("--method", "soft")
+    radiance, said = demo_frames("--method", "radiance", "--samples", "16", "--seed", "0")
+    assert "Heckbert and Herf's radiance textures (128x128 per receiver)" in said
+    assert "16 samples (seed 0)" in said
+    assert _penumbra(radiance).sum() > 300
+    shadow_s, receivers = _receiver_shadow(soft)
+    shadow_r, _ = _receiver_shadow(radiance)
+    assert np.abs(shadow_s - shadow_r)[receivers].mean() < 0.01  # measured 0.003
+    other, _ = demo_frames("--method", "radiance", "--seed", "7")
+    assert not np.array_equal(other.shadow, radiance.shadow)  # the seed moves the jitter
+
+
+def test_demo_writes_depth_and_cube_maps(demo_frames, tmp_path):
+    depth_png = tmp_path / "depth_map.png"
+    frame, _ = demo_frames("--method", "depth", "--shadow-map-output", str(depth_png))
+    depth = _png(depth_png)
+    assert depth.shape == (128, 128)
+    # Every texel holds a body here (the wall and floor fill the map): near black, far 0.8.
+    assert depth.min() == 0 and depth.max() == 204
+    # t upward: the saved image is the GL map (row 0 = t = 0) upside down.
+    stored = frame.shadow_maps[0][0][::-1].ravel()
+    assert np.corrcoef(depth.ravel(), stored)[0, 1] > 0.999
+    cube_png = tmp_path / "cube.png"
+    demo_frames("--method", "omni", "--map-size", "32", "--shadow-map-output", str(cube_png))
+    assert _png(cube_png).shape == (32, 6 * 32)
+
+
+def test_demo_draws_the_depth_method_with_webgpu(demo_frames, wgpu_device, monkeypatch, tmp_path):
+    import shadowmath.render.webgpu
+
+    frames: list = []
+    render = shadowmath.render.webgpu.render_depth_wgpu
+
+    def recording(*args, **kwargs):
+        frames.append(render(*args, **kwargs))
+        return frames[-1]
+
+    monkeypatch.setattr(shadowmath.render.webgpu, "render_depth_wgpu", recording)
+    opengl, _ = demo_frames("--method", "depth", "--pcf", "1")
+    map_png = tmp_path / "wgpu_map.png"
+    _, said = demo_frames(
+        "--method", "depth", "--pcf", "1", "--api", "webgpu", "--shadow-map-output", str(map_png)
+    )
+    assert "drawn with WebGPU on" in said
+    (webgpu,) = frames
+    # The two APIs shadow the same pixels (measured identical).
+    assert (webgpu.body == opengl.body).mean() > 0.99
+    assert np.abs(webgpu.shadow - opengl.shadow[..., 0]).mean() < 0.01
+    assert _png(map_png).shape == (128, 128)
