@@ -588,7 +588,9 @@ def _show(matrix: Any) -> NDArray[Any]:
 
 
 def _print_matrix(name: str, matrix: Any) -> None:
-    print(f"{name} =", _show(matrix), sep="\n")
+    # Local print options: main() runs in-process in tests and must not change NumPy's.
+    with np.printoptions(precision=5, suppress=True):
+        print(f"{name} =", _show(matrix), sep="\n")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -795,7 +797,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.output is None:
         output.parent.mkdir(parents=True, exist_ok=True)
     _save_png(output, color)
-    np.set_printoptions(precision=5, suppress=True)
     where = tuple(float(c) for c in light)
     lit = (
         f"{args.mesh} between a {area_size[0]:g}x{area_size[1]:g} area light centred at "
