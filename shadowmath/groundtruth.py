@@ -4,7 +4,9 @@ Pure NumPy and deliberately unrelated to the shadow matrices: no light frame,
 no frustum, no projection, no texture. A receiver point ``P`` is in a
 blocker's shadow when the open segment from ``P`` to the point light ``L``
 crosses one of the blocker's triangles, found with the Möller–Trumbore
-ray-triangle test, vectorized over points and triangles.
+ray-triangle test, vectorized over points and triangles. A directional light
+``(x, y, z, 0)`` (the direction toward the light) casts the ray from ``P``
+along that direction instead, unbounded.
 """
 
 from __future__ import annotations
@@ -37,6 +39,11 @@ def segment_hits_triangles(
 ) -> NDArray[np.bool_]:
     r"""Whether the segment from each point to the light crosses any triangle.
 
+    ``light_position`` is a point ``(x, y, z)``, or homogeneous ``(x, y, z, w)``:
+    ``w != 0`` the point ``(x, y, z) / w``, ``w = 0`` a directional light whose
+    ``(x, y, z)`` points toward the light: then the ray ``P + t d`` for ``t > eps``
+    (``d = (x, y, z)``), no upper end.
+
     Möller–Trumbore: with ``d = L - P``, edges ``e1 = B - A``, ``e2 = C - A``,
     ``h = d x e2``, ``det = e1 . h``, ``s = P - A``, ``k = s x e1``:
 
@@ -48,11 +55,13 @@ def segment_hits_triangles(
     and the segment hits the triangle when ``det != 0``, ``u >= 0``, ``v >= 0``,
     ``u + v <= 1`` and ``eps < t < 1 - eps`` (strictly between the point and
     the light, so a receiver touching the blocker is not shadowed by the
-    contact itself). Both faces of a triangle block light.
+    contact itself; a directional light: ``eps < t``). Both faces of a triangle
+    block light.
 
     Arguments:
         points: ``(..., 3)`` receiver points in world coordinates.
-        light_position: ``(3,)`` the point light.
+        light_position: ``(3,)`` the point light, or ``(4,)`` homogeneous (``w = 0``:
+            a directional light, the direction toward it).
         vertices: ``(N, 3)`` blocker vertices in world coordinates.
         triangles: ``(M, 3)`` integer indices into ``vertices``.
         eps: the fraction of the segment ignored at each end.
@@ -68,11 +77,24 @@ def segment_hits_triangles(
         >>> points = [[0, 0, 0], [5, 0, 0]]  # under it, and off to the side
         >>> segment_hits_triangles(points, [0, 0, 2], tri, [[0, 1, 2]])
         array([ True, False])
+        >>> segment_hits_triangles(points, [0, 0, 1, 0], tri, [[0, 1, 2]])  # from straight up
+        array([ True, False])
     """
     p = _points("points", points)
-    light = _points("light_position", light_position)
-    if light.shape != (3,):
-        raise ValueError(f"light_position: expected shape (3,), got {light.shape}")
+    light = np.asarray(light_position, dtype=np.float64)
+    if light.shape not in ((3,), (4,)):
+        raise ValueError(f"light_position: expected shape (3,) or (4,), got {light.shape}")
+    if not np.all(np.isfinite(light)):
+        raise ValueError("light_position: contains non-finite values (NaN or inf)")
+    directional = light.shape == (4,) and light[3] == 0
+    if directional:
+        if not np.any(light[:3]):
+            raise ValueError("light_position: a directional light (w = 0) needs a direction")
+        light = light[:3]
+    elif light.shape == (4,):
+        light = light[:3] / light[3]
+    # A directional light's ray d = (x, y, z) has no far end: t is bounded below only.
+    upper = np.inf if directional else 1 - eps
     v = _points("vertices", vertices)
     if v.ndim != 2:
         raise ValueError(f"vertices: expected shape (N, 3), got {v.shape}")
@@ -87,7 +109,10 @@ def segment_hits_triangles(
 
     def chunk(q: NDArray[np.float64]) -> NDArray[np.bool_]:
         # Components as separate (P, M) arrays: np.cross on (P, M, 3) is several times slower.
-        dx, dy, dz = (light[i] - q[:, i, None] for i in range(3))
+        if directional:
+            dx, dy, dz = (np.broadcast_to(light[i], (len(q), 1)) for i in range(3))
+        else:
+            dx, dy, dz = (light[i] - q[:, i, None] for i in range(3))
         sx, sy, sz = (q[:, i, None] - a[None, :, i] for i in range(3))
         ax, ay, az = e1[:, 0], e1[:, 1], e1[:, 2]
         bx, by, bz = e2[:, 0], e2[:, 1], e2[:, 2]
@@ -99,7 +124,7 @@ def segment_hits_triangles(
         kx, ky, kz = sy * az - sz * ay, sz * ax - sx * az, sx * ay - sy * ax  # s x e1
         w = (dx * kx + dy * ky + dz * kz) * inv
         along = (bx * kx + by * ky + bz * kz) * inv
-        crossing = ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (along > eps) & (along < 1 - eps)
+        crossing = ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (along > eps) & (along < upper)
         result: NDArray[np.bool_] = crossing.any(axis=-1)
         return result
 
@@ -108,9 +133,11 @@ def segment_hits_triangles(
     # others are answered without the (points x triangles) test.
     centre = v.mean(axis=0)
     radius = np.linalg.norm(v - centre, axis=1).max() * (1 + 1e-9) + 1e-12
-    seg = light - flat
+    seg = np.broadcast_to(light, flat.shape) if directional else light - flat
     along_seg = np.clip(
-        np.sum((centre - flat) * seg, axis=1) / np.maximum(np.sum(seg * seg, axis=1), 1e-300), 0, 1
+        np.sum((centre - flat) * seg, axis=1) / np.maximum(np.sum(seg * seg, axis=1), 1e-300),
+        0,
+        np.inf if directional else 1,
     )
     nearest = flat + along_seg[:, None] * seg
     near = np.flatnonzero(np.linalg.norm(nearest - centre, axis=1) <= radius)
