@@ -19,9 +19,6 @@ from ._resources import GpuScene, Prepared, PreparedLight
 #: resolvable depth step. :func:`depth_bias` widens the factor with the PCF radius.
 DEPTH_POLYGON_OFFSET = (2.5, 4.0)
 
-#: Relative slack of the far plane beyond the farthest receiver vertex.
-_FAR_SLACK = 1e-3
-
 
 def depth_bias(pcf_radius: int) -> tuple[float, float]:
     """The default polygon offset for a PCF kernel of radius ``k``.
@@ -37,26 +34,29 @@ def depth_bias(pcf_radius: int) -> tuple[float, float]:
 def fit_depth(
     receivers: Sequence[Prepared],
     blockers: Sequence[Prepared],
-    light_position: NDArray[np.float64],
+    light: NDArray[np.float64],
     map_size: tuple[int, int],
     pcf_radius: int = 0,
 ) -> ShadowSetup:
     """One setup per light: the sides fit all blockers (in world coordinates), with
     ``1 + pcf_radius`` border texels so a kernel never reads past the silhouette, and
-    the far plane moved out to the farthest body vertex in front of the light, so that
-    receivers lie in the depth range. A body nearer the light than the blockers' near
-    plane is clipped from the map (it casts nothing; it is lit by this map).
+    the depth range encloses every body (``fit_shadow(..., receivers=)``), so that
+    receivers lie in the depth range. ``light`` is a point ``(x, y, z)`` or a
+    homogeneous ``(x, y, z, w)``, ``w = 0`` a directional light (an orthographic map).
+    A body outside the frustum's sides is lit by this map.
     """
     casters = np.concatenate([b.world_vertices() for b in blockers])
-    border = 1 + pcf_radius
-    setup = fit_shadow(light_position, casters, map_size, border_texels=border)
     everything = np.concatenate([b.world_vertices() for b in (*receivers, *blockers)])
+    border = 1 + pcf_radius
+    if len(light) == 4:  # TODO(issue 10): one call for both once fit_shadow takes receivers=
+        return fit_shadow(light, casters, map_size, border_texels=border, receivers=everything)
+    setup = fit_shadow(light, casters, map_size, border_texels=border)
     z = (
         everything @ np.asarray(setup.world_to_light)[2, :3]
         + np.asarray(setup.world_to_light)[2, 3]
     )
-    far = max(float(z.max()) * (1 + _FAR_SLACK), float(setup.frustum.far))
-    return fit_shadow(light_position, casters, map_size, border_texels=border, far=far)
+    far = max(float(z.max()) * (1 + 1e-3), float(setup.frustum.far))
+    return fit_shadow(light, casters, map_size, border_texels=border, far=far)
 
 
 def world_to_light_clip(setup: ShadowSetup) -> NDArray[np.float64]:
@@ -139,7 +139,8 @@ class DepthPass:
         light: PreparedLight,
         map_size: tuple[int, int],
     ) -> tuple[ShadowSetup, ...]:
-        return (fit_depth(receivers, blockers, light.position, map_size, self.pcf_radius),)
+        position = light.homogeneous if light.directional else light.position
+        return (fit_depth(receivers, blockers, position, map_size, self.pcf_radius),)
 
     def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
         return tuple(range(len(scene.bodies)))
@@ -152,7 +153,7 @@ class DepthPass:
         prog = program(scene.ctx, "surface.vert", "depth_mask.frag")
         set_matrix(prog, "world_to_clip", scene.world_to_clip)
         set_uniform(prog, "depth_map", 0)
-        set_uniform(prog, "light_position", tuple(light.position))
+        set_uniform(prog, "light", tuple(light.homogeneous))
         set_uniform(prog, "pcf_radius", self.pcf_radius)
         world_to_texture = np.asarray(setup.world_to_texture, dtype=np.float64)
         scene.bind_mask()

@@ -28,12 +28,14 @@ def draw_lit(scene: GpuScene, ambient: float, background: tuple[float, float, fl
     scene.main_fbo.depth_mask = True
     scene.main_fbo.clear(*background, 0.0, depth=1.0)
     set_matrix(prog, "world_to_clip", scene.world_to_clip)
-    positions = [light.position for light in scene.lights]
+    lights = [light.homogeneous for light in scene.lights]
     colors = [light.color for light in scene.lights]
-    padding = [np.zeros(3)] * (MAX_LIGHTS - len(scene.lights))
+    padding = MAX_LIGHTS - len(scene.lights)
     set_uniform(prog, "light_count", len(scene.lights))
-    uniform(prog, "light_position").write(np.array(positions + padding, np.float32).tobytes())
-    uniform(prog, "light_color").write(np.array(colors + padding, np.float32).tobytes())
+    uniform(prog, "light").write(np.array(lights + [np.zeros(4)] * padding, np.float32).tobytes())
+    uniform(prog, "light_color").write(
+        np.array(colors + [np.zeros(3)] * padding, np.float32).tobytes()
+    )
     set_uniform(prog, "ambient", float(ambient))
     for i, body in enumerate(scene.bodies):
         set_matrix(prog, "body_to_world", body.to_world)
@@ -53,7 +55,7 @@ def subtract_light(scene: GpuScene, light: PreparedLight, bodies: Sequence[int])
     scene.blend(moderngl.FUNC_REVERSE_SUBTRACT)
     set_matrix(prog, "world_to_clip", scene.world_to_clip)
     set_uniform(prog, "mask", 2)
-    set_uniform(prog, "light_position", tuple(light.position))
+    set_uniform(prog, "light", tuple(light.homogeneous))
     set_uniform(prog, "light_color", tuple(light.color))
     for i in bodies:
         body = scene.bodies[i]

@@ -22,7 +22,8 @@ PLANAR_POLYGON_OFFSET = (-1.0, -4.0)
 
 
 class PlanarPass:
-    """``method="planar"``: every receiver needs its ``plane``.
+    """``method="planar"``: every receiver needs its ``plane``; point and directional lights
+    (``planar_projection(plane, (x, y, z, 0))`` flattens along the direction).
 
     Drawn with a polygon offset of :data:`PLANAR_POLYGON_OFFSET`; a receiver is
     skipped for a light on the other side of its plane than the camera (the
@@ -68,11 +69,12 @@ class PlanarPass:
                 for ri, receiver in enumerate(scene.receivers):
                     plane = receiver.plane
                     assert plane is not None  # render_scene checks it for this method
-                    side_light = np.dot(plane[:3], light.position) + plane[3]
+                    # a directional light (x, y, z, 0) is on the side its direction points to
+                    side_light = np.dot(plane, light.homogeneous)
                     side_eye = np.dot(plane, scene.eye) / scene.eye[3]
                     if side_light * side_eye <= 0:
                         continue  # the camera sees the face the light does not reach
-                    flatten = planar_projection(plane, np.append(light.position, 1.0))
+                    flatten = planar_projection(plane, light.homogeneous)
                     set_matrix(prog, "flatten", flatten)
                     scene.bind_record(prog, ri)
                     scene.meshes[offset + bi].render(prog)

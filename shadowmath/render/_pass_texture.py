@@ -54,10 +54,11 @@ def read_mask(tex: moderngl.Texture) -> NDArray[np.float32]:
 def fit_per_blocker(
     blockers: Sequence[Prepared], light: PreparedLight, map_size: tuple[int, int]
 ) -> tuple[ShadowSetup, ...]:
-    """One ``fit_shadow`` per blocker, in its local coordinates (the article's set-up)."""
+    """One ``fit_shadow`` per blocker, in its local coordinates (the article's set-up);
+    a directional light through its homogeneous ``(x, y, z, 0)`` (an orthographic map)."""
+    position = light.homogeneous if light.directional else light.position
     return tuple(
-        fit_shadow(light.position, b.vertices, map_size, blocker_to_world=b.to_world)
-        for b in blockers
+        fit_shadow(position, b.vertices, map_size, blocker_to_world=b.to_world) for b in blockers
     )
 
 

@@ -197,6 +197,8 @@ def render_depth_wgpu(
     recv = [prepare_body(f"receivers[{i}]", b) for i, b in enumerate(receivers)]
     block = [prepare_body(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
     lit = prepare_light("light", light)
+    if lit.directional:
+        raise ValueError("light.direction: render_depth_wgpu takes a point light only")
     if setup is None:
         setup = fit_depth(recv, block, lit.position, map_texels, k)
     bodies = recv + block

@@ -40,7 +40,10 @@ class Body(NamedTuple):
 
 
 class Light(NamedTuple):
-    """A point light, or a parallelogram area light centred on ``position``.
+    """A point light, a directional light, or a parallelogram area light.
+
+    Give ``position`` (a point light, or an area light's centre) or ``direction``
+    (a directional light: parallel rays, the light infinitely far away), not both.
 
     Attributes:
         position: ``(3,)`` in world coordinates (an area light's centre).
@@ -49,12 +52,20 @@ class Light(NamedTuple):
             ``position + u edge_u + v edge_v`` for ``-1/2 <= u, v <= 1/2``; both or
             neither. Only the soft-shadow methods (``method="soft"``, ``"radiance"``)
             sample the area; the lit pass and the other methods light from ``position``.
+        direction: ``(3,)`` a directional light's direction **toward the light**
+            (the homogeneous light ``(x, y, z, 0)`` of :func:`planar_projection` and
+            :func:`fit_shadow`; its length does not matter). Drawn by
+            ``method="planar"`` and ``method="depth"`` only.
+
+    Example:
+        >>> sun = Light(direction=(1.0, 0.5, 2.0))  # from above, toward +x
     """
 
-    position: Any
+    position: Any = None
     color: tuple[float, float, float] = (1.0, 1.0, 1.0)
     edge_u: Any = None
     edge_v: Any = None
+    direction: Any = None
 
 
 class Prepared(NamedTuple):
@@ -73,10 +84,18 @@ class Prepared(NamedTuple):
 
 
 class PreparedLight(NamedTuple):
+    #: A point light's position, or a directional light's unit direction toward it.
     position: NDArray[np.float64]
     color: NDArray[np.float64]
     #: An area light's ``(edge_u, edge_v)``; None for a point light.
     edges: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+    directional: bool = False
+
+    @property
+    def homogeneous(self) -> NDArray[np.float64]:
+        """``(x, y, z, 1)`` a point light, ``(x, y, z, 0)`` a directional light (the
+        shaders' ``vec4 light``: the vector toward the light is ``xyz - w p``)."""
+        return np.append(self.position, 0.0 if self.directional else 1.0)
 
     @property
     def corner(self) -> NDArray[np.float64]:
@@ -104,12 +123,25 @@ def prepare_body(name: str, body: Body) -> Prepared:
 
 
 def prepare_light(name: str, light: Light) -> PreparedLight:
-    p = np.asarray(light.position, dtype=np.float64)
-    if p.shape != (3,) or not np.all(np.isfinite(p)):
-        raise ValueError(f"{name}.position: expected finite (x, y, z), got {light.position!r}")
     c = np.asarray(light.color, dtype=np.float64)
     if c.shape != (3,) or not np.all(np.isfinite(c)):
         raise ValueError(f"{name}.color: expected three finite values")
+    if light.direction is not None:
+        if light.position is not None:
+            raise ValueError(f"{name}: give position (a point light) or direction, not both")
+        if light.edge_u is not None or light.edge_v is not None:
+            raise ValueError(f"{name}: a directional light has no area (edge_u, edge_v)")
+        d = np.asarray(light.direction, dtype=np.float64)
+        if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
+            raise ValueError(
+                f"{name}.direction: expected finite non-zero (x, y, z), got {light.direction!r}"
+            )
+        return PreparedLight(d / np.linalg.norm(d), c, directional=True)
+    if light.position is None:
+        raise ValueError(f"{name}: expected a position (point light) or a direction")
+    p = np.asarray(light.position, dtype=np.float64)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ValueError(f"{name}.position: expected finite (x, y, z), got {light.position!r}")
     if light.edge_u is None and light.edge_v is None:
         return PreparedLight(p, c)
     if light.edge_u is None or light.edge_v is None:

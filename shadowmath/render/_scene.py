@@ -32,6 +32,9 @@ from ._resources import (
     read_texture,
 )
 
+#: The shadow systems that draw directional lights (``Light(direction=...)``).
+DIRECTIONAL_METHODS = ("planar", "depth")
+
 #: The shadow systems by ``method`` name: each takes the options of :func:`render_scene`
 #: it uses (``pcf_radius``, ``depth_bias``) and ignores the others.
 PASSES: dict[str, Callable[[PassOptions], ShadowPass]] = {
@@ -154,7 +157,10 @@ def render_scene(
     Arguments:
         receivers: the bodies that receive shadows.
         blockers: the bodies that cast them (drawn lit, not shadowed).
-        lights: up to :data:`MAX_LIGHTS` point lights.
+        lights: up to :data:`MAX_LIGHTS` lights: points (``Light(position)``), or
+            with ``method="planar"`` and ``"depth"`` also directional lights
+            (``Light(direction=...)``, toward the light; the depth map is then
+            orthographic, from ``fit_shadow((x, y, z, 0), ...)``).
         world_to_clip: ``(4, 4)`` the camera, e.g. ``perspective(...) @ look_at(...)``.
         image_size: ``size`` or ``(width, height)`` of the picture in pixels.
         map_size: ``size`` or ``(width, height)`` of each shadow map in texels.
@@ -186,6 +192,7 @@ def render_scene(
     Raises:
         ValueError: bad meshes, matrices, sizes, colours; no lights or too many; a
             receiver without a plane under ``method="planar"`` or ``"radiance"``; a
+            directional light under another method than ``"planar"`` and ``"depth"``; a
             point light or bad ``samples`` under ``method="soft"`` or ``"radiance"``;
             ``setups`` of the wrong shape; and whatever :func:`fit_shadow` raises for a
             light and a blocker.
@@ -217,6 +224,12 @@ def render_scene(
     block = [prepare_body(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
     shadow_pass.check(recv)
     light_data = [prepare_light(f"lights[{i}]", light) for i, light in enumerate(lights)]
+    for i, light in enumerate(light_data):
+        if light.directional and method not in DIRECTIONAL_METHODS:
+            raise ValueError(
+                f"lights[{i}].direction: method={method!r} takes point lights only; "
+                f"directional lights are drawn by {' and '.join(map(repr, DIRECTIONAL_METHODS))}"
+            )
     count = shadow_pass.setup_count(block)
     if setups is None:
         all_setups = tuple(shadow_pass.fit(recv, block, light, map_texels) for light in light_data)

@@ -8,7 +8,7 @@
 uniform sampler2DShadow depth_map;  // compare_func <=: 1.0 where r <= stored depth (lit)
 uniform sampler2D surface;          // the lit pass's position record (w = body id + 1)
 uniform float body_id;
-uniform vec3 light_position;
+uniform vec4 light;  // (x, y, z, 1) a point light, (x, y, z, 0) a directional one
 uniform int pcf_radius;
 
 in vec3 v_world;
@@ -21,7 +21,7 @@ out float mask;
 void main() {
     if (texelFetch(surface, ivec2(gl_FragCoord.xy), 0).w != body_id + 1.0) discard;
     float q = v_stq.w;
-    if (q <= 0.0 || dot(v_face_normal, light_position - v_world) <= 0.0) {
+    if (q <= 0.0 || dot(v_face_normal, light.xyz - light.w * v_world) <= 0.0) {
         mask = 0.0;
         return;
     }

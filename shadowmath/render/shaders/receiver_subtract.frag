@@ -6,7 +6,7 @@
 uniform sampler2D mask;
 uniform sampler2D surface;
 uniform float body_id;
-uniform vec3 light_position;
+uniform vec4 light;  // (x, y, z, 1) a point light, (x, y, z, 0) a directional one
 uniform vec3 light_color;
 uniform vec3 albedo;
 
@@ -21,6 +21,6 @@ void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
     if (texelFetch(surface, pixel, 0).w != body_id + 1.0) discard;
     vec3 n = normalize(v_normal);
-    float diffuse = max(dot(n, normalize(light_position - v_world)), 0.0);
+    float diffuse = max(dot(n, normalize(light.xyz - light.w * v_world)), 0.0);
     color = vec4(albedo * light_color * diffuse * texelFetch(mask, pixel, 0).r, 0.0);
 }

@@ -4,7 +4,7 @@
 // and unit face normal, the per-pixel record the shadow passes and the tests use.
 const int MAX_LIGHTS = 8;
 uniform int light_count;
-uniform vec3 light_position[MAX_LIGHTS];
+uniform vec4 light[MAX_LIGHTS];  // (x, y, z, 1) a point, (x, y, z, 0) toward a direction
 uniform vec3 light_color[MAX_LIGHTS];
 uniform vec3 albedo;
 uniform float ambient;
@@ -23,7 +23,7 @@ void main() {
     vec3 n = normalize(v_normal);
     vec3 lit = vec3(ambient);
     for (int i = 0; i < light_count; ++i) {
-        lit += light_color[i] * max(dot(n, normalize(light_position[i] - v_world)), 0.0);
+        lit += light_color[i] * max(dot(n, normalize(light[i].xyz - light[i].w * v_world)), 0.0);
     }
     color = vec4(albedo * lit, 1.0);
     position = vec4(v_world, body_id + 1.0);
