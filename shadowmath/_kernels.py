@@ -142,9 +142,10 @@ def fit_kernel() -> Any:
     )
 
     @numba.njit(cache=True)
-    def place(b: Any, has_b: bool, p: Any) -> tuple[float, float, float, float]:
+    def place(
+        b: Any, has_b: bool, px: float, py: float, pz: float
+    ) -> tuple[float, float, float, float]:
         """A vertex in world coordinates and its homogeneous w (1 without a placement)."""
-        px, py, pz = float(p[0]), float(p[1]), float(p[2])
         if not has_b:
             return px, py, pz, 1.0
         w = b[12] * px + b[13] * py + b[14] * pz + b[15]
@@ -156,7 +157,9 @@ def fit_kernel() -> Any:
             w,
         )
 
-    @numba.njit(cache=True)
+    # error_model="numpy": a division is a plain division (no ZeroDivisionError branch);
+    # the loop never divides by zero anyway (z > 0 is tested first).
+    @numba.njit(cache=True, error_model="numpy")
     def kernel(
         light: Any,
         verts: Any,
@@ -200,8 +203,9 @@ def fit_kernel() -> Any:
             for k in range(n):
                 # The given vertices' own sum: non-finite exactly when one of them is
                 # (a placement's NaN must not be reported as the vertices').
-                raw += float(V[k, 0]) + float(V[k, 1]) + float(V[k, 2])
-                px, py, pz, w = place(b, has_b, V[k])
+                vx, vy, vz = float(V[k, 0]), float(V[k, 1]), float(V[k, 2])
+                raw += vx + vy + vz
+                px, py, pz, w = place(b, has_b, vx, vy, vz)
                 if not w > 0:
                     st |= PROJECTIVE_PLACEMENT
                 ox, oy, oz = px - lx, py - ly, pz - lz
@@ -232,14 +236,14 @@ def fit_kernel() -> Any:
             rx_hi = ry_hi = z_max = -math.inf
             rx_lo = ry_lo = z_min = math.inf
             for k in range(n):
-                px, py, pz, w = place(b, has_b, V[k])
+                px, py, pz, w = place(b, has_b, float(V[k, 0]), float(V[k, 1]), float(V[k, 2]))
                 ox, oy, oz = px - lx, py - ly, pz - lz
                 x = ox * ax[0] + oy * ax[1] + oz * ax[2]
                 y = ox * ax[3] + oy * ax[4] + oz * ax[5]
                 z = ox * ax[6] + oy * ax[7] + oz * ax[8]
                 z_min, z_max = min(z_min, z), max(z_max, z)
-                safe_z = z if z > 0 else 1.0
-                rx, ry = x / safe_z, y / safe_z
+                inv_z = 1.0 / z if z > 0 else 1.0
+                rx, ry = x * inv_z, y * inv_z
                 rx_lo, rx_hi = min(rx_lo, rx), max(rx_hi, rx)
                 ry_lo, ry_hi = min(ry_lo, ry), max(ry_hi, ry)
             noise = 32 * eps * reach

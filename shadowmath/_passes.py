@@ -37,14 +37,17 @@ class Extent(NamedTuple):
 
 def spread(xp: ModuleType, light: Array, verts: Array, *, aim: str) -> Spread:
     """Pass 1 over ``verts`` ``(*batch, N, 3)`` seen from ``light`` ``(*batch, 3)``."""
-    offsets = verts - light[..., None, :]
+    offsets = [verts[..., i] - light[..., None, i] for i in range(3)]  # per component: fused
     if aim == "mean":
         # The differences before the sum: full precision far from the origin.
-        direction = xp.mean(offsets, axis=-2)
+        direction = xp.stack([xp.mean(o, axis=-1) for o in offsets], axis=-1)
     else:
-        direction = 0.5 * (xp.max(offsets, axis=-2) + xp.min(offsets, axis=-2))
-    coords = xp.maximum(xp.max(xp.abs(verts), axis=(-2, -1)), xp.max(xp.abs(light), axis=-1))
-    reach = xp.max(xp.abs(offsets), axis=(-2, -1))
+        direction = xp.stack(
+            [0.5 * (xp.max(o, axis=-1) + xp.min(o, axis=-1)) for o in offsets], axis=-1
+        )
+    coords = xp.max(xp.abs(verts), axis=(-2, -1))
+    coords = xp.maximum(coords, xp.max(xp.abs(light), axis=-1))
+    reach = xp.max(xp.stack([xp.max(xp.abs(o), axis=-1) for o in offsets]), axis=0)
     return Spread(direction, coords, reach)
 
 
@@ -52,11 +55,16 @@ def extent(
     xp: ModuleType, light: Array, verts: Array, x_axis: Array, y_axis: Array, z_axis: Array
 ) -> Extent:
     """Pass 2: light coordinates and projection ratios of every vertex."""
-    offsets = verts - light[..., None, :]
-    x = xp.sum(offsets * x_axis[..., None, :], axis=-1)
-    y = xp.sum(offsets * y_axis[..., None, :], axis=-1)
-    z = xp.sum(offsets * z_axis[..., None, :], axis=-1)
+    # Written per component (three products and two sums), not as a reduction over
+    # the last axis of length 3: XLA fuses the whole pass into one loop this way,
+    # while a size-3 reduction per vertex ran 60x slower than a read on the CPU.
+    ox, oy, oz = (verts[..., i] - light[..., None, i] for i in range(3))
+
+    def along(axis: Array) -> Array:
+        return ox * axis[..., None, 0] + oy * axis[..., None, 1] + oz * axis[..., None, 2]
+
+    x, y, z = along(x_axis), along(y_axis), along(z_axis)
     # Divide by a safe z so that invalid entries (z <= 0) never produce inf/NaN
     # derivatives that leak into valid ones; the checks mark them invalid.
-    safe_z = xp.where(z > 0, z, xp.ones_like(z))
-    return Extent(x, y, z, x / safe_z, y / safe_z)
+    inv_z = 1 / xp.where(z > 0, z, xp.ones_like(z))
+    return Extent(x, y, z, x * inv_z, y * inv_z)
