@@ -52,6 +52,18 @@ class Frustum(NamedTuple):
             An off-centre frustum spans ``x / z`` in
             ``[x_offset - rx_max, x_offset + rx_max]`` (before the margin).
         y_offset: the same along light ``Y``.
+        orthographic: ``False`` (default: perspective, a point light), ``True``, or
+            a ``(*batch,)`` boolean array, True for the entries whose frustum is an
+            orthographic box (a directional light). There ``rx_max``, ``ry_max``
+            are the box's half-width and half-height in world units (before the
+            margin), ``x_offset``, ``y_offset`` its centre in light coordinates
+            (world units), and ``near``, ``far`` its depth range along ``Z``.
+            :func:`fit_shadow` gives a Python ``False`` for a 3-vector light and a
+            boolean array (``w == 0``) for a homogeneous 4-vector light.
+
+    A perspective frustum maps light ``(x, y, z)`` to NDC
+    ``x_ndc = m_x (x / z - c_x) / R_x``; an orthographic one to
+    ``x_ndc = m_x (x - c_x) / R_x``.
     """
 
     rx_max: Array
@@ -62,6 +74,7 @@ class Frustum(NamedTuple):
     margin_y: Array
     x_offset: Array = 0.0
     y_offset: Array = 0.0
+    orthographic: Array | bool = False
 
 
 def _texels(name: str, value: Any) -> tuple[int, int]:
@@ -334,24 +347,35 @@ def frustum_arrays(frustum: Frustum) -> tuple[Context, Checks, Frustum]:
 
     Eagerly a bad field raises here, before a division by ``rx_max = 0`` or
     ``far - near = 0`` could emit a NumPy warning; lazily the returned checks
-    poison the results.
+    poison the results. ``orthographic`` stays a Python bool when given as one
+    (the common, static case), else it becomes a boolean array of the batch shape.
     """
-    if not isinstance(frustum, tuple) or len(frustum) not in (6, 8):
+    if not isinstance(frustum, tuple) or len(frustum) not in (6, 8, 9):
         raise ValueError("frustum: expected a Frustum (rx_max, ry_max, near, far, margin_x, ...)")
-    values = (*frustum, 0.0, 0.0)[:8]
+    padded = (*frustum, *(0.0, 0.0, False)[len(frustum) - 6 :])
+    numeric = Frustum._fields[:8]
+    given = dict(zip(numeric, padded[:8], strict=True))
+    ortho = padded[8]
+    static_ortho = isinstance(ortho, bool | np.bool_)
     # A default (Python number) offset must not promote a float32 frustum to float64.
-    given = dict(zip(Frustum._fields, values, strict=True))
-    defaults = {n: given.pop(n) for n in Frustum._fields[6:] if isinstance(given[n], int | float)}
-    ctx, arrays = convert(**given)
+    defaults = {n: given.pop(n) for n in numeric[6:] if isinstance(given[n], int | float)}
+    extra = {} if static_ortho else {"orthographic": ortho}
+    ctx, arrays = convert(**given, **extra)
     xp = ctx.xp
-    converted = dict(zip(given, arrays, strict=True))
+    converted = dict(zip([*given, *extra], arrays, strict=True))
     converted.update({n: ctx.constant(float(v)) for n, v in defaults.items()})
-    fields = [converted[n] for n in Frustum._fields]
-    shape = batch_shape(*(tuple(a.shape) for a in fields), names=Frustum._fields)
+    fields = [converted[n] for n in numeric]
+    shapes = [tuple(a.shape) for a in fields]
+    if not static_ortho:
+        shapes.append(tuple(converted["orthographic"].shape))
+    shape = batch_shape(*shapes, names=Frustum._fields[: len(shapes)])
     checks = Checks(ctx)
-    for name, v in zip(Frustum._fields, fields, strict=True):
+    for name, v in zip(numeric, fields, strict=True):
         checks.require(xp.isfinite(v), f"frustum.{name}: must be finite")
-    fr = Frustum(*(xp.broadcast_to(v, shape) for v in fields))
+    o: Array | bool = (
+        bool(ortho) if static_ortho else xp.broadcast_to(converted["orthographic"] != 0, shape)
+    )
+    fr = Frustum._make([*(xp.broadcast_to(v, shape) for v in fields), o])
     # At least the smallest normal float, so that margin / rx_max cannot overflow.
     tiny = float(np.finfo(ctx.dtype).tiny)
     checks.require(
@@ -374,15 +398,39 @@ def projection_terms(xp: ModuleType, fr: Frustum) -> tuple[Array, ...]:
     return terms
 
 
-def _projection_entries(xp: ModuleType, fr: Frustum) -> tuple[Array, ...]:
+def projection_entries(xp: ModuleType, fr: Frustum) -> tuple[Array, ...]:
+    """The 16 entries of the blocker projection of a trusted frustum (any ``orthographic``)."""
     sx, sxc, sy, syc, a, b = projection_terms(xp, fr)
     zero = xp.zeros_like(sx)
     one = zero + 1
+    ortho = fr.orthographic
+    if isinstance(ortho, bool | np.bool_) and not ortho:
+        return (
+            sx, zero, sxc, zero,
+            zero, sy, syc, zero,
+            zero, zero, a, b,
+            zero, zero, one, zero,
+        )  # fmt: skip
+    # Orthographic entries (every field finite, far > near: both branches are finite,
+    # so selecting with where keeps derivatives finite too).
+    inv = 1.0 / (fr.far - fr.near)
+    oa, ob = 2.0 * inv, -(fr.far + fr.near) * inv
+    if isinstance(ortho, bool | np.bool_):
+        return (
+            sx, zero, zero, sxc,
+            zero, sy, zero, syc,
+            zero, zero, oa, ob,
+            zero, zero, zero, one,
+        )  # fmt: skip
+
+    def pick(o: Array, p: Array) -> Array:
+        return xp.where(ortho, o, p)
+
     return (
-        sx, zero, sxc, zero,
-        zero, sy, syc, zero,
-        zero, zero, a, b,
-        zero, zero, one, zero,
+        sx, zero, pick(zero, sxc), pick(sxc, zero),
+        zero, sy, pick(zero, syc), pick(syc, zero),
+        zero, zero, pick(oa, a), pick(ob, b),
+        zero, zero, pick(zero, one), pick(one, zero),
     )  # fmt: skip
 
 
@@ -427,7 +475,7 @@ def blocker_projection(frustum: Frustum) -> Array:
         array([0.98, 0.98, 0.5 ])
     """
     ctx, checks, fr = frustum_arrays(frustum)
-    return checks.poison(stack_matrix(ctx.xp, _projection_entries(ctx.xp, fr)), 2)
+    return checks.poison(stack_matrix(ctx.xp, projection_entries(ctx.xp, fr)), 2)
 
 
 def receiver_projection(frustum: Frustum) -> Array:
@@ -468,6 +516,6 @@ def receiver_projection(frustum: Frustum) -> Array:
         array([0.99, 0.5 ])
     """
     ctx, checks, fr = frustum_arrays(frustum)
-    P = _projection_entries(ctx.xp, fr)
+    P = projection_entries(ctx.xp, fr)
     T = formulas(ctx.xp).texture_rows(P)
     return checks.poison(stack_matrix(ctx.xp, T), 2)

@@ -21,10 +21,21 @@ import numpy as np
 
 from . import _kernels
 from . import _messages as msg
+from ._bias import PcfFilter, _check_kernel
+from ._conventions import GraphicsApi, _check_api
 from ._formulas import formulas
 from ._frame import LightFrame, _frame, check_aim, light_entries, stack_matrix, zero_direction_noise
-from ._frustum import NEAR_FAR_SLACK, Frustum, bounded_frustum, margins, projection_terms
+from ._frustum import (
+    NEAR_FAR_SLACK,
+    Frustum,
+    _texels,
+    bounded_frustum,
+    margins,
+    projection_terms,
+)
 from ._passes import extent, spread
+from ._pcf import _border_texels
+from ._scene import STABLE_NEEDS_UP, SceneOptions, scene_core
 from ._validate import (
     Array,
     Checks,
@@ -39,6 +50,7 @@ from ._validate import (
     require_last,
     require_matrix,
     require_vertices,
+    shape_error,
 )
 
 
@@ -137,13 +149,20 @@ def fit_shadow(
     blocker_vertices: Any,
     map_size: int | tuple[int, int],
     *,
-    border_texels: int = 1,
+    border_texels: int | None = None,
     blocker_to_world: Any = None,
     margin: float | tuple[float, float] | None = None,
     near: Any = None,
     far: Any = None,
     aim: Literal["mean", "bbox"] = "mean",
     method: Literal["mdv", "optimized"] = "mdv",
+    receivers: Any = None,
+    api: GraphicsApi = "opengl",
+    reversed_z: bool = False,
+    up: Any = None,
+    stable: bool = False,
+    pcf_radius: int | None = None,
+    pcf_filter: PcfFilter = "box",
 ) -> ShadowSetup:
     r"""Nagy's projective shadow texture for one point light and one blocker.
 
@@ -191,14 +210,32 @@ def fit_shadow(
     check_aim(aim)
     if method not in ("mdv", "optimized"):
         raise ValueError(f"method: expected 'mdv' or 'optimized', got {method!r}")
+    if border_texels is None:
+        border_texels = 1 if pcf_radius is None else _pcf_border(pcf_radius, pcf_filter)
     m = margins(map_size, border_texels, margin)
-    ctx, (light, verts, B, n, f) = convert(
+    _check_api(api, reversed_z)
+    if not isinstance(stable, bool | np.bool_):
+        raise ValueError(f"stable: expected True or False, got {stable!r}")
+    ctx, (light, verts, B, n, f, R, U) = convert(
         light_position=light_position,
         blocker_vertices=blocker_vertices,
         blocker_to_world=blocker_to_world,
         near=near,
         far=far,
+        receivers=receivers,
+        up=up,
     )
+    homogeneous = light.ndim >= 1 and light.shape[-1] == 4
+    if homogeneous or R is not None or U is not None or api != "opengl" or reversed_z or stable:
+        if method != "mdv":
+            raise ValueError(
+                "method: 'optimized' fits point lights (x, y, z) without receivers, api, "
+                "reversed_z, up or stable; use method='mdv' with them"
+            )
+        opts = SceneOptions(
+            api, bool(reversed_z), bool(stable), homogeneous, _texels("map_size", map_size)
+        )
+        return _fit_scene(ctx, light, verts, B, n, f, R, U, m, aim, opts)
     require_last("light_position", light, 3, hint="a light position is (x, y, z)")
     require_vertices("blocker_vertices", verts)
     shape = light.shape[:-1]
@@ -219,6 +256,135 @@ def fit_shadow(
     if not ctx.is_jax and _kernels.available():
         return _fit_compiled(ctx, shape, light, verts, B, m, n, f, aim)
     return fit_core(ctx, Checks(ctx), light, verts, B, m, n, f, aim)
+
+
+def _pcf_border(radius: int, filter: PcfFilter) -> int:
+    k, filt = _check_kernel(radius, filter)
+    return _border_texels(k, filt)
+
+
+def _fit_scene(
+    ctx: Context,
+    light: Array,
+    verts: Array,
+    B: Array | None,
+    n: Array | None,
+    f: Array | None,
+    R: Array | None,
+    U: Array | None,
+    m: tuple[float, float],
+    aim: str,
+    opts: SceneOptions,
+) -> ShadowSetup:
+    """The scene options' boundary: shapes, then the array path (a cached jit for JAX)."""
+    if light.ndim < 1 or light.shape[-1] not in (3, 4):
+        raise shape_error(
+            "light_position",
+            "(*batch, 3) or (*batch, 4)",
+            tuple(light.shape),
+            "a point light is (x, y, z); a homogeneous light (x, y, z, w), w = 0 directional",
+        )
+    require_vertices("blocker_vertices", verts)
+    if R is not None:
+        require_vertices("receivers", R)
+    if U is not None:
+        require_last("up", U, 3, hint="an up hint is (x, y, z)")
+    if opts.stable:
+        for name, mm, size in (("x", m[0], opts.texels[0]), ("y", m[1], opts.texels[1])):
+            if mm * size <= 1:
+                raise ValueError(
+                    f"map_size: stable=True needs more than one texel inside the border "
+                    f"along {name} (got {mm * size:g})"
+                )
+    _scene_batch_shape(light, verts, B, n, f, R, U)
+    if opts.stable and U is None and not opts.homogeneous:
+        raise ValueError(STABLE_NEEDS_UP)
+    if ctx.is_jax and not ctx.lazy:
+        absent = tuple(v is None for v in (B, n, f, R, U))
+        run, messages = _jitted_scene(m, aim, opts, absent)
+        setup: ShadowSetup
+        setup, bad = run(light, verts, B, n, f, R, U)
+        raise_recorded(messages, bad)
+        return setup
+    return scene_fit(ctx, Checks(ctx), light, verts, B, n, f, R, U, m, aim, opts)
+
+
+def scene_fit(
+    ctx: Context,
+    checks: Checks,
+    light: Array,
+    verts: Array,
+    B: Array | None,
+    n: Array | None,
+    f: Array | None,
+    R: Array | None,
+    U: Array | None,
+    m: tuple[float, float],
+    aim: str,
+    opts: SceneOptions,
+) -> ShadowSetup:
+    """:func:`scene_core` and its matrices, on shape-checked arrays."""
+    xp = ctx.xp
+    checks.require(all_finite(xp, light, 1), non_finite("light_position"))
+    checks.require(all_finite(xp, verts, 2), non_finite("blocker_vertices"))
+    world = check_placement(checks, verts, B)
+    frame, frustum, W, clip, tex = scene_core(
+        ctx, checks, light, world, B, R, U, m, n, f, aim, opts
+    )
+    shape = tuple(frustum.near.shape)
+    placement = xp.eye(4, dtype=ctx.dtype) if B is None else B
+    return ShadowSetup(
+        frame=frame,
+        frustum=frustum,
+        world_to_light=checks.poison(xp.broadcast_to(stack_matrix(xp, W), (*shape, 4, 4)), 2),
+        blocker_to_world=xp.broadcast_to(placement, (*shape, 4, 4)),
+        blocker_to_clip=checks.poison(xp.broadcast_to(stack_matrix(xp, clip), (*shape, 4, 4)), 2),
+        world_to_texture=checks.poison(xp.broadcast_to(stack_matrix(xp, tex), (*shape, 4, 4)), 2),
+    )
+
+
+def _scene_batch_shape(
+    light: Array,
+    verts: Array,
+    B: Array | None,
+    near: Array | None,
+    far: Array | None,
+    R: Array | None,
+    U: Array | None,
+) -> tuple[int, ...]:
+    if B is not None:
+        require_matrix("blocker_to_world", B)
+    named = [("light_position", light.shape[:-1]), ("blocker_vertices", verts.shape[:-2])]
+    named += [("blocker_to_world", B.shape[:-2])] if B is not None else []
+    named += [(name, v.shape) for name, v in (("near", near), ("far", far)) if v is not None]
+    named += [("receivers", R.shape[:-2])] if R is not None else []
+    named += [("up", U.shape[:-1])] if U is not None else []
+    return batch_shape(*(s for _, s in named), names=[name for name, _ in named])
+
+
+@functools.cache
+def _jitted_scene(
+    m: tuple[float, float], aim: str, opts: SceneOptions, absent: tuple[bool, ...]
+) -> tuple[Any, list[str]]:
+    """:func:`scene_fit` under ``jax.jit`` for concrete JAX input (as :func:`_jitted_fit`)."""
+    import jax
+    import jax.numpy as jnp
+
+    del absent  # part of the cache key: one trace per set of absent arguments
+    messages: list[str] = []
+
+    def run(
+        light: Any, verts: Any, B: Any, near: Any, far: Any, R: Any, U: Any
+    ) -> tuple[ShadowSetup, Any]:
+        ctx = Context(jnp, light.dtype, lazy=True, is_jax=True)
+        checks = Checks(ctx, mode="record")
+        setup = scene_fit(ctx, checks, light, verts, B, near, far, R, U, m, aim, opts)
+        shape = setup.frustum.near.shape
+        messages[:] = [message for message, _ in checks.recorded]
+        bad = jnp.stack([jnp.broadcast_to(b, shape) for _, b in checks.recorded])
+        return setup, bad
+
+    return jax.jit(run), messages
 
 
 def _batch_shape(
