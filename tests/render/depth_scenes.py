@@ -59,6 +59,13 @@ SCENES = {
 }
 
 
+def homogeneous(light: Light) -> np.ndarray:
+    """``(x, y, z, 1)`` a point light, ``(x, y, z, 0)`` a directional one."""
+    if light.direction is not None:
+        return np.append(np.asarray(light.direction, dtype=np.float64), 0.0)
+    return np.append(np.asarray(light.position, dtype=np.float64), 1.0)
+
+
 class Truth(NamedTuple):
     on: np.ndarray  # pixels showing a body
     shadow: np.ndarray  # facing the light and blocked
@@ -70,8 +77,8 @@ def ray_cast(body: np.ndarray, position: np.ndarray, normal: np.ndarray, scene: 
     on = body >= 0
     p = position[on].astype(np.float64)
     n = normal[on].astype(np.float64)
-    light = np.asarray(scene.light.position, dtype=np.float64)
-    facing = np.sum(n * (light - p), axis=1) > 0
+    light = homogeneous(scene.light)
+    facing = np.sum(n * (light[:3] - light[3] * p), axis=1) > 0
     blocked = np.zeros(len(p), dtype=bool)
     for b in scene.bodies:
         blocked |= segment_hits_triangles(p + LIFT * n, light, *world_mesh(b))
