@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import shadowmath as sm
+from shadowmath import meshes
 
 BOX = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], dtype=float)
 
@@ -115,3 +116,207 @@ def test_jax_matches_numpy_and_gradients_are_finite(light: Any) -> None:
 
     grads = jax.grad(loss, argnums=(0, 1))(jnp.asarray(light), jnp.asarray(BOX))
     assert all(bool(jnp.all(jnp.isfinite(g))) for g in grads)
+
+
+# ---- up: a frame that does not jump along a smooth light path --------------------------
+
+TORUS = np.asarray(meshes.torus().vertices, dtype=float)
+RADIUS, HEIGHT, STEP = float(np.hypot(2.2, 6.0)), 3.6, 2e-7  # the demo light's distance
+
+
+def _circle(theta: Any) -> np.ndarray:
+    theta = np.asarray(theta, dtype=float)
+    return np.stack(
+        [RADIUS * np.cos(theta), np.full_like(theta, HEIGHT), RADIUS * np.sin(theta)], -1
+    )
+
+
+def _largest_jump(**options: Any) -> float:
+    """The largest change of blocker_to_clip over a STEP move along the circle."""
+    theta = np.linspace(0, 2 * np.pi, 4001)
+    z = sm.fit_shadow(_circle(theta), TORUS, 512, **options).frame.z_axis
+    helper = np.asarray(sm.helper_axis(z))
+    worst = 0.0
+    for i in np.nonzero(np.any(helper[1:] != helper[:-1], axis=1))[0]:
+        a, b = theta[i], theta[i + 1]
+        for _ in range(60):  # bisect to the helper axis' switch
+            c = 0.5 * (a + b)
+            zc = sm.fit_shadow(_circle(c), TORUS, 512).frame.z_axis
+            za = sm.fit_shadow(_circle(a), TORUS, 512).frame.z_axis
+            same = np.array_equal(sm.helper_axis(za), sm.helper_axis(zc))
+            a, b = (c, b) if same else (a, c)
+        d = STEP / RADIUS
+        m0 = sm.fit_shadow(_circle(a - d / 2), TORUS, 512, **options).blocker_to_clip
+        m1 = sm.fit_shadow(_circle(a + d / 2), TORUS, 512, **options).blocker_to_clip
+        worst = max(worst, float(np.abs(m1 - m0).max()))
+    return worst
+
+
+def test_up_hint_keeps_the_frame_from_jumping() -> None:
+    # Baseline: without up the helper axis switches 8 times around the circle and a
+    # 2e-7 move changes blocker_to_clip by 8.17 (the map's axes turn by 90 degrees).
+    before = _largest_jump()
+    assert before > 5
+    # With up the same moves change it by at most a Lipschitz-like constant times the
+    # step: the constant is the largest finite-difference slope along the whole path.
+    after = _largest_jump(up=(0.0, 1.0, 0.0))
+    theta = np.linspace(0, 2 * np.pi, 2001)
+    M = sm.fit_shadow(_circle(theta), TORUS, 512, up=(0.0, 1.0, 0.0)).blocker_to_clip
+    slope = np.abs(np.diff(M, axis=0)).max() / (RADIUS * (theta[1] - theta[0]))
+    assert after <= 2 * slope * STEP
+    assert after < 1e-5
+
+
+def test_up_frame_is_the_look_at_frame() -> None:
+    light, up = np.array([1.0, 2.0, -3.0]), np.array([0.1, 1.0, 0.2])
+    s = sm.fit_shadow(light, BOX, 64, up=up)
+    f = s.frame
+    y = up - (up @ f.z_axis) * f.z_axis
+    np.testing.assert_allclose(f.y_axis, y / np.linalg.norm(y), atol=1e-15)
+    np.testing.assert_allclose(f.x_axis, np.cross(f.z_axis, f.y_axis), atol=1e-15)
+    np.testing.assert_allclose(np.cross(f.x_axis, f.y_axis), -f.z_axis, atol=1e-15)
+    with pytest.raises(ValueError, match="up: .*parallel"):
+        sm.fit_shadow(light, BOX, 64, up=f.z_axis * 3)
+
+
+# ---- every API: the receiver samples the texel the caster was drawn into ---------------
+
+
+def _check_api_fit(api: str, reversed_z: bool, light: np.ndarray, seed: int) -> None:
+    from .test_conventions import rasterize
+
+    rng = np.random.default_rng(seed)
+    verts = rng.normal(size=(30, 3)) + [0.0, 0.0, 6.0]
+    W, H = 97, 64
+    s = sm.fit_shadow(light, verts, (W, H), api=api, reversed_z=reversed_z)
+    gl = sm.fit_shadow(light, verts, (W, H))
+    conv = sm.api_convention(api=api, reversed_z=reversed_z)
+    np.testing.assert_allclose(
+        s.blocker_to_clip, conv.gl_clip_to_clip @ gl.blocker_to_clip, atol=1e-13
+    )
+    clip = np.c_[verts, np.ones(len(verts))] @ s.blocker_to_clip.T
+    x_window, row, depth, inside = rasterize(api, clip, W, H)
+    assert inside.all()
+    tex = np.c_[verts, np.ones(len(verts))] @ s.world_to_texture.T
+    st_ = tex[:, :3] / tex[:, 3:]
+    np.testing.assert_allclose(st_[:, 0] * W, x_window, atol=1e-9)
+    np.testing.assert_allclose(st_[:, 1] * H, row, atol=1e-9)
+    np.testing.assert_allclose(st_[:, 2], depth, atol=1e-12)
+    # The depth stored at the nearest vertex is nearer than the farthest's, in the API's order.
+    z = (verts - s.frame.origin) @ s.frame.z_axis
+    near_d, far_d = depth[np.argmin(z)], depth[np.argmax(z)]
+    assert (near_d < far_d) == (conv.near_depth < conv.far_depth)
+
+
+LIGHTS = [np.array([0.3, -0.2, 0.0]), np.array([0.3, -0.2, -1.0, 0.0])]
+
+
+@pytest.mark.parametrize("reversed_z", [False, True])
+@pytest.mark.parametrize("light", LIGHTS, ids=["point", "directional"])
+@pytest.mark.parametrize("seed", [1, 2])
+def test_opengl_fit_samples_the_texel_it_drew(reversed_z: bool, light: Any, seed: int) -> None:
+    _check_api_fit("opengl", reversed_z, light, seed)
+
+
+@pytest.mark.parametrize("reversed_z", [False, True])
+@pytest.mark.parametrize("light", LIGHTS, ids=["point", "directional"])
+@pytest.mark.parametrize("seed", [1, 2])
+def test_vulkan_fit_samples_the_texel_it_drew(reversed_z: bool, light: Any, seed: int) -> None:
+    _check_api_fit("vulkan", reversed_z, light, seed)
+
+
+@pytest.mark.parametrize("reversed_z", [False, True])
+@pytest.mark.parametrize("light", LIGHTS, ids=["point", "directional"])
+@pytest.mark.parametrize("seed", [1, 2])
+def test_direct3d_fit_samples_the_texel_it_drew(reversed_z: bool, light: Any, seed: int) -> None:
+    _check_api_fit("direct3d", reversed_z, light, seed)
+
+
+@pytest.mark.parametrize("reversed_z", [False, True])
+@pytest.mark.parametrize("light", LIGHTS, ids=["point", "directional"])
+@pytest.mark.parametrize("seed", [1, 2])
+def test_metal_fit_samples_the_texel_it_drew(reversed_z: bool, light: Any, seed: int) -> None:
+    _check_api_fit("metal", reversed_z, light, seed)
+
+
+@pytest.mark.parametrize("reversed_z", [False, True])
+@pytest.mark.parametrize("light", LIGHTS, ids=["point", "directional"])
+@pytest.mark.parametrize("seed", [1, 2])
+def test_webgpu_fit_samples_the_texel_it_drew(reversed_z: bool, light: Any, seed: int) -> None:
+    _check_api_fit("webgpu", reversed_z, light, seed)
+
+
+def test_unknown_api_lists_the_valid_ones() -> None:
+    with pytest.raises(
+        ValueError, match="api: .*'opengl', 'vulkan', 'direct3d', 'metal', 'webgpu'"
+    ):
+        sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, api="gles")  # type: ignore[arg-type]
+
+
+# ---- receivers: the depth range encloses the receivers inside the frustum --------------
+
+
+@pytest.mark.parametrize("light", LIGHTS, ids=["point", "directional"])
+def test_receivers_inside_the_sides_fit_the_depth_range(light: Any) -> None:
+    rng = np.random.default_rng(3)
+    verts = rng.normal(size=(30, 3)) * 0.5 + [0.0, 0.0, 6.0]
+    floor = np.stack(np.meshgrid(np.linspace(-8, 8, 41), np.linspace(-8, 8, 41)), -1).reshape(-1, 2)
+    receivers = np.c_[floor, np.full(len(floor), 12.0)]  # a wall behind the blocker
+    receivers = np.r_[receivers, [[0.0, 0.0, -5.0]]]  # behind the point light: ignored
+    plain = sm.fit_shadow(light, verts, 64)
+    s = sm.fit_shadow(light, verts, 64, receivers=receivers)
+    np.testing.assert_allclose(
+        s.blocker_to_clip[:2] @ [0, 0, 6, 1], plain.blocker_to_clip[:2] @ [0, 0, 6, 1], atol=1e-12
+    )
+    ndc = _ndc(s.blocker_to_clip, receivers)
+    w = np.c_[receivers, np.ones(len(receivers))] @ s.blocker_to_clip[3]
+    inside = (np.abs(ndc[:, 0]) <= 1) & (np.abs(ndc[:, 1]) <= 1) & (w > 0)
+    assert inside.sum() > 10 and (~inside).sum() > 10
+    assert np.all(np.abs(ndc[inside, 2]) < 1)  # inside the depth range
+    assert np.all(np.abs(_ndc(s.blocker_to_clip, verts)[:, 2]) < 1)
+    with pytest.raises(ValueError, match="receivers: expected shape"):
+        sm.fit_shadow(light, verts, 64, receivers=receivers[:, :2])
+
+
+# ---- stable directional maps ------------------------------------------------------------
+
+
+def test_stable_map_keeps_its_scale_and_moves_by_whole_texels() -> None:
+    W = 256
+    light = np.array([0.3, 1.0, -0.4, 0.0])
+    rng = np.random.default_rng(4)
+    local = rng.normal(size=(40, 3)) * [1.0, 0.4, 0.7]
+    probe = np.array([0.123, -0.456, 0.789, 1.0])  # a fixed world point
+    scales, positions = [], []
+    for k in range(60):  # a path of small steps: moving and turning
+        a = 0.013 * k
+        R = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+        verts = local @ R.T + [0.0037 * k, 0.0011 * k, -0.002 * k]
+        s = sm.fit_shadow(light, verts, W, stable=True)
+        scales.append(np.linalg.norm(s.blocker_to_clip[0, :3]))
+        positions.append((s.world_to_texture @ probe)[:2] * W)
+        ndc = _ndc(s.blocker_to_clip, verts)
+        assert np.all(np.abs(ndc[:, :2]) <= sm.border_margin(W)[0] + 1e-12)
+    np.testing.assert_allclose(scales, scales[0], rtol=1e-12)  # the scale stays fixed
+    pos = np.array(positions)
+    moves = np.diff(pos, axis=0)
+    np.testing.assert_allclose(moves, np.round(moves), atol=1e-6)  # whole texels
+    assert np.abs(moves).sum() > 0  # and the grid did move
+
+
+def test_stable_point_light_needs_up() -> None:
+    with pytest.raises(ValueError, match="up: stable=True"):
+        sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, stable=True)
+    a = sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, stable=True, up=(0, 1, 0))
+    b = sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, up=(0, 1, 0))
+    np.testing.assert_allclose(a.blocker_to_clip, b.blocker_to_clip)
+
+
+def test_pcf_radius_sets_the_border() -> None:
+    a = sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, pcf_radius=3)
+    b = sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, border_texels=sm.pcf_border_texels(3))
+    np.testing.assert_array_equal(a.blocker_to_clip, b.blocker_to_clip)
+    c = sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, pcf_radius=3, pcf_filter="bilinear")
+    assert float(c.frustum.margin_x) == (64 - 2 * 4) / 64
+    d = sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, pcf_radius=3, border_texels=1)  # explicit wins
+    assert float(d.frustum.margin_x) == 62 / 64
