@@ -45,6 +45,7 @@ MAP_METHODS = ("texture", "depth", "omni", "soft", "radiance")
 DEPTH_BIAS_METHODS = ("depth", "omni", "soft")
 PCF_METHODS = ("depth", "soft")
 AREA_LIGHT_METHODS = ("soft", "radiance")
+DIRECTIONAL_METHODS = ("planar", "depth")
 MAP_OUTPUT_METHODS = ("texture", "depth", "omni")
 APIS = ("opengl", "webgpu")
 DEFAULT_AREA_LIGHT = (1.0, 1.0)
@@ -88,6 +89,8 @@ shadow systems (--method):
             the depth-map shadows of its samples (--pcf, --depth-bias)
   radiance  an area light: Heckbert and Herf's radiance texture per receiver
             (pyramid_to_unit_cube), accumulated over the samples
+  --directional X Y Z replaces the point light with a directional one
+  (parallel rays, an orthographic depth map) for planar and depth.
   An option that does not apply to the chosen system is refused.
 
 output files:
@@ -102,6 +105,7 @@ examples:
   python -m shadowmath --method planar --output planar.png
   python -m shadowmath --method depth --pcf 1 --map-size 512
   python -m shadowmath --method depth --api webgpu
+  python -m shadowmath --method depth --directional -1 2 1.5
   python -m shadowmath --method soft --area-light 1.5 1 --samples 64"""
 
 
@@ -198,6 +202,20 @@ def _check_light(light: NDArray[np.float64]) -> None:
             f"--light {shown}: y = {light[1]:g} puts the light on or below the floor "
             "(the plane y = 0); the scene is lit from y > 0"
         )
+
+
+def _check_direction(direction: NDArray[np.float64]) -> None:
+    """A directional light must shine onto the visible faces of the wall and the floor."""
+    shown = _shown(direction)
+    if not np.all(np.isfinite(direction)):
+        raise _OptionError(f"--directional {shown}: coordinates must be finite")
+    for axis, name, plane in ((2, "z", "wall (the plane z = 0)"), (1, "y", "floor (y = 0)")):
+        if direction[axis] <= 0:
+            raise _OptionError(
+                f"--directional {shown}: the direction points toward the light, and "
+                f"{name} = {direction[axis]:g} puts the light on or behind the {plane}; "
+                f"give {name} > 0"
+            )
 
 
 def _area_light_edges(
@@ -378,10 +396,20 @@ def _parser() -> argparse.ArgumentParser:
         type=float,
         nargs=3,
         metavar=("X", "Y", "Z"),
-        default=DEFAULT_LIGHT,
+        default=None,
         help="the point light's position (an area light's centre), with y > 0 (above "
         "the floor) and z > 0 (in front of the wall) "
         f"(default: {' '.join(map(str, DEFAULT_LIGHT))})",
+    )
+    parser.add_argument(
+        "--directional",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        default=None,
+        help="a directional light instead of --light (parallel rays, like sunlight): the "
+        "direction toward the light, with y > 0 and z > 0; --method planar or depth only "
+        "(default: the point light)",
     )
     parser.add_argument(
         "--method",
@@ -493,6 +521,22 @@ def _check_combinations(args: argparse.Namespace) -> None:
         _OptionError: naming the option, the method, and the methods it applies to.
     """
     method = args.method
+    if args.directional is not None:
+        shown = f"--directional {_shown(args.directional)}"
+        if args.light is not None:
+            raise _OptionError(
+                f"{shown}: give a point light (--light) or a directional one, not both"
+            )
+        if method not in DIRECTIONAL_METHODS:
+            raise _OptionError(
+                f"{shown}: --method {method} takes a point light; directional lights "
+                "are drawn by --method planar or depth"
+            )
+        if args.api == "webgpu":
+            raise _OptionError(
+                f"{shown}: the demo's WebGPU renderer takes a point light; use --api opengl "
+                "(the default) for a directional light"
+            )
     if args.api == "webgpu" and method != "depth":
         raise _OptionError(
             f"--api webgpu: the demo's WebGPU renderer draws --method depth only, not "
@@ -610,7 +654,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     map_size: int | tuple[int, int] = DEFAULT_MAP_SIZE if args.map_size is None else args.map_size
     map_w, map_h = (map_size, map_size) if isinstance(map_size, int) else map_size
     width, height = args.size
-    light = np.asarray(args.light, dtype=np.float64)
+    directional = args.directional is not None
+    light = np.asarray(
+        args.directional if directional else (args.light or DEFAULT_LIGHT), dtype=np.float64
+    )
     pcf = 0 if args.pcf is None else args.pcf
     bias = (
         (DEFAULT_DEPTH_BIAS[0] + 2.0 * pcf, DEFAULT_DEPTH_BIAS[1])
@@ -628,7 +675,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             if args.shadow_map_output is None
             else _png_path("--shadow-map-output", args.shadow_map_output, create=False)
         )
-        _check_light(light)
+        if directional:
+            _check_direction(light)
+        else:
+            _check_light(light)
         edges = _area_light_edges(light, area_size) if area else None
         if edges is not None:
             _check_area_light(light, area_size, edges)
@@ -673,11 +723,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     scene = _Scene(receivers, blocker, camera)
 
     # The light's points that fit a shadow map must see the whole blocker in front.
-    light_text = f"--light {_shown(light)}"
+    light_text = f"--{'directional' if directional else 'light'} {_shown(light)}"
     points: NDArray[np.float64] | None = None
     try:
         setup = _no_map_setup()
-        if method in ("texture", "depth"):
+        if method in ("texture", "depth") and not directional:
             setup = _fit_in_front(
                 light_text, method, "this light", light, mesh, blocker_to_world, map_size
             )
@@ -753,7 +803,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         adapter = wframe.adapter
     else:
         area_light = (
-            Light(light) if edges is None else Light(light, edge_u=edges[0], edge_v=edges[1])
+            Light(direction=light)
+            if directional
+            else Light(light)
+            if edges is None
+            else Light(light, edge_u=edges[0], edge_v=edges[1])
         )
         try:
             frame = render_scene(
@@ -802,13 +856,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"{args.mesh} between a {area_size[0]:g}x{area_size[1]:g} area light centred at "
         f"{where} and a wall"
         if area
+        else f"{args.mesh} between a directional light toward {where} and a wall"
+        if directional
         else f"{args.mesh} between a point light at {where} and a wall"
     )
     bias_text = f"depth bias {bias[0]:g} {bias[1]:g}"
     drawn = {
         "texture": f"Nagy's projective shadow texture from a {map_w}x{map_h} shadow map",
         "planar": "Blinn's planar shadows",
-        "depth": f"Williams' depth shadow map ({map_w}x{map_h}, PCF radius {pcf}, "
+        "depth": f"Williams' depth shadow map ({map_w}x{map_h}"
+        + (", orthographic" if directional else "")
+        + f", PCF radius {pcf}, "
         f"{bias_text}) drawn with "
         + (f"WebGPU on {adapter}, shading composed in NumPy" if webgpu else "OpenGL"),
         "omni": f"an omnidirectional cube depth map (six {map_w}x{map_h} faces, {bias_text})",
@@ -864,7 +922,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         _print_matrix("area light edge_u (W, horizontal)", edges[0])
         _print_matrix("area light edge_v (H, upward)", edges[1])
         _print_matrix(f"area_light_samples (the {samples} light samples)", points)
-    light_h = np.append(light, 1.0)
+    light_h = np.append(light, 0.0 if directional else 1.0)
     for name, plane in (("the wall z = 0", WALL_PLANE), ("the floor y = 0", FLOOR_PLANE)):
         _print_matrix(f"planar_projection onto {name}", planar_projection(plane, light_h))
     sys.stdout.flush()

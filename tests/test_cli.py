@@ -59,6 +59,7 @@ def test_help_is_plain_text_with_every_default(capsys):
         ("--samples", "(default: 16)"),
         ("--seed", "(default: 0)"),
         ("--api", "(default: opengl)"),
+        ("--directional", "(default: the point light)"),
     ]:
         assert default in " ".join(entries[option].split()), option
 
@@ -279,3 +280,86 @@ def test_map_size_beyond_the_driver_limit(capsys, tmp_path):
     err = _error(capsys, ["--size", str(limit + 1), "8", "--output", str(tmp_path / "x.png")])
     assert f"--size {limit + 1} 8" in err
     assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--method", m], f"--directional -1 2 1.5: --method {m} takes a point light")
+        for m in ("texture", "omni", "soft", "radiance")
+    ]
+    + [
+        (["--method", "depth", "--light", "1", "2", "3"], "not both"),
+        (["--method", "depth", "--api", "webgpu"], "WebGPU renderer takes a point light"),
+    ],
+)
+def test_directional_light_is_refused_where_it_does_not_apply(capsys, tmp_path, args, message):
+    err = _error(
+        capsys, [*args, "--directional", "-1", "2", "1.5", "--output", str(tmp_path / "x.png")]
+    )
+    assert message in err
+    assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize(
+    ("direction", "message"),
+    [
+        (["1", "0", "1"], "y = 0 puts the light on or behind the floor"),
+        (["1", "1", "-2"], "z = -2 puts the light on or behind the wall"),
+        (["1", "nan", "1"], "coordinates must be finite"),
+    ],
+)
+def test_directional_light_must_shine_on_the_wall_and_floor(capsys, tmp_path, direction, message):
+    err = _error(
+        capsys,
+        ["--method", "depth", "--directional", *direction, "--output", str(tmp_path / "x.png")],
+    )
+    assert err.split(": error: ")[1].startswith(f"--directional {' '.join(direction)}")
+    assert message in err
+
+
+@pytest.mark.usefixtures("gl")
+def test_directional_light_with_planar_shadows(capsys, tmp_path):
+    from PIL import Image
+
+    out = tmp_path / "planar.png"
+    assert (
+        main(
+            [*SMALL, "--method", "planar", "--directional", "-1", "2", "1.5", "--output", str(out)]
+        )
+        == 0
+    )
+    printed = capsys.readouterr().out
+    first = printed.splitlines()[0]
+    assert "a directional light toward (-1.0, 2.0, 1.5)" in first
+    assert "Blinn's planar shadows" in first
+    # the flattening matrix takes the homogeneous light (x, y, z, 0)
+    from shadowmath import planar_projection
+
+    block = printed.split("planar_projection onto the floor y = 0 =\n")[1].splitlines()[:4]
+    printed_matrix = np.array([line.strip(" []").split() for line in block], dtype=float)
+    expected = planar_projection((0.0, 1.0, 0.0, 0.0), (-1.0, 2.0, 1.5, 0.0))
+    assert np.allclose(printed_matrix, expected)
+    assert np.asarray(Image.open(out)).shape == (32, 48, 3)
+
+
+@pytest.mark.usefixtures("gl")
+def test_directional_light_with_a_depth_map(capsys, tmp_path):
+    from PIL import Image
+
+    out, depth = tmp_path / "depth.png", tmp_path / "map.png"
+    args = ["--method", "depth", "--directional", "-1", "2", "1.5", "--map-size", "64"]
+    assert (
+        main([*SMALL, *args, "--pcf", "1", "--output", str(out), "--shadow-map-output", str(depth)])
+        == 0
+    )
+    printed = capsys.readouterr().out
+    first = printed.splitlines()[0]
+    assert "a directional light toward (-1.0, 2.0, 1.5)" in first
+    assert "depth shadow map (64x64, orthographic, PCF radius 1" in first
+    assert np.asarray(Image.open(out)).shape == (32, 48, 3)
+    assert np.asarray(Image.open(depth)).shape[:2] == (64, 64)
+    # the light's clip matrix is affine: its last printed row is 0 0 0 1
+    block = printed.split("world_to_clip of the light")[1].split("\n\n")[0]
+    rows = [line for line in block.splitlines() if line.strip().startswith("[")]
+    assert np.allclose(np.array(rows[3].strip(" []").split(), dtype=float), [0, 0, 0, 1])
