@@ -164,7 +164,7 @@ def fit_shadow(
     pcf_radius: int | None = None,
     pcf_filter: PcfFilter = "box",
 ) -> ShadowSetup:
-    r"""Nagy's projective shadow texture for one point light and one blocker.
+    r"""Nagy's projective shadow texture for one point or directional light and one blocker.
 
     .. math::
 
@@ -177,27 +177,79 @@ def fit_shadow(
     writes the same products in row-vector order, ``B * W * P``.)
 
     Arguments:
-        light_position: ``(*batch, 3)`` the point light.
+        light_position: ``(*batch, 3)`` a point light, or ``(*batch, 4)`` a
+            homogeneous light ``(x, y, z, w)``: ``w != 0`` the point ``xyz / w``,
+            ``w == 0`` a **directional** light whose ``xyz`` points toward the light.
+            ``w`` is a value (not static under ``jax.jit``): both fits are computed
+            for every entry and selected per entry with ``where``.
         blocker_vertices: ``(*batch, N, 3)`` in the blocker's local coordinates
             (world coordinates when ``blocker_to_world`` is None).
         map_size: ``size`` or ``(width, height)`` of the shadow map in texels.
-        border_texels: texels left empty on each side of the map.
+        border_texels: texels left empty on each side of the map (default 1, or
+            :func:`pcf_border_texels` ``(pcf_radius, pcf_filter)`` when a radius is given).
         blocker_to_world: ``(*batch, 4, 4)`` the blocker's local-to-world placement.
-        margin, near, far: as in :func:`adaptive_frustum`.
+        margin, near, far: as in :func:`adaptive_frustum` (for a directional light,
+            ``near`` and ``far`` are ``z`` in the returned frame, whose origin is
+            placed by the fit: leave them None).
         aim: as in :func:`light_frame` (for ``method="mdv"``).
         method: ``"mdv"`` (default) the article's frame and symmetric frustum;
             ``"optimized"`` the frame and off-centre frustum of
-            :func:`optimize_frustum` (needs JAX; the silhouette fills the map
-            better, it touches the margin on all four sides). The matrices
-            are used the same way either way.
+            :func:`optimize_frustum` (needs JAX; point lights ``(x, y, z)`` without
+            the scene options below).
+        receivers: ``(*batch, M, 3)`` receiver points in world coordinates. The
+            frustum's sides still fit the casters; its depth range (``near``,
+            ``far``) also encloses every receiver point inside the side planes
+            (``|x_ndc|, |y_ndc| <= 1``), so no depth comparison falls outside the
+            map's range. Receivers outside the side planes are not in the map and
+            are lit by it (clamp-to-border); receivers behind a point light
+            (``z <= 0``) are ignored for the range; casters behind it are refused.
+        api: ``"opengl"`` (default), ``"vulkan"``, ``"direct3d"``, ``"metal"`` or
+            ``"webgpu"``: ``blocker_to_clip = C P W B`` and
+            ``world_to_texture = T C P W`` with :func:`api_convention`'s ``C`` and
+            ``T``, so a receiver point samples the texel the caster was drawn
+            into and ``r`` is the depth that API stores.
+        reversed_z: store ``1`` at near and ``0`` at far (see :func:`api_convention`).
+        up: ``(*batch, 3)`` an up hint: light ``Y`` is the part of ``up``
+            perpendicular to ``Z`` (as in a look-at camera) and ``X = Z x Y``, so
+            the frame turns smoothly with the light instead of jumping where
+            Nagy's helper axis switches.
+        stable: for directional lights a shadow that does not shimmer: the
+            extent comes from the blocker's bounding sphere about its vertices'
+            mean (the same as the blocker turns), enlarged by half a texel, and
+            the centre is snapped to whole texels of a grid anchored in world
+            space, so the texels move by whole texels as the blocker or light
+            moves and their size stays fixed. For point lights it means a frame
+            that does not jump: ``up`` is required there.
+        pcf_radius, pcf_filter: the PCF kernel the map will be filtered with:
+            ``border_texels`` defaults to :func:`pcf_border_texels` of them.
 
-    Returns:
-        :class:`ShadowSetup`.
+    Directional fit: ``Z = -normalize(xyz)``, ``X, Y`` from the helper axis (or
+    ``up``); in light coordinates about the blocker's bounding-box centre ``c``
+    the frustum is the box ``[lo_x, hi_x] x [lo_y, hi_y]`` of the vertices
+    (centre ``c_x = (hi_x + lo_x) / 2``, half-width ``R_x = (hi_x - lo_x) / 2``),
+    and the frame's origin is ``c + Z (z_lo - pad)``, ``pad = (z_hi - z_lo) +
+    max(R_x, R_y)``, behind every vertex (and counted receiver), so every ``z > 0``.
+    The projection is orthographic (``frustum.orthographic``):
+
+    .. math::
+
+        P = \begin{bmatrix} s_x & 0 & 0 & -s_x c_x \\ 0 & s_y & 0 & -s_y c_y \\
+            0 & 0 & \frac{2}{f - n} & -\frac{f + n}{f - n} \\ 0 & 0 & 0 & 1 \end{bmatrix},
+        \qquad s_x = \frac{m_x}{R_x}
+
+    so every vertex lies within the margins, some vertex on each of the four
+    (``blocker_to_clip`` is affine: last row ``(0, 0, 0, 1)``).
+
+    The options other than ``pcf_radius`` run on the array path (NumPy or JAX,
+    whole arrays); the compiled loop serves point lights with the default options.
 
     Raises:
         ValueError: everything :func:`light_frame` and :func:`adaptive_frustum`
-            raise, and a non-finite or wrongly shaped ``blocker_to_world``
-            (NaN outputs under JAX transformations).
+            raise, a non-finite or wrongly shaped ``blocker_to_world``, a zero
+            directional light, receivers of the wrong shape or non-finite, an
+            unknown ``api`` (the message lists the valid ones), an ``up`` zero or
+            parallel to the light's direction, ``stable=True`` for a point light
+            without ``up`` (value errors are NaN outputs under JAX transformations).
 
     Example:
         >>> import numpy as np
@@ -206,6 +258,9 @@ def fit_shadow(
         >>> clip = (s.blocker_to_clip @ np.c_[box, np.ones(8)].T).T
         >>> float(np.abs(clip[:, 0] / clip[:, 3]).max().round(6))
         0.98
+        >>> sun = fit_shadow([0.3, 1.0, -0.2, 0.0], box, 100, api="vulkan")  # directional
+        >>> bool(sun.frustum.orthographic), sun.blocker_to_clip[3].tolist()
+        (True, [0.0, 0.0, 0.0, 1.0])
     """
     check_aim(aim)
     if method not in ("mdv", "optimized"):

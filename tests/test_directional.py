@@ -175,7 +175,7 @@ def test_up_frame_is_the_look_at_frame() -> None:
     np.testing.assert_allclose(f.y_axis, y / np.linalg.norm(y), atol=1e-15)
     np.testing.assert_allclose(f.x_axis, np.cross(f.z_axis, f.y_axis), atol=1e-15)
     np.testing.assert_allclose(np.cross(f.x_axis, f.y_axis), -f.z_axis, atol=1e-15)
-    with pytest.raises(ValueError, match="up: .*parallel"):
+    with pytest.raises(ValueError, match=r"up: .*parallel"):
         sm.fit_shadow(light, BOX, 64, up=f.z_axis * 3)
 
 
@@ -248,7 +248,7 @@ def test_webgpu_fit_samples_the_texel_it_drew(reversed_z: bool, light: Any, seed
 
 def test_unknown_api_lists_the_valid_ones() -> None:
     with pytest.raises(
-        ValueError, match="api: .*'opengl', 'vulkan', 'direct3d', 'metal', 'webgpu'"
+        ValueError, match=r"api: .*'opengl', 'vulkan', 'direct3d', 'metal', 'webgpu'"
     ):
         sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, api="gles")  # type: ignore[arg-type]
 
