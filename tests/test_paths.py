@@ -137,10 +137,12 @@ def test_batches_broadcast_the_same_on_both_paths(
 
 
 #: Top-level primitives of the jitted fit of one light and 8 vertices: 552 before the
-#: rewrite (over half of them validation bookkeeping: 7 conversions, 38 checks), 357
-#: after it (of which the value checks are about 40). The bound leaves room for small
-#: changes, not for a second round of validation.
-MAX_FIT_PRIMITIVES = 380
+#: rewrite (over half of them validation bookkeeping: 7 conversions, 38 checks), 434
+#: after it, of which the value checks are about 40 and about 80 are the per-component
+#: slices that let XLA fuse each pass over the vertices into one loop (the 4M-vertex
+#: fit: 315 ms before them, 90 ms after). The bound leaves room for small changes, not
+#: for a second round of validation.
+MAX_FIT_PRIMITIVES = 460
 
 
 def test_jitted_fit_stays_small() -> None:
