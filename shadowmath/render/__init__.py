@@ -17,6 +17,9 @@ does not.
   sampled with ``samplerCubeShadow``; ``method="soft"`` and ``"radiance"`` average
   the hard shadows of an area light's samples (seed 003's depth maps, Heckbert and
   Herf's radiance textures).
+  Lights are points (``Light(position)``), area lights (``edge_u``, ``edge_v``) or,
+  for ``method="planar"`` and ``"depth"``, directional (``Light(direction=...)``,
+  the homogeneous ``(x, y, z, 0)``: parallel rays, an orthographic depth map).
 * :func:`radiance_texture`: Heckbert and Herf's radiance texture of one receiver
   parallelogram, as a NumPy array.
 * moderngl 5 has no stencil state. Where the articles use the stencil buffer

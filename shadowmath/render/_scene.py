@@ -116,8 +116,9 @@ def render_scene(
        a polygon offset of :data:`PLANAR_POLYGON_OFFSET` against z-fighting, and
        skipped for a light on the other side of the plane than the camera (the
        visible face is unlit: Blinn's back-face case). With ``method="depth"``
-       (Williams' shadow z-buffer) one setup per light fits all blockers, its far
-       plane moved out to enclose every body; **every body** (receivers and
+       (Williams' shadow z-buffer) one setup per light fits all blockers, its depth
+       range enclosing every body inside the map's sides (``fit_shadow(...,
+       receivers=)``; orthographic for a directional light); **every body** (receivers and
        blockers) is drawn into a depth texture with ``glPolygonOffset(*depth_bias)``
        and every body is then shadowed by comparing its light depth ``r`` with the
        map (``sampler2DShadow``) over a ``(2k + 1)^2`` box of texels (PCF,
