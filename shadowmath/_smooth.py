@@ -29,6 +29,7 @@ from ._validate import (
     all_finite,
     batch_shape,
     convert,
+    nan_unless,
     non_finite,
     require_last,
 )
@@ -86,8 +87,7 @@ def smooth_max(values: Any, temperature: Any) -> Array:
     checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
     shape = batch_shape(tuple(x.shape[:-1]), tuple(T.shape), names=("values", "temperature"))
     x = xp.broadcast_to(x, (*shape, x.shape[-1]))
-    safe_T = xp.where(T > 0, T, xp.ones_like(T))
-    return checks.poison(xp.broadcast_to(_smooth_max(xp, x, safe_T), shape), 0)
+    return checks.poison(xp.broadcast_to(_smooth_max(xp, x, nan_unless(xp, T > 0, T)), shape), 0)
 
 
 def soft_bounds(
@@ -140,7 +140,7 @@ def _ratio_frustum(
     bounds = None
     if T is not None:
         checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
-        T = xp.where(T > 0, T, xp.ones_like(T))
+        T = nan_unless(xp, T > 0, T)
         bounds = soft_bounds(xp, ext.rx, ext.ry, T, symmetric=symmetric)
     reach = blocker_reach(xp, f.origin, verts)
     return bounded_frustum(ctx, checks, ext, reach, m, n, fa, symmetric=symmetric, bounds=bounds)

@@ -303,3 +303,15 @@ def raise_status(status: Array, messages: Sequence[tuple[int, str]]) -> None:
     """Raise the first failed check of a compiled loop's status words (bits, in check order)."""
     for bit, message in messages:
         _raise_first((status & bit) == 0, message)
+
+
+def nan_unless(xp: ModuleType, ok: Array, x: Array) -> Array:
+    """``x`` where ``ok``, NaN elsewhere, and NaN *derivatives* there too.
+
+    ``where(ok, x, 1)`` would keep the value finite but give the derivative
+    with respect to ``x`` as exactly zero where ``ok`` fails: an optimizer would
+    stall silently at an invalid input. A product carries the NaN into the
+    derivative. Only reached lazily (eagerly the failed check has raised).
+    """
+    nan = xp.asarray(float("nan"), dtype=x.dtype)
+    return x * xp.where(ok, xp.ones_like(x), nan)

@@ -278,6 +278,7 @@ def _jax(tree: Any) -> Any:
 
 def _good_then_bad(case: Case) -> Any:
     """The valid and the invalid arguments stacked into a batch of two."""
+
     return jax.tree_util.tree_map(lambda g, b: jnp.stack([g, b]), _jax(case.good), _jax(case.bad))
 
 
@@ -312,10 +313,12 @@ def test_grad_sees_nan_values_and_keeps_valid_gradients_finite(case: Case) -> No
     def raw(*args: Any) -> Any:
         return sum(jnp.sum(x) for x in _matrix_leaves(case.fn(*args)))
 
-    assert bool(jnp.isnan(jax.value_and_grad(raw)(*_jax(case.bad))[0]))
+    # allow_int: Frustum.orthographic is a boolean leaf (its cotangent is float0).
+    assert bool(jnp.isnan(jax.value_and_grad(raw, allow_int=True)(*_jax(case.bad))[0]))
     stacked = _good_then_bad(case)
-    grads = jax.vmap(jax.grad(loss, argnums=tuple(range(len(case.bad)))))(*stacked)
-    for g in jax.tree_util.tree_leaves(grads):
+    argnums = tuple(range(len(case.bad)))
+    grads = jax.vmap(jax.grad(loss, argnums=argnums, allow_int=True))(*stacked)
+    for g in _float_leaves(grads):
         assert bool(jnp.all(jnp.isfinite(g[0]))), "NaN leaked into a valid entry's gradient"
 
 
@@ -431,3 +434,26 @@ def test_check_finite_under_jit_needs_checkify_and_then_reports() -> None:
     err, setup = checkify.checkify(jax.jit(fitted))(jnp.asarray(LIGHT), jnp.asarray(VERTS))
     assert err.get() is None
     assert bool(jnp.all(jnp.isfinite(setup.blocker_to_clip)))
+
+
+def _float_leaves(tree: Any) -> list[Any]:
+    return [x for x in jax.tree_util.tree_leaves(tree) if jnp.issubdtype(x.dtype, jnp.floating)]
+
+
+@pytest.mark.parametrize("case", VALUE_CASES.values(), ids=VALUE_CASES.keys())
+def test_grad_is_nan_where_the_value_is_nan(case: Case) -> None:
+    """The promise holds for derivatives too: an invalid input never gets a finite gradient.
+
+    (A zero gradient at an invalid configuration would stall an optimizer silently.)
+    """
+    bad = _jax(case.bad)
+
+    def raw(*args: Any) -> Any:
+        return sum(jnp.sum(x) for x in _matrix_leaves(case.fn(*args)))
+
+    value, grads = jax.value_and_grad(raw, argnums=tuple(range(len(bad))), allow_int=True)(*bad)
+    assert bool(jnp.isnan(value))
+    leaves = _float_leaves(grads)
+    assert leaves
+    for g in leaves:
+        assert bool(jnp.any(jnp.isnan(g))), "a finite gradient at an invalid input"
