@@ -12,6 +12,7 @@ for its border, near >= far, near <= 0, bad frames, frusta and placements.
 from __future__ import annotations
 
 import re
+import sys
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -151,6 +152,16 @@ VALUE_CASES = {
         lambda f, v, n: sm.adaptive_frustum(f, v, 64, near=n),
         (FRAME, VERTS, np.array(0.0)), (FRAME, VERTS, np.array(0.5)),
         ("near:", "near > 0"),
+    ),
+    "frustum: near inside the blocker": Case(
+        lambda f, v, n: sm.adaptive_frustum(f, v, 64, near=n),
+        (FRAME, VERTS, np.array(8.0)), (FRAME, VERTS, np.array(0.5)),
+        ("near:", "cuts into the blocker"),
+    ),
+    "fit_shadow: far inside the blocker": Case(
+        lambda L, V, fa: sm.fit_shadow(L, V, 64, far=fa),
+        (LIGHT, VERTS, np.array(8.0)), (LIGHT, VERTS, np.array(40.0)),
+        ("far:", "cuts into the blocker"),
     ),
     "frustum: near >= far": Case(
         lambda f, v, n, fa: sm.adaptive_frustum(f, v, 64, near=n, far=fa),
@@ -457,3 +468,9 @@ def test_grad_is_nan_where_the_value_is_nan(case: Case) -> None:
     assert leaves
     for g in leaves:
         assert bool(jnp.any(jnp.isnan(g))), "a finite gradient at an invalid input"
+
+
+def test_optimized_fit_without_jax_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "jax", None)  # as if JAX were not installed
+    with pytest.raises(ImportError, match=re.escape("pip install 'shadowmath[jax]'")):
+        sm.fit_shadow(LIGHT, VERTS, 64, method="optimized")
