@@ -123,6 +123,40 @@ def run(cfg: Config) -> Section:
         )
     )
 
+    # The depth-map system's functions (issue 10): a directional fit with receivers, and PCF.
+    floor = np.stack(np.meshgrid(np.linspace(-5, 5, 8), [-2.0], np.linspace(0, 10, 8)), -1)
+    floor = floor.reshape(-1, 3)
+    sun = np.array([0.3, 1.0, -0.2, 0.0])
+    t = measure(
+        lambda: sm.fit_shadow(sun, box8[0], MAP_SIZE, receivers=floor),
+        repeats=reps,
+        min_time=fast,
+    )
+    rows.append(
+        Row(
+            "fit_shadow, directional light, 8 casters + 64 receiver points, NumPy float64",
+            t,
+            "PyGLM lookAt + perspective, bounding sphere",
+            glm8,
+        )
+    )
+    rng = np.random.default_rng(cfg.seed)
+    depth_map = rng.uniform(0.2, 1.0, (MAP_SIZE, MAP_SIZE))
+    count = cfg.size(10_000, 16)
+    coords, depths = rng.uniform(0, 1, (count, 2)), rng.uniform(0.2, 1.0, count)
+    cols = np.minimum((coords[:, 0] * MAP_SIZE).astype(int), MAP_SIZE - 1)
+    rows_ = np.minimum((coords[:, 1] * MAP_SIZE).astype(int), MAP_SIZE - 1)
+    base = measure(lambda: depths <= depth_map[rows_, cols], repeats=reps, min_time=fast)
+    t = measure(lambda: sm.pcf(depth_map, coords, depths, radius=1), repeats=reps, min_time=fast)
+    rows.append(
+        Row(
+            f"pcf, {count:,} lookups, 3x3 box, {MAP_SIZE}² map, NumPy float64",
+            t,
+            "the same lookups unfiltered (one texel each, NumPy indexing)",
+            base,
+        )
+    )
+
     # Eager JAX on concrete arrays (no jit by the caller).
     import jax.numpy as jnp
 
