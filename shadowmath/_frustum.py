@@ -413,7 +413,8 @@ def projection_entries(xp: ModuleType, fr: Frustum) -> tuple[Array, ...]:
         )  # fmt: skip
     # Orthographic entries (every field finite, far > near: both branches are finite,
     # so selecting with where keeps derivatives finite too).
-    inv = 1.0 / (fr.far - fr.near)
+    depth = fr.far - fr.near
+    inv = 1.0 / xp.where(depth > 0, depth, xp.ones_like(depth))  # bad entries: poisoned
     oa, ob = 2.0 * inv, -(fr.far + fr.near) * inv
     if isinstance(ortho, bool | np.bool_):
         return (
