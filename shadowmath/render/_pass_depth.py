@@ -31,6 +31,26 @@ def depth_bias(pcf_radius: int) -> tuple[float, float]:
     return factor + 2.0 * pcf_radius, units
 
 
+def pcf_radius_option(pcf_radius: object) -> int:
+    """A pass's ``pcf_radius`` option, checked: an int ``>= 0``."""
+    if not isinstance(pcf_radius, int | np.integer) or pcf_radius < 0:
+        raise ValueError(f"pcf_radius: expected an int >= 0, got {pcf_radius!r}")
+    return int(pcf_radius)
+
+
+def depth_bias_option(bias: object, pcf_radius: int) -> tuple[float, float]:
+    """A pass's ``depth_bias`` option, checked: finite ``(factor, units)``, or the default."""
+    if bias is None:
+        return depth_bias(pcf_radius)
+    try:
+        b = tuple(float(v) for v in bias)  # type: ignore[attr-defined]
+    except (TypeError, ValueError):
+        b = ()
+    if len(b) != 2 or not all(np.isfinite(b)):
+        raise ValueError(f"depth_bias: expected finite (factor, units), got {bias!r}")
+    return b[0], b[1]
+
+
 def fit_depth(
     receivers: Sequence[Prepared],
     blockers: Sequence[Prepared],
@@ -170,15 +190,8 @@ class DepthPass:
     """
 
     def __init__(self, pcf_radius: int = 0, bias: tuple[float, float] | None = None) -> None:
-        if not isinstance(pcf_radius, int | np.integer) or pcf_radius < 0:
-            raise ValueError(f"pcf_radius: expected an int >= 0, got {pcf_radius!r}")
-        self.pcf_radius = int(pcf_radius)
-        if bias is None:
-            bias = depth_bias(self.pcf_radius)
-        b = tuple(float(v) for v in bias)
-        if len(b) != 2 or not all(np.isfinite(b)):
-            raise ValueError(f"depth_bias: expected finite (factor, units), got {bias!r}")
-        self.bias = (b[0], b[1])
+        self.pcf_radius = pcf_radius_option(pcf_radius)
+        self.bias = depth_bias_option(bias, self.pcf_radius)
 
     def check(self, receivers: Sequence[Prepared]) -> None:
         pass

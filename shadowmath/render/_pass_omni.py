@@ -13,7 +13,7 @@ from shadowmath._cube import cube_face_projection, cube_face_views
 from shadowmath._setup import ShadowSetup
 
 from ._context import program, set_matrix, set_uniform
-from ._pass_depth import depth_bias
+from ._pass_depth import depth_bias_option
 from ._resources import GpuScene, Prepared, PreparedLight
 
 #: The near plane as a fraction of the far plane: bodies nearer the light than this (along
@@ -118,12 +118,7 @@ class OmniPass:
     """
 
     def __init__(self, bias: tuple[float, float] | None = None) -> None:
-        if bias is None:
-            bias = depth_bias(0)
-        b = tuple(float(v) for v in bias)
-        if len(b) != 2 or not all(np.isfinite(b)):
-            raise ValueError(f"depth_bias: expected finite (factor, units), got {bias!r}")
-        self.bias = (b[0], b[1])
+        self.bias = depth_bias_option(bias, 0)
 
     def check(self, receivers: Sequence[Prepared]) -> None:
         pass

@@ -22,7 +22,7 @@ from shadowmath._setup import ShadowSetup
 from shadowmath._soft import area_light_samples, pyramid_to_unit_cube
 
 from ._context import image_size, program, resolve_context, set_matrix, set_uniform
-from ._pass_depth import depth_bias, fit_depth, world_to_light_clip
+from ._pass_depth import depth_bias_option, fit_depth, pcf_radius_option, world_to_light_clip
 from ._resources import (
     Body,
     GpuMesh,
@@ -285,15 +285,8 @@ class SoftPass:
     ) -> None:
         self.samples = check_samples(samples)
         self.seed = seed
-        if not isinstance(pcf_radius, int | np.integer) or pcf_radius < 0:
-            raise ValueError(f"pcf_radius: expected an int >= 0, got {pcf_radius!r}")
-        self.pcf_radius = int(pcf_radius)
-        if bias is None:
-            bias = depth_bias(self.pcf_radius)
-        b = tuple(float(v) for v in bias)
-        if len(b) != 2 or not all(np.isfinite(b)):
-            raise ValueError(f"depth_bias: expected finite (factor, units), got {bias!r}")
-        self.bias = (b[0], b[1])
+        self.pcf_radius = pcf_radius_option(pcf_radius)
+        self.bias = depth_bias_option(bias, self.pcf_radius)
 
     def check(self, receivers: Sequence[Prepared]) -> None:
         pass
