@@ -47,6 +47,7 @@ from ._validate import (
     non_finite,
     raise_recorded,
     raise_status,
+    recorded_jit,
     require_last,
     require_matrix,
     require_vertices,
@@ -351,7 +352,7 @@ def _fit_scene(
                     f"map_size: stable=True needs more than one texel inside the border "
                     f"along {name} (got {mm * size:g})"
                 )
-    _scene_batch_shape(light, verts, B, n, f, R, U)
+    _batch_shape(light, verts, B, n, f, R, U)
     if opts.stable and U is None and not opts.homogeneous:
         raise ValueError(STABLE_NEEDS_UP)
     if ctx.is_jax and not ctx.lazy:
@@ -398,15 +399,16 @@ def scene_fit(
     )
 
 
-def _scene_batch_shape(
+def _batch_shape(
     light: Array,
     verts: Array,
     B: Array | None,
     near: Array | None,
     far: Array | None,
-    R: Array | None,
-    U: Array | None,
+    R: Array | None = None,
+    U: Array | None = None,
 ) -> tuple[int, ...]:
+    """The broadcast batch shape of ``fit_shadow``'s arguments (checks ``B``'s shape)."""
     if B is not None:
         require_matrix("blocker_to_world", B)
     named = [("light_position", light.shape[:-1]), ("blocker_vertices", verts.shape[:-2])]
@@ -421,60 +423,28 @@ def _scene_batch_shape(
 def _jitted_scene(
     m: tuple[float, float], aim: str, opts: SceneOptions, absent: tuple[bool, ...]
 ) -> tuple[Any, list[str]]:
-    """:func:`scene_fit` under ``jax.jit`` for concrete JAX input (as :func:`_jitted_fit`)."""
-    import jax
-    import jax.numpy as jnp
+    """:func:`scene_fit` under ``jax.jit`` for concrete JAX input (``absent``: cache key)."""
 
-    del absent  # part of the cache key: one trace per set of absent arguments
-    messages: list[str] = []
+    def core(ctx: Context, checks: Checks, *a: Array) -> ShadowSetup:
+        light, verts, B, near, far, R, U = a
+        return scene_fit(ctx, checks, light, verts, B, near, far, R, U, m, aim, opts)
 
-    def run(
-        light: Any, verts: Any, B: Any, near: Any, far: Any, R: Any, U: Any
-    ) -> tuple[ShadowSetup, Any]:
-        ctx = Context(jnp, light.dtype, lazy=True, is_jax=True)
-        checks = Checks(ctx, mode="record")
-        setup = scene_fit(ctx, checks, light, verts, B, near, far, R, U, m, aim, opts)
-        shape = setup.frustum.near.shape
-        messages[:] = [message for message, _ in checks.recorded]
-        bad = jnp.stack([jnp.broadcast_to(b, shape) for _, b in checks.recorded])
-        return setup, bad
-
-    return jax.jit(run), messages
-
-
-def _batch_shape(
-    light: Array, verts: Array, B: Array | None, near: Array | None, far: Array | None
-) -> tuple[int, ...]:
-    if B is not None:
-        require_matrix("blocker_to_world", B)
-    named = [("light_position", light.shape[:-1]), ("blocker_vertices", verts.shape[:-2])]
-    named += [("blocker_to_world", B.shape[:-2])] if B is not None else []
-    named += [(name, v.shape) for name, v in (("near", near), ("far", far)) if v is not None]
-    return batch_shape(*(s for _, s in named), names=[name for name, _ in named])
+    return recorded_jit(core, _batch_of)
 
 
 @functools.cache
 def _jitted_fit(m: tuple[float, float], aim: str, *absent: bool) -> tuple[Any, list[str]]:
-    """``fit_core`` under ``jax.jit`` for concrete JAX input, recording its failed checks.
+    """:func:`fit_core` under ``jax.jit`` for concrete JAX input (``absent``: cache key)."""
 
-    One per set of static options and absent (None) arguments, so that every
-    trace of it records the same checks in the same order.
-    """
-    import jax
-    import jax.numpy as jnp
+    def core(ctx: Context, checks: Checks, *a: Array) -> ShadowSetup:
+        light, verts, B, near, far = a
+        return fit_core(ctx, checks, light, verts, B, m, near, far, aim)
 
-    messages: list[str] = []
+    return recorded_jit(core, _batch_of)
 
-    def run(light: Any, verts: Any, B: Any, near: Any, far: Any) -> tuple[ShadowSetup, Any]:
-        ctx = Context(jnp, light.dtype, lazy=True, is_jax=True)
-        checks = Checks(ctx, mode="record")
-        setup = fit_core(ctx, checks, light, verts, B, m, near, far, aim)
-        shape = setup.frustum.near.shape
-        messages[:] = [message for message, _ in checks.recorded]
-        bad = jnp.stack([jnp.broadcast_to(b, shape) for _, b in checks.recorded])
-        return setup, bad
 
-    return jax.jit(run), messages
+def _batch_of(setup: ShadowSetup) -> tuple[int, ...]:
+    return tuple(setup.frustum.near.shape)
 
 
 # The compiled loop's status bits and the array path's messages, in check order.

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from types import ModuleType
 from typing import Any, Literal, TypeAlias
 
@@ -315,3 +315,32 @@ def nan_unless(xp: ModuleType, ok: Array, x: Array) -> Array:
     """
     nan = xp.asarray(float("nan"), dtype=x.dtype)
     return x * xp.where(ok, xp.ones_like(x), nan)
+
+
+def recorded_jit(
+    core: Callable[..., Any], batch_of: Callable[[Any], tuple[int, ...]]
+) -> tuple[Any, list[str]]:
+    """``core(ctx, checks, *arrays)`` under ``jax.jit`` for concrete JAX input.
+
+    The checks run in ``"record"`` mode: the jitted function returns the result
+    and a ``(checks, *batch)`` mask of failures (``batch_of(result)`` is the
+    batch shape), and the messages, known at trace time, fill the returned list.
+    Call :func:`raise_recorded` on them: one host sync, the eager error. Cache
+    one per set of static options and absent (None) arguments, so that every
+    trace records the same checks in the same order.
+    """
+    import jax
+    import jax.numpy as jnp
+
+    messages: list[str] = []
+
+    def run(*arrays: Any) -> tuple[Any, Any]:
+        ctx = Context(jnp, arrays[0].dtype, lazy=True, is_jax=True)
+        checks = Checks(ctx, mode="record")
+        result = core(ctx, checks, *arrays)
+        shape = batch_of(result)
+        messages[:] = [message for message, _ in checks.recorded]
+        bad = jnp.stack([jnp.broadcast_to(b, shape) for _, b in checks.recorded])
+        return result, bad
+
+    return jax.jit(run), messages
