@@ -14,6 +14,7 @@ from __future__ import annotations
 import operator
 from typing import Any
 
+from ._bias import _texel_size_on_surface
 from ._frustum import Frustum, _texels, frustum_arrays
 from ._validate import (
     Array,
@@ -25,7 +26,7 @@ from ._validate import (
     require_last,
     require_matrix,
 )
-from ._vector import cross, dot
+from ._vector import dot
 
 
 def cross_section_area(frustum: Frustum) -> Array:
@@ -144,15 +145,8 @@ def receiver_texel_size(
         tuple(n.shape[:-1]),
         names=("world_to_texture", "points", "normals"),
     )
-    hom = M[..., :3] @ p[..., None] + M[..., 3:]  # (*batch, 4, 1)
-    q = hom[..., 3, 0]
+    q = xp.sum(M[..., 3, :3] * p, axis=-1) + M[..., 3, 3]
     checks.require(q > 0, "points: a receiver point is behind the light (q <= 0)")
-    safe_q = xp.where(q > 0, q, xp.ones_like(q))
-    s, t = hom[..., 0, 0] / safe_q, hom[..., 1, 0] / safe_q
-    m3 = M[..., 3, :3]
-    grad_s = (M[..., 0, :3] - s[..., None] * m3) / safe_q[..., None]
-    grad_t = (M[..., 1, :3] - t[..., None] * m3) / safe_q[..., None]
-    safe_n_sq = xp.where(n_sq > 0, n_sq, xp.ones_like(n_sq))
-    det = xp.abs(dot(xp, cross(xp, grad_s, grad_t), n)) / xp.sqrt(safe_n_sq)
-    size = 1 / xp.sqrt(W * H * det)
+    unit_n = n / xp.sqrt(n_sq)[..., None]
+    size = _texel_size_on_surface(xp, M, p, unit_n, W, H)
     return checks.poison(xp.broadcast_to(size, shape), 0)
