@@ -29,9 +29,13 @@ engines' conventions are on ``docs/cube-maps.md``.
 
 from __future__ import annotations
 
+import functools
+import math
 import operator
 from types import ModuleType
 from typing import Any, NamedTuple
+
+import numpy as np
 
 from ._conventions import GraphicsApi, _check_api
 from ._validate import (
@@ -107,14 +111,91 @@ class CubeFaceDepth(NamedTuple):
 # ------------------------------------------------------------------ helpers
 
 
-def _stack_matrix(xp: ModuleType, entries: list[Array], shape: tuple[int, ...]) -> Array:
-    """A ``(*shape, 4, 4)`` matrix from 16 row-major entries (arrays or scalars)."""
-    full = [xp.broadcast_to(e, shape) for e in entries]
-    return xp.reshape(xp.stack(full, axis=-1), (*shape, 4, 4))
+@functools.cache
+def _view_constants(dtype: np.dtype[Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(A, index, sign)``, read-only: ``V = A + L[..., index] * sign`` for a light ``L``.
+
+    ``A`` (``(6, 4, 4)``, in ``dtype``) is each face's ``[[R, 0], [0, 1]]``; the
+    translation ``-R L`` of its last column is one signed component of ``L`` per
+    row (``R`` is a signed permutation), which ``index`` picks and ``sign``
+    (``-R``'s nonzero entry there, ``0`` elsewhere) scales: exact, and no matmul
+    (a JAX matmul may round float32 operands on GPU and TPU).
+    """
+    R = np.asarray(_FACE_ROTATIONS, dtype=np.float64)  # (6, 3, 3)
+    component = np.argmax(np.abs(R), axis=-1)  # (6, 3)
+    A = np.zeros((6, 4, 4))
+    A[:, :3, :3] = R
+    A[:, 3, 3] = 1
+    index = np.zeros((6, 4, 4), dtype=np.intp)
+    index[:, :3, 3] = component
+    sign = np.zeros((6, 4, 4))
+    sign[:, :3, 3] = -np.take_along_axis(R, component[..., None], axis=-1)[..., 0]
+    constants = (A.astype(dtype), index, sign.astype(dtype))
+    for c in constants:
+        c.flags.writeable = False
+    return constants
+
+
+@functools.cache
+def _rotation_constant(dtype: np.dtype[Any]) -> np.ndarray:
+    R = np.asarray(_FACE_ROTATIONS, dtype=dtype)
+    R.flags.writeable = False
+    return R
 
 
 def _rotations(xp: ModuleType, dtype: Any) -> Array:
-    return xp.asarray(_FACE_ROTATIONS, dtype=dtype)  # (6, 3, 3)
+    return xp.asarray(_rotation_constant(np.dtype(dtype)))  # (6, 3, 3)
+
+
+@functools.lru_cache(maxsize=64)
+def _projection_constants(
+    dtype: np.dtype[Any], scale: float, flip_y: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(P0, at_a, at_b)``, read-only: the projection with a zero depth row, and the
+    masks of that row's entries ``a`` (``[2, 2]``) and ``b`` (``[2, 3]``)."""
+    P0 = np.zeros((4, 4), dtype=dtype)
+    P0[0, 0] = scale
+    P0[1, 1] = -scale if flip_y else scale
+    P0[3, 2] = -1
+    at_a = np.zeros((4, 4), dtype=bool)
+    at_a[2, 2] = True
+    at_b = np.zeros((4, 4), dtype=bool)
+    at_b[2, 3] = True
+    constants = (P0, at_a, at_b)
+    for c in constants:
+        c.flags.writeable = False
+    return constants
+
+
+def _require_finite(checks: Checks, x: Array, trailing: int, name: str) -> None:
+    """``checks.require(all_finite(...))``, after one whole-array test for eager NumPy.
+
+    Only an array that fails the test pays for the per-entry check, which names
+    the first bad batch index. (``count_nonzero``: ``.all()`` costs microseconds
+    more on a light's three numbers.)
+    """
+    eager_numpy = checks.mode == "raise" and type(x) is np.ndarray
+    if eager_numpy and np.count_nonzero(np.isfinite(x)) == x.size:
+        return
+    checks.require(all_finite(checks.ctx.xp, x, trailing), non_finite(name))
+
+
+_SCALAR_TYPES: dict[type, Any] = {float: np.float64, np.float64: np.float64, np.float32: np.float32}
+
+
+def _numpy_scalar(value: object) -> Any:
+    """A Python float, a NumPy float32/float64 scalar or a 0-d array of one, as a
+    NumPy scalar of its dtype (what :func:`convert` would make of it); else ``None``."""
+    kind = _SCALAR_TYPES.get(type(value))
+    if kind is not None:
+        return kind(value)
+    if (
+        type(value) is np.ndarray
+        and value.ndim == 0
+        and value.dtype.type in (np.float32, np.float64)
+    ):
+        return value[()]
+    return None
 
 
 def _select_face(xp: ModuleType, face: Array, candidates: Array) -> Array:
@@ -145,13 +226,26 @@ def _check_near_far(checks: Checks, xp: ModuleType, near: Array, far: Array) -> 
 
 
 def _cube_face_views(xp: ModuleType, light: Array) -> Array:
-    R = _rotations(xp, light.dtype)  # (6, 3, 3)
-    # R has entries 0 and +-1, so -R @ light is exact (a signed permutation).
-    translation = -xp.sum(R * light[..., None, None, :], axis=-1)  # (*batch, 6, 3)
-    shape = translation.shape[:-1]
-    top = xp.concat([xp.broadcast_to(R, (*shape, 3, 3)), translation[..., None]], axis=-1)
-    bottom = xp.broadcast_to(xp.asarray([0, 0, 0, 1], dtype=light.dtype), (*shape, 1, 4))
-    return xp.concat([top, bottom], axis=-2)
+    A, index, sign = _view_constants(light.dtype)
+    if xp is not np:
+        A, sign = xp.asarray(A), xp.asarray(sign)
+    return A + light[..., index] * sign  # (*batch, 6, 4, 4)
+
+
+def _depth_row(near: Array, far: Array, zero_to_one: bool, reversed_z: bool) -> tuple[Array, Array]:
+    """The depth row ``(0, 0, a, b)`` of the projection: clip ``z = a z_v + b``, ``w = -z_v = D``.
+
+    Plain arithmetic: ``near, far`` may be arrays or NumPy scalars.
+    """
+    n, f = near, far
+    span = f - n
+    if zero_to_one and reversed_z:  # depth n (f - D) / ((f - n) D): 1 at near, 0 at far
+        return n / span, f * n / span
+    if zero_to_one:  # depth f (D - n) / ((f - n) D): 0 at near, 1 at far
+        return -f / span, -f * n / span
+    if reversed_z:  # NDC +1 at near, -1 at far
+        return (f + n) / span, 2 * f * n / span
+    return -(f + n) / span, -2 * f * n / span  # glFrustum: NDC -1 at near, +1 at far
 
 
 def _cube_face_projection(
@@ -163,23 +257,21 @@ def _cube_face_projection(
     flip_y: bool,
     reversed_z: bool,
 ) -> Array:
-    n, f = near, far
-    span = f - n
-    if zero_to_one and reversed_z:  # depth n (f - D) / ((f - n) D): 1 at near, 0 at far
-        a, b = n / span, f * n / span
-    elif zero_to_one:  # depth f (D - n) / ((f - n) D): 0 at near, 1 at far
-        a, b = -f / span, -f * n / span
-    elif reversed_z:  # NDC +1 at near, -1 at far
-        a, b = (f + n) / span, 2 * f * n / span
-    else:  # glFrustum: NDC -1 at near, +1 at far
-        a, b = -(f + n) / span, -2 * f * n / span
-    zero = xp.zeros_like(a)
-    sx = zero + scale
-    sy = zero + (-scale if flip_y else scale)
-    w = zero - 1
-    shape = tuple(a.shape)
-    rows = [sx, zero, zero, zero, zero, sy, zero, zero, zero, zero, a, b, zero, zero, w, zero]
-    return _stack_matrix(xp, rows, shape)
+    """``(*batch, 4, 4)`` from ``(*batch,)`` arrays ``near, far``."""
+    a, b = _depth_row(near, far, zero_to_one, reversed_z)
+    P0, at_a, at_b = (xp.asarray(c) for c in _projection_constants(a.dtype, scale, flip_y))
+    # where, not P0 + a * mask: b overflows to inf for an extreme far * near, and inf * 0 is NaN.
+    return xp.where(at_a, a[..., None, None], xp.where(at_b, b[..., None, None], P0))
+
+
+def _cube_face_projection_scalar(
+    near: Any, far: Any, scale: float, zero_to_one: bool, flip_y: bool, reversed_z: bool
+) -> Array:
+    """:func:`_cube_face_projection` of one light's NumPy scalars, entry by entry."""
+    a, b = _depth_row(near, far, zero_to_one, reversed_z)
+    sy = -scale if flip_y else scale
+    entries = (scale, 0, 0, 0, 0, sy, 0, 0, 0, 0, a, b, 0, 0, -1, 0)
+    return np.array(entries, dtype=a.dtype).reshape(4, 4)
 
 
 def _cube_face(xp: ModuleType, d: Array) -> tuple[Array, Array, Array]:
@@ -253,11 +345,10 @@ def cube_face_views(light_position: Any) -> Array:
         array([ 0.,  0., -1.,  1.])
     """
     ctx, (light,) = convert(light_position=light_position)
-    xp = ctx.xp
     require_last("light_position", light, 3, hint="a point light is (x, y, z)")
     checks = Checks(ctx)
-    checks.require(all_finite(xp, light, 1), non_finite("light_position"))
-    return checks.poison(_cube_face_views(xp, light), 3)
+    _require_finite(checks, light, 1, "light_position")
+    return checks.poison(_cube_face_views(ctx.xp, light), 3)
 
 
 def cube_face_projection(
@@ -335,13 +426,19 @@ def cube_face_projection(
             f"border_texels: a border of {border} texels on each side leaves no inner "
             f"texel of a {size}-texel face (need 2 * border_texels < map_size)"
         )
+    scale = (size - 2 * border) / size
+    n, f = _numpy_scalar(near), _numpy_scalar(far)
+    if n is not None and type(n) is type(f) and math.isfinite(n) and math.isfinite(f) and 0 < n < f:
+        # One light's NumPy scalars that pass the checks below: no conversion to
+        # arrays, no per-check round trips. Anything else, failures included
+        # (which the checks below report), takes the general path.
+        return _cube_face_projection_scalar(n, f, scale, zero_to_one, flip_y, reversed_z)
     ctx, (n, f) = convert(near=near, far=far)
     xp = ctx.xp
     shape = batch_shape(tuple(n.shape), tuple(f.shape), names=("near", "far"))
     n, f = xp.broadcast_to(n, shape), xp.broadcast_to(f, shape)
     checks = Checks(ctx)
     _check_near_far(checks, xp, n, f)
-    scale = (size - 2 * border) / size
     P = _cube_face_projection(xp, n, f, scale, zero_to_one, flip_y, reversed_z)
     return checks.poison(P, 2)
 
@@ -407,7 +504,7 @@ def cube_face(directions: Any) -> CubeFaceCoords:
     xp = ctx.xp
     require_last("directions", d, 3, hint="a direction is (x, y, z)")
     checks = Checks(ctx)
-    checks.require(all_finite(xp, d, 1), non_finite("directions"))
+    _require_finite(checks, d, 1, "directions")
     checks.require(
         xp.any(d != 0, axis=-1),
         "directions: a direction is zero (the point is at the light); it selects no face",
@@ -519,8 +616,8 @@ def cube_face_depth(
         names=("light_position", "points", "near", "far"),
     )
     checks = Checks(ctx)
-    checks.require(all_finite(xp, light, 1), non_finite("light_position"))
-    checks.require(all_finite(xp, p, 1), non_finite("points"))
+    _require_finite(checks, light, 1, "light_position")
+    _require_finite(checks, p, 1, "points")
     _check_near_far(checks, xp, n, f)
     r = p - light
     checks.require(

@@ -216,6 +216,14 @@ def test_views_are_look_at_cameras_with_the_specified_target_and_up(
     np.testing.assert_array_equal(sm.cube_face_views(np.zeros(3))[face, :3, :3], look_at)
 
 
+def test_a_batch_of_lights_gives_each_light_its_own_views(to: Any, dtype: Any) -> None:
+    lights = np.random.default_rng(4).normal(size=(2, 3, 3)) * 10
+    V = sm.cube_face_views(to(lights))
+    assert V.shape == (2, 3, 6, 4, 4) and V.dtype == dtype
+    for i in np.ndindex(lights.shape[:-1]):
+        np.testing.assert_array_equal(V[i], sm.cube_face_views(to(lights[i])))
+
+
 # ------------------------------------------------------------------ projection
 
 
@@ -315,6 +323,45 @@ def test_depth_matches_the_api_conventions_but_y_follows_the_cube_map_table(
     assert P[1, 1] == (-P_gl[1, 1] if flip else P_gl[1, 1])
     if api == "vulkan":
         assert converted[1, 1] == -P[1, 1]  # the 2D-map convention would mirror the face
+
+
+@pytest.mark.parametrize("api", APIS)
+@pytest.mark.parametrize("reversed_z", [False, True])
+def test_a_batch_of_near_far_gives_each_pair_its_own_projection(
+    to: Any, dtype: Any, api: str, reversed_z: bool
+) -> None:
+    near, far = np.array([[0.05], [0.5], [3.0]]), np.array([10.0, 300.0])
+    kw: dict[str, Any] = {"map_size": 100, "border_texels": 3, "api": api, "reversed_z": reversed_z}
+    P = sm.cube_face_projection(to(near), to(far), **kw)
+    assert P.shape == (3, 2, 4, 4) and P.dtype == dtype
+    for i, j in np.ndindex(3, 2):
+        np.testing.assert_array_equal(
+            P[i, j], sm.cube_face_projection(to(near[i, 0]), to(far[j]), **kw)
+        )
+
+
+@pytest.mark.parametrize(
+    ("near", "far", "dtype"),
+    [
+        (0.5, 20.0, np.float64),
+        (np.float64(0.5), 20.0, np.float64),
+        (np.float32(0.5), np.float32(20.0), np.float32),
+        (np.asarray(0.5, np.float32), np.asarray(20.0, np.float32), np.float32),
+        (np.float32(0.5), 20.0, np.float64),  # float32 with float64 promotes, as everywhere
+        (np.float16(0.5), np.float16(20.0), np.float32),
+        (1, 20, np.float64),
+    ],
+)
+def test_scalar_near_far_give_numpy_in_their_dtype_equal_to_the_batched_result(
+    near: Any, far: Any, dtype: Any
+) -> None:
+    """One light's scalars (the per-frame case) give what a batch of one gives."""
+    for api in APIS:
+        kw: dict[str, Any] = {"map_size": 64, "border_texels": 1, "api": api}
+        P = sm.cube_face_projection(near, far, **kw)
+        assert type(P) is np.ndarray and P.shape == (4, 4) and P.dtype == dtype
+        one = [np.full(1, x, dtype=np.result_type(x)) for x in (near, far)]
+        np.testing.assert_array_equal(P, sm.cube_face_projection(*one, **kw)[0])
 
 
 @given(
@@ -451,6 +498,15 @@ def test_gradients_match_finite_differences() -> None:
     np.testing.assert_allclose(g, fd, rtol=1e-7, atol=1e-9)
 
 
+def test_the_views_derivative_is_minus_the_rotation_in_the_translation_column() -> None:
+    light = jnp.asarray([0.3, -1.2, 2.5])
+    J = np.asarray(jax.jacobian(sm.cube_face_views)(light))  # (6, 4, 4, 3)
+    R = np.asarray(sm.cube_face_views(light))[:, :3, :3]
+    expected = np.zeros((6, 4, 4, 3))
+    expected[:, :3, 3, :] = -R
+    np.testing.assert_array_equal(J, expected)
+
+
 def test_bad_values_give_nan_under_jit_never_a_finite_wrong_result() -> None:
     d = jnp.asarray([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
     r = jax.jit(sm.cube_face)(d)
@@ -478,3 +534,11 @@ def test_float32_stays_float32_with_jax() -> None:
     assert r.s.dtype == jnp.float32 and r.face.dtype == jnp.int32
     assert sm.cube_face_views(d[0]).dtype == jnp.float32
     assert sm.cube_face_direction(r.face, r.s, r.t).dtype == jnp.float32
+
+
+def test_jax_scalar_near_far_give_jax_in_their_dtype() -> None:
+    n, f = jnp.asarray(0.5, dtype=jnp.float32), jnp.asarray(9.0, dtype=jnp.float32)
+    P = sm.cube_face_projection(n, f, map_size=8)
+    assert isinstance(P, jax.Array) and P.dtype == jnp.float32
+    P = sm.cube_face_projection(jnp.asarray(0.5), 9.0, map_size=8)  # a mix gives JAX
+    assert isinstance(P, jax.Array) and P.dtype == jnp.float64
