@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shadowmath.__main__ import BUILT_IN_MESHES, main
+from shadowmath.cli import main
+from shadowmath.cli._options import BUILT_IN_MESHES
 from tests.render.conftest import gl as gl  # the shared GL fixture (skips or fails)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -188,7 +189,9 @@ def test_area_light_must_stay_above_the_floor_and_before_the_wall(capsys, tmp_pa
 
 
 def test_area_light_edges_face_the_blocker():
-    from shadowmath.__main__ import BLOCKER_CENTRE, DEFAULT_LIGHT, _area_light_edges
+    from shadowmath.cli._build import BLOCKER_CENTRE
+    from shadowmath.cli._build import area_light_edges as _area_light_edges
+    from shadowmath.cli._options import DEFAULT_LIGHT
 
     light = np.array(DEFAULT_LIGHT)
     edge_u, edge_v = _area_light_edges(light, (1.5, 0.5))
@@ -363,3 +366,45 @@ def test_directional_light_with_a_depth_map(capsys, tmp_path):
     block = printed.split("world_to_clip of the light")[1].split("\n\n")[0]
     rows = [line for line in block.splitlines() if line.strip().startswith("[")]
     assert np.allclose(np.array(rows[3].strip(" []").split(), dtype=float), [0, 0, 0, 1])
+
+
+def test_console_script_runs_the_cli():
+    import tomllib
+
+    import shadowmath.__main__
+    import shadowmath.cli
+
+    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    module, name = scripts["shadowmath"].split(":")
+    assert module == "shadowmath.__main__"
+    assert getattr(shadowmath.__main__, name) is shadowmath.cli.main
+
+
+@pytest.mark.parametrize("text", ["2", "3", "4", "3x2", "2x3", "3x3", "0x10", "-4", "512x256"])
+def test_map_size_follows_the_library_border_rule(text):
+    """--map-size accepts exactly the sizes border_margin accepts with fit_shadow's border."""
+    import argparse
+
+    from shadowmath import border_margin
+    from shadowmath.cli._options import MAP_BORDER_TEXELS, map_size_arg
+
+    values = [int(v) for v in text.split("x")]
+    size = values[0] if len(values) == 1 else tuple(values)
+    try:
+        border_margin(size, border_texels=MAP_BORDER_TEXELS)
+    except ValueError:
+        with pytest.raises(argparse.ArgumentTypeError, match="sizes >= 3"):
+            map_size_arg(text)
+    else:
+        assert map_size_arg(text) == size
+
+
+@pytest.mark.usefixtures("gl")
+def test_map_too_small_for_the_pcf_border_is_an_option_error(capsys, tmp_path):
+    # The renderer's depth map keeps 1 + K empty texels on each side: K = 1 needs 5 texels.
+    out = tmp_path / "x.png"
+    err = _error(
+        capsys, [*SMALL, "--method", "depth", "--pcf", "1", "--map-size", "4", "--output", str(out)]
+    )
+    assert "4x4" in err
+    assert not out.exists()

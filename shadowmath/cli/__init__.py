@@ -1,0 +1,62 @@
+"""``python -m shadowmath``: render the article's Figure 5.8.1 scene and print its matrices.
+
+A torus (or any mesh) between a light and a wall, above a floor, drawn
+offscreen with the reference renderer (:mod:`shadowmath.render`, the
+``render`` extra) by one of its shadow systems (``--method``) and saved as a
+PNG. Every error about the user's options goes through ``argparse``'s
+``parser.error`` (exit status 2) and names the option; a missing OpenGL
+context, WebGPU adapter or renderer extra exits with status 1.
+
+The layers, each a client of the public API (``import shadowmath as sm``,
+:mod:`shadowmath.meshes`, :mod:`shadowmath.render`):
+
+* ``_options``: the parser, the option checks and their messages, :class:`Options`.
+* ``_build``: the scene from the options: light checks, blocker mesh, bodies, fits.
+* ``_run``: the device and its limits, the render, the files and the printout.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+from ._build import build_scene, check_light_and_mesh, fit_light
+from ._options import OptionError, build_parser, resolve_options
+from ._run import (
+    UnavailableError,
+    check_limits,
+    open_device,
+    print_matrices,
+    render,
+    require_renderer,
+    write_outputs,
+)
+
+__all__ = ["main"]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the demo with ``argv`` (default ``sys.argv[1:]``); returns the exit status.
+
+    Errors in the options exit through ``SystemExit(2)`` with a message on stderr;
+    a missing renderer, OpenGL context or WebGPU adapter through ``SystemExit(1)``.
+    """
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        options = resolve_options(args)
+        geometry = check_light_and_mesh(options)
+        require_renderer()
+        scene = build_scene(options, geometry)
+        fit = fit_light(options, geometry)
+        device = open_device(options)
+        check_limits(options, device)
+        rendered = render(options, scene, fit, device)
+    except OptionError as err:
+        parser.error(str(err))
+    except UnavailableError as err:
+        parser.exit(1, f"{parser.prog}: {err}\n")
+    write_outputs(options, rendered)
+    print_matrices(options, scene, fit, rendered)
+    sys.stdout.flush()
+    return 0

@@ -1,0 +1,550 @@
+"""The demo's command line: the ``argparse`` parser, the option checks, the resolved options.
+
+:func:`build_parser` declares every option with its help text and its value
+checks (the ``type=`` functions, whose messages ``argparse`` prefixes with
+``argument --option:``). :func:`resolve_options` fills in the defaults and
+refuses combinations that the chosen ``--method`` and ``--api`` would ignore
+and output paths that cannot be written, raising :class:`OptionError`; the
+other layers read the resulting :class:`Options`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal, cast
+
+import numpy as np
+from numpy.typing import NDArray
+
+import shadowmath as sm
+from shadowmath import meshes
+
+#: A shadow system of ``--method`` (the ``method`` of ``render_scene``).
+Method = Literal["texture", "planar", "depth", "omni", "soft", "radiance"]
+
+#: ``--method``'s shadow systems, and the options that apply to each.
+METHODS: tuple[Method, ...] = ("texture", "planar", "depth", "omni", "soft", "radiance")
+DEPTH_BIAS_METHODS = ("depth", "omni", "soft")
+PCF_METHODS = ("depth", "soft")
+AREA_LIGHT_METHODS = ("soft", "radiance")
+DIRECTIONAL_METHODS = ("planar", "depth")
+MAP_OUTPUT_METHODS = ("texture", "depth", "omni")
+APIS = ("opengl", "webgpu")
+
+DEFAULT_LIGHT = (-2.2, 3.6, 6.0)
+DEFAULT_MAP_SIZE = 256
+DEFAULT_IMAGE_SIZE = (640, 400)
+#: The default picture; its folder is the only one the demo creates when missing.
+DEFAULT_OUTPUT = Path("out/shadow.png")
+DEFAULT_AREA_LIGHT = (1.0, 1.0)
+DEFAULT_SAMPLES = 16
+DEFAULT_SEED = 0
+#: The renderer's default polygon offset of a depth map, ``(2.5 + 2 k, 4)`` for PCF radius k.
+DEFAULT_DEPTH_BIAS = (2.5, 4.0)
+#: The empty border of ``fit_shadow``'s map (its default ``border_texels``): a
+#: ``--map-size`` must leave room inside it, the rule of :func:`shadowmath.border_margin`.
+MAP_BORDER_TEXELS = 1
+
+#: The built-in blockers, by the name ``--mesh`` takes.
+BUILT_IN_MESHES: dict[str, Callable[[], meshes.Mesh]] = {
+    "torus": meshes.torus,
+    "box": lambda: meshes.box((1.4, 1.0, 0.6)),
+    "sphere": lambda: meshes.sphere(0.8),
+    "bar": lambda: meshes.bar(2.6, 0.12),
+}
+
+DESCRIPTION = """\
+Render the scene of Nagy's Figure 5.8.1 offscreen and print the matrices it was
+drawn with: a blocker (a torus by default) between a light and a wall, above a
+floor, shadowed by one of the reference renderer's shadow systems. The wall is
+the plane z = 0 (the scene lies at z > 0), the floor the plane y = 0 (the scene
+lies at y > 0). Needs the 'render' extra (moderngl) and an OpenGL 3.3 context
+through EGL (Mesa's llvmpipe is enough); --api webgpu needs a WebGPU adapter
+through wgpu (Mesa's Vulkan llvmpipe is enough)."""
+
+EPILOG = f"""\
+shadow systems (--method):
+  texture   Nagy's projective shadow texture: the blocker's silhouette map
+            projected onto the receivers (fit_shadow, world_to_texture)
+  planar    Blinn's planar projection of the blocker onto the wall and the
+            floor (planar_projection), no shadow map
+  depth     Williams' shadow z-buffer: every body's depth from the light,
+            compared per pixel (--pcf, --depth-bias; --api webgpu draws it
+            with WebGPU instead of OpenGL)
+  omni      a point light shining every way: a cube depth map of six faces
+            (cube_face_views, cube_face_projection; --depth-bias)
+  soft      an area light (--area-light, --samples, --seed): the average of
+            the depth-map shadows of its samples (--pcf, --depth-bias)
+  radiance  an area light: Heckbert and Herf's radiance texture per receiver
+            (pyramid_to_unit_cube), accumulated over the samples
+  --directional X Y Z replaces the point light with a directional one
+  (parallel rays, an orthographic depth map) for planar and depth.
+  An option that does not apply to the chosen system is refused.
+
+output files:
+  The picture goes to --output (default {DEFAULT_OUTPUT}). The default folder
+  '{DEFAULT_OUTPUT.parent}' is created when missing; any other folder, of --output
+  or --shadow-map-output, must exist already (the demo does not create folders
+  you name). Every file written is reported with its full path.
+
+examples:
+  python -m shadowmath --mesh bar --light 2 4 6
+  python -m shadowmath --mesh model.obj --map-size 512x256 --shadow-map-output map.png
+  python -m shadowmath --method planar --output planar.png
+  python -m shadowmath --method depth --pcf 1 --map-size 512
+  python -m shadowmath --method depth --api webgpu
+  python -m shadowmath --method depth --directional -1 2 1.5
+  python -m shadowmath --method soft --area-light 1.5 1 --samples 64"""
+
+
+class OptionError(ValueError):
+    """A problem with the user's options, told in terms of those options.
+
+    :func:`shadowmath.cli.main` reports it through ``parser.error`` (exit status 2).
+    """
+
+
+def shown(values: Any) -> str:
+    """Numbers as the user typed them: ``-2.2 3.6 6`` (``%g``, space-separated)."""
+    return " ".join(f"{float(c):g}" for c in np.ravel(values))
+
+
+def point(values: Any) -> str:
+    """A computed point for messages: ``(0.50, 1.70, -0.52)``, two decimals, no ``-0.00``."""
+    return "(" + ", ".join(f"{float(c):.2f}" for c in np.round(values, 2) + 0.0) + ")"
+
+
+def map_size_arg(text: str) -> int | tuple[int, int]:
+    """``--map-size``: ``256`` or ``512x256``, with room inside the map's border.
+
+    The sizes must pass :func:`shadowmath.border_margin` with the border of
+    ``fit_shadow`` (:data:`MAP_BORDER_TEXELS`): at least ``2 b + 1 = 3`` texels per axis.
+    """
+    smallest = 2 * MAP_BORDER_TEXELS + 1
+    parts = text.lower().split("x")
+    try:
+        values = [int(p) for p in parts]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected N or WxH, got {text!r}") from None
+    too_small = argparse.ArgumentTypeError(
+        f"expected N or WxH with sizes >= {smallest}, got {text!r}"
+    )
+    if len(values) not in (1, 2):
+        raise too_small
+    size = values[0] if len(values) == 1 else (values[0], values[1])
+    try:
+        sm.border_margin(size, border_texels=MAP_BORDER_TEXELS)
+    except ValueError:
+        raise too_small from None
+    return size
+
+
+def positive_int(text: str) -> int:
+    """``--samples``, ``--size``: an integer ``>= 1``."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def non_negative_int(text: str) -> int:
+    """``--pcf``, ``--seed``: an integer ``>= 0``."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
+def finite_float(text: str) -> float:
+    """``--depth-bias``: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not np.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """``--area-light``: a finite number ``> 0``."""
+    value = finite_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The demo's parser (``prog`` ``python -m shadowmath``), its options in help order."""
+    parser = argparse.ArgumentParser(
+        prog="python -m shadowmath",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_scene_arguments(parser)
+    _add_map_arguments(parser)
+    _add_area_light_arguments(parser)
+    _add_output_arguments(parser)
+    return parser
+
+
+def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--mesh``, ``--light``, ``--directional`` and ``--method``."""
+    parser.add_argument(
+        "--mesh",
+        default="torus",
+        metavar="NAME_OR_FILE",
+        help=f"the blocker: a built-in mesh ({', '.join(BUILT_IN_MESHES)}) or a mesh "
+        "file (.obj; .stl, .ply, .glb, .off and more with the 'mesh' extra), centred "
+        "and scaled to the torus's size (default: torus)",
+    )
+    parser.add_argument(
+        "--light",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        default=None,
+        help="the point light's position (an area light's centre), with y > 0 (above "
+        "the floor) and z > 0 (in front of the wall) "
+        f"(default: {' '.join(map(str, DEFAULT_LIGHT))})",
+    )
+    parser.add_argument(
+        "--directional",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        default=None,
+        help="a directional light instead of --light (parallel rays, like sunlight): the "
+        "direction toward the light, with y > 0 and z > 0; --method planar or depth only "
+        "(default: the point light)",
+    )
+    parser.add_argument(
+        "--method",
+        choices=METHODS,
+        default="texture",
+        help="the shadow system, one of texture, planar, depth, omni, soft, radiance "
+        "(see 'shadow systems' below) (default: texture)",
+    )
+
+
+def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--map-size``, ``--pcf`` and ``--depth-bias``."""
+    parser.add_argument(
+        "--map-size",
+        type=map_size_arg,
+        default=None,
+        metavar="N_OR_WxH",
+        help="the shadow map's size in texels, N (square) or WxH, at most the driver's "
+        "maximum texture size: the silhouette map (texture), the depth map (depth, and "
+        "each sample's in soft), each cube face (omni: square only), each receiver's "
+        f"radiance texture (radiance); not with planar (default: {DEFAULT_MAP_SIZE})",
+    )
+    parser.add_argument(
+        "--pcf",
+        type=non_negative_int,
+        default=None,
+        metavar="K",
+        help="percentage-closer filtering: each depth comparison averaged over a "
+        "(2K+1)x(2K+1) box of texels; --method depth or soft only (the omni pass "
+        "samples one cube-map texel) (default: 0, no filtering)",
+    )
+    parser.add_argument(
+        "--depth-bias",
+        type=finite_float,
+        nargs=2,
+        metavar=("FACTOR", "UNITS"),
+        default=None,
+        help="the depth map's polygon offset against shadow acne, glPolygonOffset(FACTOR, "
+        "UNITS): FACTOR times each caster triangle's depth slope plus UNITS depth steps; "
+        "--method depth, omni or soft (WebGPU rounds UNITS to an integer) "
+        f"(default: {DEFAULT_DEPTH_BIAS[0]:g}+2K {DEFAULT_DEPTH_BIAS[1]:g}, "
+        "K the --pcf radius)",
+    )
+
+
+def _add_area_light_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--area-light``, ``--samples`` and ``--seed``."""
+    parser.add_argument(
+        "--area-light",
+        type=positive_float,
+        nargs=2,
+        metavar=("W", "H"),
+        default=None,
+        help="a W x H rectangular light centred on --light and facing the blocker: both "
+        "edges perpendicular to the direction from the light to the blocker, W horizontal "
+        "and H upward; --method soft or radiance only (default: "
+        f"{shown(DEFAULT_AREA_LIGHT)} with those methods)",
+    )
+    parser.add_argument(
+        "--samples",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="how many points of the area light cast hard shadows, stratified and "
+        "jittered (area_light_samples); --method soft or radiance only "
+        f"(default: {DEFAULT_SAMPLES})",
+    )
+    parser.add_argument(
+        "--seed",
+        type=non_negative_int,
+        default=None,
+        metavar="S",
+        help="the seed of the samples' jitter; --method soft or radiance only "
+        f"(default: {DEFAULT_SEED})",
+    )
+
+
+def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--api``, ``--size``, ``--output`` and ``--shadow-map-output``."""
+    parser.add_argument(
+        "--api",
+        choices=APIS,
+        default="opengl",
+        help="the graphics API that draws the shadows: opengl (moderngl through EGL) or "
+        "webgpu (wgpu; --method depth only, with WebGPU's depth and texture conventions) "
+        "(default: opengl)",
+    )
+    parser.add_argument(
+        "--size",
+        type=positive_int,
+        nargs=2,
+        metavar=("W", "H"),
+        default=DEFAULT_IMAGE_SIZE,
+        help="the picture's size in pixels (default: "
+        f"{DEFAULT_IMAGE_SIZE[0]} {DEFAULT_IMAGE_SIZE[1]})",
+    )
+    parser.add_argument(
+        "--output",
+        type=Path,
+        default=None,
+        metavar="FILE.png",
+        help=f"the picture to write (default: {DEFAULT_OUTPUT}); its folder must exist",
+    )
+    parser.add_argument(
+        "--shadow-map-output",
+        type=Path,
+        default=None,
+        metavar="FILE.png",
+        help="also write the shadow map, t upward: the silhouette (texture), the depth "
+        "map (depth; near dark, far light, white where nothing was drawn) or the six "
+        "cube faces +X -X +Y -Y +Z -Z side by side (omni); its folder must exist "
+        "(default: not written)",
+    )
+
+
+def check_combinations(args: argparse.Namespace) -> None:
+    """Refuse every option that the chosen ``--method`` and ``--api`` would ignore.
+
+    Raises:
+        OptionError: naming the option, the method, and the methods it applies to.
+    """
+    _check_directional(args)
+    _check_api_and_map(args)
+    _check_method_options(args)
+
+
+def _check_directional(args: argparse.Namespace) -> None:
+    """``--directional``: not with ``--light``, only for planar and depth, only on OpenGL."""
+    if args.directional is None:
+        return
+    given = f"--directional {shown(args.directional)}"
+    if args.light is not None:
+        raise OptionError(f"{given}: give a point light (--light) or a directional one, not both")
+    if args.method not in DIRECTIONAL_METHODS:
+        raise OptionError(
+            f"{given}: --method {args.method} takes a point light; directional lights "
+            "are drawn by --method planar or depth"
+        )
+    if args.api == "webgpu":
+        raise OptionError(
+            f"{given}: the demo's WebGPU renderer takes a point light; use --api opengl "
+            "(the default) for a directional light"
+        )
+
+
+def _check_api_and_map(args: argparse.Namespace) -> None:
+    """``--api webgpu`` draws depth only; ``--map-size`` and ``--shadow-map-output`` need a map."""
+    method = args.method
+    if args.api == "webgpu" and method != "depth":
+        raise OptionError(
+            f"--api webgpu: the demo's WebGPU renderer draws --method depth only, not "
+            f"--method {method}; use --api opengl (the default) for {method}"
+        )
+    if method == "planar" and args.map_size is not None:
+        raise OptionError("--map-size: --method planar draws no shadow map; leave --map-size out")
+    if method == "omni" and isinstance(args.map_size, tuple) and len(set(args.map_size)) > 1:
+        w, h = args.map_size
+        raise OptionError(
+            f"--map-size {w}x{h}: --method omni's cube faces are square; give one size, "
+            f"e.g. --map-size {max(w, h)}"
+        )
+    if args.shadow_map_output is not None and method not in MAP_OUTPUT_METHODS:
+        why = {
+            "planar": "--method planar draws no shadow map to write",
+            "soft": "--method soft draws one depth map per light sample and writes none",
+            "radiance": "--method radiance draws a texture per receiver and writes none",
+        }[method]
+        raise OptionError(
+            f"--shadow-map-output: {why} (it writes the map of --method texture, depth or omni)"
+        )
+
+
+def _check_method_options(args: argparse.Namespace) -> None:
+    """``--pcf``, ``--depth-bias`` and the area light's options, each with its methods."""
+    method = args.method
+    if args.pcf is not None and method not in PCF_METHODS:
+        why = (
+            "the omni pass samples one cube-map texel per comparison"
+            if method == "omni"
+            else f"--method {method} compares no depths"
+        )
+        raise OptionError(
+            f"--pcf {args.pcf}: {why}; percentage-closer filtering applies to "
+            "--method depth or soft"
+        )
+    if args.depth_bias is not None and method not in DEPTH_BIAS_METHODS:
+        raise OptionError(
+            f"--depth-bias {shown(args.depth_bias)}: --method {method} draws no depth "
+            "map; the bias applies to --method depth, omni or soft"
+        )
+    for option, value in (
+        ("--area-light", args.area_light),
+        ("--samples", args.samples),
+        ("--seed", args.seed),
+    ):
+        if value is not None and method not in AREA_LIGHT_METHODS:
+            raise OptionError(
+                f"{option} {shown(value)}: --method {method} lights from a point; an area "
+                "light and its samples need --method soft or radiance"
+            )
+
+
+def png_path(option: str, path: Path, *, create: bool) -> Path:
+    """``path`` resolved, after checking that a PNG can be written there.
+
+    Raises:
+        OptionError: not a ``.png`` name, a folder, or in a folder that does not
+            exist (and may not be created).
+    """
+    if path.suffix.lower() != ".png":
+        raise OptionError(f"{option} {path}: expected a file name ending in .png")
+    if path.is_dir():
+        raise OptionError(f"{option} {path}: is a folder; give a file name ending in .png")
+    folder = path.parent
+    if not folder.is_dir() and not create:
+        raise OptionError(
+            f"{option} {path}: the folder {folder} does not exist; create it first "
+            "(the demo creates only its default folder)"
+        )
+    return path.resolve()
+
+
+@dataclass(frozen=True, eq=False)
+class Options:
+    """The parsed options with their defaults filled in and their combinations checked.
+
+    Attributes:
+        method: the shadow system (``--method``).
+        webgpu: ``--api webgpu`` (else OpenGL).
+        mesh: ``--mesh`` as given: a built-in name or a file.
+        light: ``(3,)`` the point light's position or area light's centre, or the
+            direction toward a directional light.
+        directional: ``light`` is ``--directional``'s direction.
+        map_size: ``--map-size`` as parsed: ``N`` or ``(W, H)``.
+        image_size: ``--size``, ``(W, H)`` in pixels.
+        pcf: the PCF radius ``K``.
+        bias: the depth map's polygon offset ``(factor, units)``.
+        area_size: the area light's ``(W, H)`` (read by soft and radiance only).
+        samples, seed: the area light's samples and their jitter seed.
+        output: the picture's resolved path.
+        map_output: the shadow map's resolved path, or None.
+        default_output: ``--output`` was not given: create its folder if missing.
+    """
+
+    method: Method
+    webgpu: bool
+    mesh: str
+    light: NDArray[np.float64]
+    directional: bool
+    map_size: int | tuple[int, int]
+    image_size: tuple[int, int]
+    pcf: int
+    bias: tuple[float, float]
+    area_size: tuple[float, float]
+    samples: int
+    seed: int
+    output: Path
+    map_output: Path | None
+    default_output: bool
+
+    @property
+    def map_texels(self) -> tuple[int, int]:
+        """The shadow map's ``(width, height)`` in texels."""
+        size = self.map_size
+        return (size, size) if isinstance(size, int) else size
+
+    @property
+    def area(self) -> bool:
+        """The method lights from an area light (soft, radiance)."""
+        return self.method in AREA_LIGHT_METHODS
+
+    @property
+    def light_option(self) -> str:
+        """The light as an option, for messages: ``--light X Y Z`` or ``--directional X Y Z``."""
+        return f"--{'directional' if self.directional else 'light'} {shown(self.light)}"
+
+
+def resolve_options(args: argparse.Namespace) -> Options:
+    """The :class:`Options` of ``parser.parse_args``'s result, defaults filled in.
+
+    Checks, in this order, the combinations (:func:`check_combinations`), then
+    ``--output`` and ``--shadow-map-output`` (:func:`png_path`).
+
+    Raises:
+        OptionError: the first problem found.
+    """
+    directional = args.directional is not None
+    pcf = 0 if args.pcf is None else args.pcf
+    bias = (
+        (DEFAULT_DEPTH_BIAS[0] + 2.0 * pcf, DEFAULT_DEPTH_BIAS[1])
+        if args.depth_bias is None
+        else (float(args.depth_bias[0]), float(args.depth_bias[1]))
+    )
+    area_w, area_h = args.area_light or DEFAULT_AREA_LIGHT
+    check_combinations(args)
+    output = png_path("--output", args.output or DEFAULT_OUTPUT, create=args.output is None)
+    map_output = (
+        None
+        if args.shadow_map_output is None
+        else png_path("--shadow-map-output", args.shadow_map_output, create=False)
+    )
+    width, height = args.size
+    return Options(
+        method=cast(Method, args.method),
+        webgpu=args.api == "webgpu",
+        mesh=args.mesh,
+        light=np.asarray(
+            args.directional if directional else (args.light or DEFAULT_LIGHT), dtype=np.float64
+        ),
+        directional=directional,
+        map_size=DEFAULT_MAP_SIZE if args.map_size is None else args.map_size,
+        image_size=(width, height),
+        pcf=pcf,
+        bias=bias,
+        area_size=(area_w, area_h),
+        samples=DEFAULT_SAMPLES if args.samples is None else args.samples,
+        seed=DEFAULT_SEED if args.seed is None else args.seed,
+        output=output,
+        map_output=map_output,
+        default_output=args.output is None,
+    )
