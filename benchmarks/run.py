@@ -2,11 +2,18 @@
 
 Sections (``--only NAME``, repeatable or comma-separated):
 
-* ``single``: one ``fit_shadow`` (8, 1,000, 100,000 vertices), ``planar_projection``, a
-  receiver's texture matrix, eager JAX, ``import shadowmath`` and the first fit in a fresh
-  process; baselines PyGLM ``lookAt`` + ``perspective`` and the one-line NumPy planar matrix.
-* ``batch``: 100,000 fits of 8-vertex blockers, NumPy and jitted JAX, float32 and float64,
-  against a Python loop of PyGLM.
+* ``single``: one ``fit_shadow`` (8, 1,000, 100,000 vertices), ``planar_projection``, a cube
+  map's ``cube_face_views`` + ``cube_face_projection``, a receiver's texture matrix, eager JAX,
+  ``import shadowmath`` and the first fit in a fresh process (point and directional, the disk
+  cache warm; the first process in the note); baselines PyGLM ``lookAt`` + ``perspective`` and
+  the one-line NumPy planar matrix.
+* ``options``: every light and option of ``fit_shadow`` on one 8-vertex blocker (point ``xyz``,
+  ``xyzw``, ``up``; directional, with receivers and ``stable``, ``api="vulkan"``,
+  ``reversed_z``), with the ``fast`` extra against PyGLM (``perspective`` or ``ortho``) and
+  with NumPy alone (compiled loop disabled) against a hand-written NumPy fit.
+* ``batch``: 100,000 point fits of 8-vertex blockers, NumPy and jitted JAX, float32 and
+  float64, and 1,000 directional fits with receivers and ``stable=True``, against a Python
+  loop of PyGLM.
 * ``large``: one 4M-vertex float32 blocker against one flat ``sum`` of the array.
 * ``derivatives``: the jitted gradient of the fitting objective against its forward pass;
   ``optimize_frustum`` on 1,000 and 500,000 vertices and on a batch of 100 blockers.
@@ -15,9 +22,9 @@ Sections (``--only NAME``, repeatable or comma-separated):
 
 Each prints a Markdown table: median (with its repeat count), the baseline measured in the
 same process, ratio = median / baseline median, the issue's target and an informational
-PASS/MISS. ``--json PATH`` writes every figure; ``--tiny`` runs each benchmark once at a
-tiny size (what ``tests/test_benchmarks.py`` does: the figures must exist, nothing is said
-about time).
+PASS/MISS; the run ends with every target on one line. ``--json PATH`` writes every figure
+(and the targets); ``--tiny`` runs each benchmark once at a tiny size (what
+``tests/test_benchmarks.py`` does: the figures must exist, nothing is said about time).
 """
 
 from __future__ import annotations
@@ -37,7 +44,7 @@ from typing import Any
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from speed import SECTIONS
-from speed._timing import Config, Section, table
+from speed._timing import Config, Section, table, target_line, targets
 
 
 def _version(dist: str) -> str:
@@ -114,9 +121,15 @@ def _names(only: list[str] | None) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description=(__doc__ or "").splitlines()[0],
-        epilog="Benchmarks: " + ", ".join(SECTIONS),
+        epilog=(__doc__ or "").split("\n", 1)[-1].strip(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("--only", action="append", metavar="NAME", help="run these only")
+    parser.add_argument(
+        "--only",
+        action="append",
+        metavar="NAME",
+        help="run these only (repeatable or comma-separated: " + ", ".join(SECTIONS) + ")",
+    )
     parser.add_argument("--tiny", action="store_true", help="each once, at a tiny size")
     parser.add_argument("--json", metavar="PATH", help="write every figure to PATH")
     parser.add_argument("--seed", type=int, default=2026)
@@ -144,8 +157,16 @@ def main(argv: list[str] | None = None) -> int:
         sections[name] = section
         print(table(section))
         print(f"\n({name}: {time.perf_counter() - t0:.1f} s)\n", flush=True)
+    goals = targets(sections)
+    print("## Targets\n")
+    print("\n".join(target_line(name, row) for name, row in goals) or "(none measured)")
+    print(f"\n{sum(r.status == 'PASS' for _, r in goals)} of {len(goals)} targets met{tiny}\n")
     if args.json:
-        out = {"environment": env, "benchmarks": {n: s.to_json() for n, s in sections.items()}}
+        out = {
+            "environment": env,
+            "benchmarks": {n: s.to_json() for n, s in sections.items()},
+            "targets": [{"benchmark": n, **r.to_json()} for n, r in goals],
+        }
         with open(args.json, "w") as f:
             json.dump(out, f, indent=2)
             f.write("\n")

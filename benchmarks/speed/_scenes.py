@@ -96,3 +96,79 @@ def glm_fit(light: Any, vertices: list[Any], aspect: float = 1.0) -> Any:
     fov = 2.0 * math.asin(min(radius / dist, 1.0))
     proj = glm.perspective(fov, aspect, max(dist - radius, 1e-3 * dist), dist + radius)
     return proj * view
+
+
+def glm_ortho_fit(direction: Any, vertices: list[Any]) -> Any:
+    """The directional baseline: ``lookAt`` along ``-direction`` + ``ortho`` on the bounding sphere.
+
+    ``direction`` (a ``vec3``) points toward the light. The sphere is found as in
+    :func:`glm_fit` (two Python loops); the camera stands one diameter up-light
+    of its centre, and the box just contains the sphere.
+    """
+    import glm
+
+    lo = glm.vec3(vertices[0])
+    hi = glm.vec3(vertices[0])
+    for v in vertices:
+        lo = glm.min(lo, v)
+        hi = glm.max(hi, v)
+    centre = (lo + hi) * 0.5
+    radius = 0.0
+    for v in vertices:
+        radius = max(radius, glm.distance(v, centre))
+    d = glm.normalize(direction)
+    up = glm.vec3(0.0, 1.0, 0.0)
+    if abs(d.y) > 0.99:
+        up = glm.vec3(1.0, 0.0, 0.0)
+    view = glm.lookAt(centre + d * (2.0 * radius), centre, up)
+    proj = glm.ortho(-radius, radius, -radius, radius, radius, 3.0 * radius)
+    return proj * view
+
+
+# (direction, up) of the six cube-map faces, +X, -X, +Y, -Y, +Z, -Z (OpenGL's table).
+CUBE_FACES = (
+    ((1.0, 0.0, 0.0), (0.0, -1.0, 0.0)),
+    ((-1.0, 0.0, 0.0), (0.0, -1.0, 0.0)),
+    ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+    ((0.0, -1.0, 0.0), (0.0, 0.0, -1.0)),
+    ((0.0, 0.0, 1.0), (0.0, -1.0, 0.0)),
+    ((0.0, 0.0, -1.0), (0.0, -1.0, 0.0)),
+)
+
+
+def glm_cube(light: Any, near: float, far: float) -> tuple[Any, list[Any]]:
+    """A cube shadow map's matrices in PyGLM: one 90° ``perspective`` and six ``lookAt``."""
+    import glm
+
+    proj = glm.perspective(0.5 * math.pi, 1.0, near, far)
+    views = [glm.lookAt(light, light + glm.vec3(d), glm.vec3(up)) for d, up in CUBE_FACES]
+    return proj, views
+
+
+# ---------------------------------------------------------------------------
+# Directional lights and receivers
+# ---------------------------------------------------------------------------
+
+SUN = np.array([0.3, 1.0, -0.2, 0.0])
+"""The directional light of the single-call benchmarks: ``(x, y, z, 0)``, toward the light."""
+
+
+def suns(n: int, seed: int, dtype: Any = np.float64) -> np.ndarray:
+    """``(n, 4)`` directional lights ``(x, y, z, 0)`` from random directions in the upper half."""
+    rng = np.random.default_rng(seed)
+    d = rng.standard_normal((n, 3))
+    d[:, 1] = np.abs(d[:, 1]) + 0.5
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    return np.concatenate([d, np.zeros((n, 1))], axis=-1).astype(dtype)
+
+
+def floor(points: int, *, y: float = -4.0, half: float = 20.0) -> np.ndarray:
+    """``(4 + points**2, 3)`` receivers: a square floor's 4 corners and a grid of points on it.
+
+    Below every blocker of :func:`boxes` (centres within ``[-2, 2]``, reach below 1.8).
+    """
+    corners = [[x, y, z] for x in (-half, half) for z in (-half, half)]
+    g = np.linspace(-0.5 * half, 0.5 * half, points)
+    gx, gz = np.meshgrid(g, g)
+    grid = np.stack([gx.ravel(), np.full(gx.size, y), gz.ravel()], axis=-1)
+    return np.concatenate([np.asarray(corners), grid])

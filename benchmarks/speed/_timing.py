@@ -10,6 +10,7 @@ that NumPy timings carry no synchronisation overhead.
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import json
 import math
@@ -17,7 +18,7 @@ import os
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -107,6 +108,22 @@ def synced(fn: Callable[..., object], *args: object) -> Callable[[], object]:
 def once(fn: Callable[[], object]) -> Timing:
     """One timed call (a first call, compilation included)."""
     return Timing(_sample(fn, 1), 1, 1)
+
+
+@contextlib.contextmanager
+def numpy_alone() -> Iterator[None]:
+    """NumPy input runs the array path within the block, as without the ``fast`` extra."""
+    from shadowmath import _kernels
+
+    with _kernels.disabled():
+        yield
+
+
+def fast_extra() -> bool:
+    """Whether the ``fast`` extra's compiled loops are there (Numba, not ``SHADOWMATH_NUMBA=0``)."""
+    from shadowmath import _kernels
+
+    return _kernels.available()
 
 
 # ---------------------------------------------------------------------------
@@ -241,6 +258,23 @@ def table(section: Section) -> str:
         lines.append("")
         lines.append(f"ERROR: {section.error}")
     return "\n".join(lines)
+
+
+def target_line(section: str, row: Row) -> str:
+    """One target on one line: PASS/MISS, the workload, its median, the baseline's, the ratio."""
+    base = row.baseline_timing
+    against = "" if base is None else f" vs {fmt_time(base.median)} ({row.baseline})"
+    ratio = "" if row.ratio is None else f", ratio {fmt_ratio(row.ratio)}"
+    on = "ratio" if row.limit_on == "ratio" else "time"
+    return (
+        f"{row.status or 'MISS'} [{section}] {row.workload}: {fmt_time(row.timing.median)}"
+        f"{against}{ratio}; target {on} {row.target}"
+    )
+
+
+def targets(sections: dict[str, Section]) -> list[tuple[str, Row]]:
+    """Every row with a target, in order, with its section's name."""
+    return [(name, r) for name, s in sections.items() for r in s.rows if r.limit is not None]
 
 
 # ---------------------------------------------------------------------------
