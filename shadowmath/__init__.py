@@ -75,9 +75,9 @@ from ._measures import silhouette_coverage as silhouette_coverage
 from ._pcf import pcf as pcf
 from ._pcf import pcf_border_texels as pcf_border_texels
 from ._planar import planar_projection as planar_projection
-from ._setup import ShadowSetup as ShadowSetup
 from ._setup import fit_shadow as fit_shadow
 from ._setup import receiver_texture_matrix as receiver_texture_matrix
+from ._shadow_setup import ShadowSetup as ShadowSetup
 from ._smooth import offcenter_frustum as offcenter_frustum
 from ._smooth import rolled_light_frame as rolled_light_frame
 from ._smooth import smooth_frustum as smooth_frustum
@@ -85,6 +85,9 @@ from ._smooth import smooth_max as smooth_max
 from ._soft import area_light_samples as area_light_samples
 from ._soft import area_light_samples_jax as area_light_samples_jax
 from ._soft import pyramid_to_unit_cube as pyramid_to_unit_cube
+from ._spec import ShadowMapSpec as ShadowMapSpec
+from .lights import DirectionalLight as DirectionalLight
+from .lights import PointLight as PointLight
 
 __version__ = "0.1.0"
 
@@ -94,9 +97,12 @@ __all__ = [
     "ApiConvention",
     "CubeFaceCoords",
     "CubeFaceDepth",
+    "DirectionalLight",
     "Frustum",
     "FrustumFit",
     "LightFrame",
+    "PointLight",
+    "ShadowMapSpec",
     "ShadowSetup",
     "adaptive_frustum",
     "api_convention",

@@ -30,12 +30,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._formulas import formulas
 from ._frame import LightFrame, _frame, zero_direction_noise
 from ._frustum import Frustum, blocker_reach, bounded_frustum, check_blocker, margins
 from ._passes import extent, spread
-from ._setup import ShadowSetup, setup_from
+from ._shadow_setup import ShadowSetup, setup_from
 from ._smooth import rolled_frame, soft_bounds
+from ._specialize import formulas
 from ._validate import Array, Checks, Context, all_finite, convert, non_finite, require_last
 
 

@@ -2,9 +2,9 @@
 
 Each function here is plain arithmetic on *components* (scalars or arrays of the
 same batch shape), written with three primitives only: ``where``, ``sqrt`` and
-``fabs``. :func:`specialize` binds them to a backend: NumPy's or JAX's array
+``fabs``. :func:`._specialize.specialize` binds them to a backend: NumPy's or JAX's array
 functions (the arguments are then ``(*batch,)`` arrays and everything
-broadcasts) or Numba's scalar ones (the compiled loop of :mod:`._kernels` calls
+broadcasts) or Numba's scalar ones (the compiled loops of :mod:`._loops` call
 the same functions once per batch entry). So the frame, the frustum and the
 matrices are written once, and the backends cannot drift apart.
 
@@ -13,10 +13,7 @@ Trusted inputs only: these functions check nothing (the public functions did).
 
 from __future__ import annotations
 
-import functools
-import types
 from collections.abc import Callable
-from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -239,7 +236,7 @@ def compose_rows(m: tuple[Any, ...], b: tuple[Any, ...]) -> tuple[Any, ...]:
     return (*_row_times(m, 0, b), *_row_times(m, 1, b), *_row_times(m, 2, b), *_row_times(m, 3, b))
 
 
-_FUNCTIONS = (
+FUNCTIONS = (
     "normalize3",
     "helper_axis3",
     "frame_axes",
@@ -256,37 +253,3 @@ _FUNCTIONS = (
     "_row_times",
     "compose_rows",
 )
-
-
-def specialize(
-    primitives: dict[str, Any], wrap: Callable[[Any], Any] | None = None
-) -> types.SimpleNamespace:
-    """Copies of this module's formulas with ``where``, ``sqrt``, ``fabs`` bound to a backend.
-
-    ``wrap`` (e.g. ``numba.njit``) is applied to each copy; the copies call one
-    another through the same namespace, so a compiled formula calls compiled ones.
-    """
-    namespace: dict[str, Any] = {**globals(), **primitives}
-    for name in _FUNCTIONS:
-        func = globals()[name]
-        copy = types.FunctionType(func.__code__, namespace, name, func.__defaults__)
-        namespace[name] = wrap(copy) if wrap is not None else copy
-    return types.SimpleNamespace(**{name: namespace[name] for name in _FUNCTIONS})
-
-
-@functools.cache
-def formulas(xp: ModuleType) -> types.SimpleNamespace:
-    """The formulas specialized to the array namespace ``xp`` (NumPy or ``jax.numpy``)."""
-    where = xp.where if xp is not np else _numpy_where
-    return specialize({"where": where, "sqrt": xp.sqrt, "fabs": xp.abs, "isfinite": xp.isfinite})
-
-
-def _numpy_where(c: Any, a: Any, b: Any) -> Any:
-    """``np.where`` keeping the arrays' dtype: a Python float is weak, as in JAX.
-
-    (``np.where`` turns a Python float into a float64 array, which would
-    promote float32 work to float64.)
-    """
-    dtypes = [v.dtype for v in (a, b) if isinstance(v, np.ndarray | np.generic)]
-    out = np.where(c, a, b)
-    return out.astype(np.result_type(*dtypes), copy=False) if dtypes else out

@@ -13,8 +13,8 @@ from types import ModuleType
 from typing import Any, Literal, NamedTuple
 
 from . import _messages as msg
-from ._formulas import formulas
 from ._passes import spread
+from ._specialize import formulas
 from ._validate import (
     Array,
     Checks,

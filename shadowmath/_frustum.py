@@ -17,9 +17,9 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from . import _messages as msg
-from ._formulas import formulas
 from ._frame import LightFrame, frame_arrays, stack_matrix
 from ._passes import Extent, extent
+from ._specialize import formulas
 from ._validate import (
     Array,
     Checks,

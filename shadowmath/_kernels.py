@@ -1,46 +1,27 @@
-"""The compiled loop of ``fit_shadow`` for NumPy input (optional: needs Numba).
+"""The compiled loops' switch and loader (optional: needs Numba).
 
-One loop over the batch; per entry, the two passes over the vertices that
-Nagy's algorithm needs (the viewing direction and the scales; then the
-ratios and the depth range in light coordinates), each reading the vertices
-once, then the frame, frustum and matrices from the formulas of
-:mod:`._formulas`, the same functions the array path runs on whole arrays.
-Sums are accumulated in float64 whatever the input dtype.
-
-Validity is reported per batch entry as bits of a status word; the boundary
-(:mod:`._setup`) turns the first failing check into the array path's own
-``ValueError``. Numba is imported on first use, never by ``import shadowmath``;
-compiled code is cached on disk (``cache=True``).
+Numba is imported on first use, never by ``import shadowmath``. The loops of
+:mod:`._loops` inline the formulas of several modules, while Numba keys its disk
+cache to the source file of each compiled function only: a change of a formula
+in another file would leave a new process running the old machine code. So the
+loops are compiled with Numba's cache directory set to a folder named after a
+hash of every source file of the package (and the Python and Numba versions):
+when any of them changes, the folder is new and the loops are compiled afresh.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import hashlib
 import importlib.util
 import os
+import sys
+import tempfile
 from collections.abc import Iterator
+from pathlib import Path
+from types import ModuleType
 from typing import Any
-
-# Status bits, in the order the checks are reported (the array path's order).
-NONFINITE_LIGHT = 1
-NONFINITE_VERTICES = 2
-NONFINITE_PLACEMENT = 4
-PROJECTIVE_PLACEMENT = 8
-ZERO_DIRECTION = 16
-BEHIND_LIGHT = 32
-ZERO_SILHOUETTE = 64
-NEAR_NOT_FINITE = 128
-FAR_NOT_FINITE = 256
-NEAR_POSITIVE = 512
-NEAR_CLIPS = 1024
-FAR_CLIPS = 2048
-NEAR_FAR = 4096
-OVERFLOW = 8192
-
-#: Layout of one output row: origin, X, Y, Z (3 each), the eight frustum fields; and
-#: of one matrix block (4, 4, 4): world_to_light, blocker_to_clip, world_to_texture,
-#: blocker_to_world.
-ROW = 12 + 8
 
 
 def available() -> bool:
@@ -65,23 +46,51 @@ def disabled() -> Iterator[None]:
         _enabled[0] = old
 
 
-# Status bits of planar_projection's loop, in the order of its checks.
-PLANAR_NONFINITE_PLANE = 1
-PLANAR_NONFINITE_LIGHT = 2
-PLANAR_ZERO_NORMAL = 4
-PLANAR_ZERO_LIGHT = 8
-PLANAR_IN_PLANE = 16
+_PACKAGE = Path(__file__).resolve().parent
 
 
-def planar_kernel() -> Any:
-    """The compiled batch loop of ``planar_projection`` (Numba imported on first use)."""
-    from ._loops import planar_loop
+def sources_hash() -> str:
+    """A hash of every Python source of the package's core, and of Python's and Numba's versions.
 
-    return planar_loop
+    The whole core (every ``*.py`` beside this file), not a list of the files the
+    loops import today: a new import can never escape the key.
+    """
+    import numba
+
+    digest = hashlib.sha256(f"{sys.version}|{numba.__version__}".encode())
+    for path in sorted(_PACKAGE.glob("*.py")):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
 
 
-def fit_kernel() -> Any:
-    """The compiled batch loop of ``fit_shadow`` (Numba imported on first use)."""
-    from ._loops import fit_loop
+def cache_dir(key: str) -> str:
+    """A writable folder for the compiled loops of sources ``key``.
 
-    return fit_loop
+    ``$NUMBA_CACHE_DIR/shadowmath-<key>`` when that variable is set, else the
+    package's ``__pycache__/shadowmath-<key>``, else (read-only installs) a folder
+    of the system's temporary directory.
+    """
+    base = os.environ.get("NUMBA_CACHE_DIR") or str(_PACKAGE / "__pycache__")
+    for root in (base, os.path.join(tempfile.gettempdir(), f"shadowmath-numba-{os.getuid()}")):
+        path = os.path.join(root, f"shadowmath-{key}")
+        with contextlib.suppress(OSError):
+            os.makedirs(path, exist_ok=True)
+            if os.access(path, os.W_OK):
+                return path
+    return tempfile.mkdtemp(prefix="shadowmath-numba-")
+
+
+@functools.cache
+def loops() -> ModuleType:
+    """The module of compiled loops, compiled (or loaded) under its sources' cache key."""
+    from numba.core import config as numba_config
+
+    config: Any = numba_config
+    old = config.CACHE_DIR
+    config.CACHE_DIR = cache_dir(sources_hash())
+    try:
+        from . import _loops
+    finally:
+        config.CACHE_DIR = old
+    return _loops

@@ -1,9 +1,15 @@
-"""The compiled loops of :mod:`._kernels`, imported only when Numba is installed.
+"""The compiled loops (Numba): one loop over the batch, the fits' steps per entry.
 
-Every compiled function here is a module-level ``numba.njit(cache=True)``
-function whose callees are module-level too, so Numba's on-disk cache finds
-them again in the next process (a loop built inside a function, closing over
-its callees, is compiled anew in every process).
+Imported only through :func:`._kernels.loops`, which sets Numba's cache folder to
+one keyed on every source of the package, so that the machine code cached on disk
+can never be older than the formulas it inlines.
+
+Per entry, the passes that the fit needs, each reading the vertices once, then
+the frame, sides, depth range and matrices from the formulas of
+:mod:`._fit_formulas` and :mod:`._formulas`: the same functions that the array
+path (:mod:`._fit_arrays`) runs on whole arrays. Sums are accumulated in float64
+whatever the input dtype. Validity is reported per entry as the bits of
+:mod:`._status`; the boundary raises the message of the first failing one.
 """
 
 from __future__ import annotations
@@ -14,28 +20,10 @@ from typing import Any
 import numba
 import numpy as np
 
-from ._formulas import specialize
-from ._kernels import (
-    BEHIND_LIGHT,
-    FAR_CLIPS,
-    FAR_NOT_FINITE,
-    NEAR_CLIPS,
-    NEAR_FAR,
-    NEAR_NOT_FINITE,
-    NEAR_POSITIVE,
-    NONFINITE_LIGHT,
-    NONFINITE_PLACEMENT,
-    NONFINITE_VERTICES,
-    OVERFLOW,
-    PLANAR_IN_PLANE,
-    PLANAR_NONFINITE_LIGHT,
-    PLANAR_NONFINITE_PLANE,
-    PLANAR_ZERO_LIGHT,
-    PLANAR_ZERO_NORMAL,
-    PROJECTIVE_PLACEMENT,
-    ZERO_DIRECTION,
-    ZERO_SILHOUETTE,
-)
+from ._specialize import specialize
+from ._status import FORMULA_BITS, LIGHT, OVERFLOW, PLACEMENT, PROJECTIVE, RECEIVERS, UP, VERTICES
+
+_njit = numba.njit(cache=True, error_model="numpy")
 
 
 @numba.njit(cache=True)
@@ -43,22 +31,30 @@ def _where(c: Any, a: Any, b: Any) -> Any:
     return a if c else b
 
 
-# The formulas of _formulas compiled for scalars: the same source as the array path.
+# The formulas compiled for scalars: the same source as the array path.
 _F = specialize(
-    {"where": _where, "sqrt": math.sqrt, "fabs": abs, "isfinite": math.isfinite},
-    wrap=numba.njit(cache=True),
+    {"where": _where, "sqrt": math.sqrt, "fabs": abs, "rint": np.rint, "isfinite": math.isfinite},
+    wrap=_njit,
 )
+place = _F.place
+to_light = _F.to_light
+fit_axes = _F.fit_axes
 normalize3 = _F.normalize3
 axes_from_z = _F.axes_from_z
-projection_rows = _F.projection_rows
-light_rows = _F.light_rows
-clip_rows = _F.clip_rows
-texture_rows = _F.texture_rows
+point_sides = _F.point_sides
+box_sides = _F.box_sides
+stable_sides = _F.stable_sides
+receiver_counted = _F.receiver_counted
+directional_origin = _F.directional_origin
+depth_range = _F.depth_range
+safe_box = _F.safe_box
+fit_rows = _F.fit_rows
 compose_rows = _F.compose_rows
 planar_entries = _F.planar_entries
+_BITS = FORMULA_BITS
 
 
-@numba.njit(cache=True)
+@_njit
 def planar_loop(plane: Any, light: Any, eps: float, out: Any, status: Any) -> None:
     splitter = 134217729.0  # 2^27 + 1: the loop computes in float64
     for i in range(out.shape[0]):
@@ -68,172 +64,250 @@ def planar_loop(plane: Any, light: Any, eps: float, out: Any, status: Any) -> No
         st = 0
         for v in pi:
             if not math.isfinite(v):
-                st |= PLANAR_NONFINITE_PLANE
+                st |= 1
         for v in li:
             if not math.isfinite(v):
-                st |= PLANAR_NONFINITE_LIGHT
+                st |= 2
         e = planar_entries(pi, li, splitter)
         if not e[18] > 0:
-            st |= PLANAR_ZERO_NORMAL
+            st |= 4
         if li[0] == 0 and li[1] == 0 and li[2] == 0 and li[3] == 0:
-            st |= PLANAR_ZERO_LIGHT
+            st |= 8
         if not abs(e[16]) > 16 * eps * e[17]:
-            st |= PLANAR_IN_PLANE
+            st |= 16
         status[i] = st
         for j in range(16):
             out[i, j] = e[j]
 
 
-@numba.njit(cache=True)
-def place(
-    b: Any, has_b: bool, px: float, py: float, pz: float
-) -> tuple[float, float, float, float]:
-    """A vertex in world coordinates and its homogeneous w (1 without a placement)."""
-    if not has_b:
-        return px, py, pz, 1.0
-    w = b[12] * px + b[13] * py + b[14] * pz + b[15]
-    s = 1.0 / w if w > 0 else 1.0
-    return (
-        (b[0] * px + b[1] * py + b[2] * pz + b[3]) * s,
-        (b[4] * px + b[5] * py + b[6] * pz + b[7]) * s,
-        (b[8] * px + b[9] * py + b[10] * pz + b[11]) * s,
-        w,
-    )
+@_njit
+def _vertex(V: Any, k: int, b: Any, has_b: bool) -> Any:
+    """Vertex ``k`` in world coordinates and its ``w`` (1 without a placement)."""
+    vx, vy, vz = float(V[k, 0]), float(V[k, 1]), float(V[k, 2])
+    if has_b:
+        return place(b, vx, vy, vz)
+    return vx, vy, vz, 1.0
 
 
-# error_model="numpy": a division is a plain division (no ZeroDivisionError branch);
-# the loop never divides by zero anyway (z > 0 is tested first).
-@numba.njit(cache=True, error_model="numpy")
-def fit_loop(
-    light: Any,
-    verts: Any,
-    placement: Any,
-    near: Any,
-    far: Any,
-    options: Any,
-    out: Any,
-    mats: Any,
-    status: Any,
-) -> None:
-    aim_bbox, has_b = options[0] != 0, options[1] != 0
-    has_near, has_far = options[2] != 0, options[3] != 0
-    mx, my, eps, slack = options[4], options[5], options[6], options[7]
-    single = options[8] != 0
-    n = verts.shape[1]
-    for i in range(out.shape[0]):
-        L = light[i % light.shape[0]]
-        V = verts[i % verts.shape[0]]
-        bm = placement[i % placement.shape[0]]
-        lx, ly, lz = float(L[0]), float(L[1]), float(L[2])
-        b = (
-            float(bm[0, 0]), float(bm[0, 1]), float(bm[0, 2]), float(bm[0, 3]),
-            float(bm[1, 0]), float(bm[1, 1]), float(bm[1, 2]), float(bm[1, 3]),
-            float(bm[2, 0]), float(bm[2, 1]), float(bm[2, 2]), float(bm[2, 3]),
-            float(bm[3, 0]), float(bm[3, 1]), float(bm[3, 2]), float(bm[3, 3]),
-        )  # fmt: skip
-        st = 0
-        if not (math.isfinite(lx) and math.isfinite(ly) and math.isfinite(lz)):
-            st |= NONFINITE_LIGHT
-        if has_b:
-            for e in b:
-                if not math.isfinite(e):
-                    st |= NONFINITE_PLACEMENT
-        # Pass 1: the viewing direction and the two scales.
-        sx = sy = sz = 0.0
-        lo_x = lo_y = lo_z = math.inf
-        hi_x = hi_y = hi_z = -math.inf
-        coords = max(abs(lx), abs(ly), abs(lz))
-        reach = raw = 0.0
-        for k in range(n):
-            # The given vertices' own sum: non-finite exactly when one of them is
-            # (a placement's NaN must not be reported as the vertices').
-            vx, vy, vz = float(V[k, 0]), float(V[k, 1]), float(V[k, 2])
-            raw += vx + vy + vz
-            px, py, pz, w = place(b, has_b, vx, vy, vz)
-            if not w > 0:
-                st |= PROJECTIVE_PLACEMENT
-            ox, oy, oz = px - lx, py - ly, pz - lz
-            sx += ox
-            sy += oy
-            sz += oz
-            lo_x, lo_y, lo_z = min(lo_x, ox), min(lo_y, oy), min(lo_z, oz)
-            hi_x, hi_y, hi_z = max(hi_x, ox), max(hi_y, oy), max(hi_z, oz)
-            coords = max(coords, abs(px), abs(py), abs(pz))
-            reach = max(reach, abs(ox), abs(oy), abs(oz))
-        if not math.isfinite(raw):
-            st |= NONFINITE_VERTICES
-        elif not (math.isfinite(sx) and math.isfinite(sy) and math.isfinite(sz)):
-            st |= OVERFLOW
-        if aim_bbox:
-            dx, dy, dz = 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y), 0.5 * (hi_z + lo_z)
-        else:
-            dx, dy, dz = sx / n, sy / n, sz / n
-        zx, zy, zz, length = normalize3(dx, dy, dz)
-        if single:
-            # The helper axis is decided on Z as returned (rounded to float32),
-            # so that the documented rule holds for the frame the caller sees.
-            zx, zy, zz = float(np.float32(zx)), float(np.float32(zy)), float(np.float32(zz))
-        ax = (*axes_from_z(zx, zy, zz), zx, zy, zz)
-        if not length > 32 * eps * coords:
-            st |= ZERO_DIRECTION
-        # Pass 2: the ratios and the depth range in light coordinates.
-        rx_hi = ry_hi = z_max = -math.inf
-        rx_lo = ry_lo = z_min = math.inf
-        for k in range(n):
-            px, py, pz, w = place(b, has_b, float(V[k, 0]), float(V[k, 1]), float(V[k, 2]))
-            ox, oy, oz = px - lx, py - ly, pz - lz
-            x = ox * ax[0] + oy * ax[1] + oz * ax[2]
-            y = ox * ax[3] + oy * ax[4] + oz * ax[5]
-            z = ox * ax[6] + oy * ax[7] + oz * ax[8]
-            z_min, z_max = min(z_min, z), max(z_max, z)
+@_njit
+def _spread(V: Any, b: Any, has_b: bool, o: Any) -> tuple[Any, ...]:
+    """Pass 1 about the point ``o``: sums and bounds of ``p - o``, reach, coords, status."""
+    sx = sy = sz = reach = coords = raw = 0.0
+    lo_x = lo_y = lo_z = math.inf
+    hi_x = hi_y = hi_z = -math.inf
+    st = 0
+    for k in range(V.shape[0]):
+        raw += float(V[k, 0]) + float(V[k, 1]) + float(V[k, 2])
+        px, py, pz, w = _vertex(V, k, b, has_b)
+        if not w > 0:
+            st |= PROJECTIVE
+        x, y, z = px - o[0], py - o[1], pz - o[2]
+        sx, sy, sz = sx + x, sy + y, sz + z
+        lo_x, lo_y, lo_z = min(lo_x, x), min(lo_y, y), min(lo_z, z)
+        hi_x, hi_y, hi_z = max(hi_x, x), max(hi_y, y), max(hi_z, z)
+        reach = max(reach, abs(x), abs(y), abs(z))
+        coords = max(coords, abs(px), abs(py), abs(pz))
+    if not math.isfinite(raw):
+        st |= VERTICES
+    elif not (math.isfinite(sx) and math.isfinite(sy) and math.isfinite(sz)):
+        st |= OVERFLOW
+    return (sx, sy, sz), (lo_x, lo_y, lo_z), (hi_x, hi_y, hi_z), reach, coords, st
+
+
+@_njit
+def _light_pass(V: Any, b: Any, has_b: bool, o: Any, a: Any, ratios: bool) -> Any:
+    """Pass 2: bounds of ``x, y`` (or ``x / z, y / z``) and ``z`` about ``o``; max ``|p - o|^2``."""
+    hx = hy = hz = -math.inf
+    lx = ly = lz = math.inf
+    r2 = reach = 0.0
+    for k in range(V.shape[0]):
+        px, py, pz, _ = _vertex(V, k, b, has_b)
+        ox, oy, oz = px - o[0], py - o[1], pz - o[2]
+        x, y, z = to_light(ox, oy, oz, a)
+        if ratios:
             inv_z = 1.0 / z if z > 0 else 1.0
-            rx, ry = x * inv_z, y * inv_z
-            rx_lo, rx_hi = min(rx_lo, rx), max(rx_hi, rx)
-            ry_lo, ry_hi = min(ry_lo, ry), max(ry_hi, ry)
-        noise = 32 * eps * reach
-        if not z_min > noise:
-            st |= BEHIND_LIGHT
-        half_x, half_y = max(rx_hi, -rx_lo), max(ry_hi, -ry_lo)
-        ratio_noise = 2 * noise / (z_min if z_min > 0 else 1.0)
-        if not (half_x > ratio_noise and half_y > ratio_noise):
-            st |= ZERO_SILHOUETTE
-        n_near = z_min * (1 - slack)
-        if has_near:
-            n_near = float(near[i % near.shape[0]])
-            if not math.isfinite(n_near):
-                st |= NEAR_NOT_FINITE
-            if not n_near > 0:
-                st |= NEAR_POSITIVE
-            if not n_near <= z_min:
-                st |= NEAR_CLIPS
-        n_far = z_max * (1 + slack)
-        if has_far:
-            n_far = float(far[i % far.shape[0]])
-            if not math.isfinite(n_far):
-                st |= FAR_NOT_FINITE
-            if not n_far >= z_max:
-                st |= FAR_CLIPS
-        if not n_near < n_far:
-            st |= NEAR_FAR
+            x, y = x * inv_z, y * inv_z
+        hx, lx, hy, ly = max(hx, x), min(lx, x), max(hy, y), min(ly, y)
+        hz, lz = max(hz, z), min(lz, z)
+        r2 = max(r2, ox * ox + oy * oy + oz * oz)
+        reach = max(reach, abs(ox), abs(oy), abs(oz))
+    return (hx, lx, hy, ly, hz, lz), r2, reach
+
+
+@_njit
+def _receiver_range(R: Any, o: Any, a: Any, sides: Any, zb: Any, directional: bool) -> Any:
+    """The depth range widened over the receiver points inside the sides; finite flag."""
+    z_lo, z_hi = zb
+    raw = 0.0
+    for k in range(R.shape[0]):
+        rx, ry, rz = float(R[k, 0]), float(R[k, 1]), float(R[k, 2])
+        raw += rx + ry + rz
+        x, y, z = to_light(rx - o[0], ry - o[1], rz - o[2], a)
+        if receiver_counted(x, y, z, sides, directional):
+            z_lo, z_hi = min(z_lo, z), max(z_hi, z)
+    return z_lo, z_hi, math.isfinite(raw)
+
+
+@_njit
+def _sides(hx: float, hy: float, margins: Any, cx: float, cy: float) -> Any:
+    """``(s_x, s_y, c_x, c_y)`` of :func:`receiver_counted` with safe half-widths."""
+    return (margins[0] / (hx if hx > 0 else 1.0), margins[1] / (hy if hy > 0 else 1.0), cx, cy)
+
+
+@_njit
+def _flags(ok: Any, first: int) -> int:
+    """Status bits of the formula checks ``ok`` (starting at ``FORMULA_BITS[first]``)."""
+    st = 0
+    for j in range(len(ok)):
+        if not ok[j]:
+            st |= _BITS[first + j]
+    return st
+
+
+@_njit
+def _point_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
+    """One point light's fit. ``o``: the options tuple of :func:`fit_loop`."""
+    aim_bbox, has_b, has_r, has_up, single, margins, eps = o[0], o[1], o[2], o[3], o[4], o[5], o[6]
+    s, lo, hi, reach, coords, st = _spread(V, b, has_b, L)
+    n = V.shape[0]
+    if aim_bbox:
+        d = (0.5 * (hi[0] + lo[0]), 0.5 * (hi[1] + lo[1]), 0.5 * (hi[2] + lo[2]))
+    else:
+        d = (s[0] / n, s[1] / n, s[2] / n)
+    coords = max(coords, abs(L[0]), abs(L[1]), abs(L[2]))
+    a, _, ok_dir, ok_up = fit_axes(d, U, has_up, coords, eps)
+    if single and not has_up:
+        # The helper axis is decided on Z as returned (rounded to float32), as the
+        # float32 array path decides it, so the documented rule holds for that frame.
+        zx, zy, zz, _ = normalize3(d[0], d[1], d[2])
+        zx, zy, zz = float(np.float32(zx)), float(np.float32(zy)), float(np.float32(zz))
+        a = axes_from_z(zx, zy, zz) + (zx, zy, zz)  # noqa: RUF005 (Numba: tuple concatenation)
+    st |= _flags((ok_dir, ok_up), 1)
+    bounds, _, _ = _light_pass(V, b, has_b, L, a, True)
+    hx, lx, hy, ly, zb_max, zb_min = bounds
+    half_x, half_y, ok_behind, ok_sil = point_sides(hx, lx, hy, ly, zb_min, reach, eps)
+    st |= _flags((ok_behind, ok_sil), 3)
+    z_lo, z_hi, ok_r = zb_min, zb_max, True
+    if has_r:
+        sides = _sides(half_x, half_y, margins, 0.0, 0.0)
+        z_lo, z_hi, ok_r = _receiver_range(R, L, a, sides, (zb_min, zb_max), False)
+    if not ok_r:
+        st |= RECEIVERS
+    box = (half_x, half_y, 0.0, 0.0)
+    return st, (L[0], L[1], L[2]), a, box, (z_lo, z_hi, zb_min, zb_max)
+
+
+@_njit
+def _directional_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
+    """One directional light's fit. ``o``: the options tuple of :func:`fit_loop`."""
+    has_b, has_r, has_up, stable, margins, eps, texels = o[1], o[2], o[3], o[7], o[5], o[6], o[8]
+    zero3 = (0.0, 0.0, 0.0)
+    s, lo, hi, _, coords, st = _spread(V, b, has_b, zero3)
+    a, ok_light, _, ok_up = fit_axes((-L[0], -L[1], -L[2]), U, has_up, coords, eps)
+    st |= _flags((ok_light,), 0) | _flags((ok_up,), 2)
+    n = V.shape[0]
+    if stable:
+        c = (s[0] / n, s[1] / n, s[2] / n)
+    else:
+        c = (0.5 * (hi[0] + lo[0]), 0.5 * (hi[1] + lo[1]), 0.5 * (hi[2] + lo[2]))
+    bounds, r2, reach = _light_pass(V, b, has_b, c, a, False)
+    hx, lx, hy, ly, zb_max, zb_min = bounds
+    if stable:
+        texels4 = (margins[0], margins[1], texels[0], texels[1])
+        half_x, half_y, cx, cy, ok_sil = stable_sides(r2, c, a, texels4, reach, eps)
+    else:
+        half_x, half_y, cx, cy, ok_sil = box_sides(hx, lx, hy, ly, reach, eps)
+    st |= _flags((ok_sil,), 4)
+    z_lo, z_hi, ok_r = zb_min, zb_max, True
+    if has_r:
+        sides = _sides(half_x, half_y, margins, cx, cy)
+        z_lo, z_hi, ok_r = _receiver_range(R, c, a, sides, (zb_min, zb_max), True)
+    if not ok_r:
+        st |= RECEIVERS
+    ox, oy, oz, shift = directional_origin(z_lo, z_hi, half_x, half_y, c, a)
+    z = (z_lo - shift, z_hi - shift, zb_min - shift, zb_max - shift)
+    return st, (ox, oy, oz), a, (half_x, half_y, cx, cy), z
+
+
+@_njit
+def _row(V: Any, i: int) -> Any:
+    return V[i % V.shape[0]]
+
+
+@_njit
+def _entries(M: Any, i: int) -> Any:
+    """Batch entry ``i`` of ``(count or 1, 4, 4)`` matrices as 16 floats."""
+    m = M[i % M.shape[0]]
+    return (
+        float(m[0, 0]), float(m[0, 1]), float(m[0, 2]), float(m[0, 3]),
+        float(m[1, 0]), float(m[1, 1]), float(m[1, 2]), float(m[1, 3]),
+        float(m[2, 0]), float(m[2, 1]), float(m[2, 2]), float(m[2, 3]),
+        float(m[3, 0]), float(m[3, 1]), float(m[3, 2]), float(m[3, 3]),
+    )  # fmt: skip
+
+
+@_njit
+def _check_finite(L: Any, U: Any, b: Any, o: Any) -> int:
+    st = 0
+    if not (math.isfinite(L[0]) and math.isfinite(L[1]) and math.isfinite(L[2])):
+        st |= LIGHT
+    if o[3] and not (math.isfinite(U[0]) and math.isfinite(U[1]) and math.isfinite(U[2])):
+        st |= UP
+    if o[1]:
+        for e in b:
+            if not math.isfinite(e):
+                st |= PLACEMENT
+    return st
+
+
+@_njit
+def fit_loop(arrays: Any, given: Any, o: Any, api: Any, out: Any, mats: Any, status: Any) -> None:
+    """Every batch entry's fit. ``arrays = (light, verts, placement, receivers, up)``,
+    ``given = (near, far)`` (``(count or 1,)`` each), ``o`` the static options:
+    ``(aim_bbox, has_b, has_r, has_up, single, margins, eps, stable, texels,
+    directional, (has_near, has_far), slack)``, ``api = (C, T C)``.
+    """
+    light, verts, placement, recv, ups = arrays
+    directional, has_nf, slack = o[9], o[10], o[11]
+    for i in range(out.shape[0]):
+        Lr, Ur = _row(light, i), _row(ups, i)
+        L = (float(Lr[0]), float(Lr[1]), float(Lr[2]))
+        U = (float(Ur[0]), float(Ur[1]), float(Ur[2]))
+        b = _entries(placement, i)
+        V, R = _row(verts, i), _row(recv, i)
+        if directional:
+            st, origin, a, sides, z = _directional_entry(L, V, b, R, U, o)
+        else:
+            st, origin, a, sides, z = _point_entry(L, V, b, R, U, o)
+        st |= _check_finite(L, U, b, o)
+        nf = (float(_row(given[0], i)), float(_row(given[1], i)))
+        near, far, ok = depth_range(z, nf, has_nf, slack)
+        st |= _flags(ok, 5)
         status[i] = st
-        if st != 0:
-            n_near, n_far, half_x, half_y = 1.0, 2.0, 1.0, 1.0  # never divide by 0
-        p = projection_rows(mx / half_x, my / half_y, 0.0, 0.0, n_near, n_far)
-        wl = light_rows(lx, ly, lz, ax[0], ax[1], ax[2], ax[3], ax[4], ax[5], ax[6], ax[7], ax[8])
-        clip = clip_rows(wl, p)
-        tex = texture_rows(clip)
-        if has_b:
+        hx, hy, cx, cy = sides
+        safe = safe_box(hx, hy, cx, cy, near, far)
+        W, clip, tex = fit_rows(origin, a, safe, o[5], directional, api)
+        if o[1]:
             clip = compose_rows(clip, b)
-        row, mat = out[i], mats[i]
-        row[0], row[1], row[2] = lx, ly, lz
-        for j in range(9):
-            row[3 + j] = ax[j]
-        row[12], row[13], row[14], row[15] = half_x, half_y, n_near, n_far
-        row[16], row[17], row[18], row[19] = mx, my, 0.0, 0.0
-        for j in range(12):
-            mat[0, j // 4, j % 4] = wl[j]
-        for j in range(16):
-            mat[1, j // 4, j % 4] = clip[j]
-            mat[2, j // 4, j % 4] = tex[j]
-            mat[3, j // 4, j % 4] = b[j] if has_b else (1.0 if j % 5 == 0 else 0.0)
-        mat[0, 3, 0], mat[0, 3, 1], mat[0, 3, 2], mat[0, 3, 3] = 0.0, 0.0, 0.0, 1.0
+        _store(out[i], mats[i], (origin, a, (hx, hy, near, far), o[5], (cx, cy)), (W, clip, tex, b))
+
+
+@_njit
+def _store(row: Any, mat: Any, fields: Any, matrices: Any) -> None:
+    """One entry's output row (frame, frustum) and its four matrices."""
+    origin, a, box, margins, offsets = fields
+    W, clip, tex, b = matrices
+    for j in range(3):
+        row[j] = origin[j]
+    for j in range(9):
+        row[3 + j] = a[j]
+    for j in range(4):
+        row[12 + j] = box[j]
+    row[16], row[17], row[18], row[19] = margins[0], margins[1], offsets[0], offsets[1]
+    for j in range(12):
+        mat[0, j // 4, j % 4] = W[j]
+    mat[0, 3, 0], mat[0, 3, 1], mat[0, 3, 2], mat[0, 3, 3] = 0.0, 0.0, 0.0, 1.0
+    for j in range(16):
+        mat[1, j // 4, j % 4] = clip[j]
+        mat[2, j // 4, j % 4] = tex[j]
+        mat[3, j // 4, j % 4] = b[j]

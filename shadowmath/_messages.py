@@ -41,3 +41,14 @@ OVERFLOW = (
     "blocker_vertices: the coordinates are too large: their sums overflow the "
     "floating-point range; scale the scene down"
 )
+ZERO_DIRECTIONAL = (
+    "light: zero directional light (x = y = z = 0): a directional light's (x, y, z) "
+    "must point toward the light"
+)
+UP_PARALLEL = (
+    "up: the up hint is zero or parallel to the light's viewing direction; pick another up"
+)
+STABLE_NEEDS_UP = (
+    "up: stable=True needs an up hint for a point light, so that its frame cannot jump; "
+    "pass up=(x, y, z)"
+)

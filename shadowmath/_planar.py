@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from . import _kernels
-from ._formulas import formulas
+from . import _kernels, _status
 from ._frame import stack_matrix
+from ._specialize import formulas
 from ._validate import (
     Array,
     Checks,
@@ -107,19 +107,19 @@ def planar_projection(plane: Any, light: Any) -> Array:
 
 
 _MESSAGES = (
-    (_kernels.PLANAR_NONFINITE_PLANE, non_finite("plane")),
-    (_kernels.PLANAR_NONFINITE_LIGHT, non_finite("light")),
+    (_status.PLANAR_NONFINITE_PLANE, non_finite("plane")),
+    (_status.PLANAR_NONFINITE_LIGHT, non_finite("light")),
     (
-        _kernels.PLANAR_ZERO_NORMAL,
+        _status.PLANAR_ZERO_NORMAL,
         "plane: the normal (a, b, c) is zero; a plane needs a nonzero normal",
     ),
     (
-        _kernels.PLANAR_ZERO_LIGHT,
+        _status.PLANAR_ZERO_LIGHT,
         "light: all components are zero; use (x, y, z, 1) for a point light or "
         "(dx, dy, dz, 0) with a nonzero direction for a directional light",
     ),
     (
-        _kernels.PLANAR_IN_PLANE,
+        _status.PLANAR_IN_PLANE,
         "light lies in the plane (plane . light = 0): a point light on the plane, or a "
         "directional light parallel to it, collapses the projection; move the light off "
         "the plane or tilt it",
@@ -132,7 +132,7 @@ def _planar_compiled(ctx: Context, shape: tuple[int, ...], pi: Array, L: Array) 
     count = math.prod(shape)
     out = np.empty((count, 16), dtype=ctx.dtype)
     status = np.empty(count, dtype=np.int32)
-    _kernels.planar_kernel()(
+    _kernels.loops().planar_loop(
         flat_batch(pi, shape, (4,)), flat_batch(L, shape, (4,)), ctx.eps, out, status
     )
     if status[0] if count == 1 else status.any():

@@ -1,41 +1,35 @@
-"""The whole of Nagy's projective shadow texture set-up in one call.
+"""The whole of Nagy's projective shadow texture set-up in one call: :func:`fit_shadow`.
 
-:func:`fit_shadow` is a boundary: it converts and checks its arguments once,
-then runs one of three equivalent cores on the trusted arrays:
+A boundary: it reads the light's kind once (its type, or ``w`` of a homogeneous
+``(x, y, z, w)``), makes the static :class:`._spec.FitKey`, converts and checks the
+arrays' shapes once, then runs one of three equivalent drivers of the same fit
+formulas on the trusted arrays:
 
-* NumPy input with Numba installed: the compiled loop of :mod:`._kernels`;
-* concrete JAX input: :func:`fit_core` under a cached ``jax.jit``, with the
-  failed checks read back in one host sync;
-* NumPy without Numba, or JAX inside a transformation: :func:`fit_core`
+* NumPy input with Numba installed: the compiled loop of the light's kind
+  (:mod:`._compiled`);
+* concrete JAX input: :func:`._fit_arrays.fit_arrays` under a ``jax.jit`` cached
+  per key, with the failed checks read back in one host sync;
+* NumPy without Numba, or JAX inside a transformation: :func:`._fit_arrays.fit_arrays`
   directly, on whole arrays.
 """
 
 from __future__ import annotations
 
 import functools
-import math
-from types import ModuleType
-from typing import Any, Literal, NamedTuple
+from typing import Any, Literal
 
 import numpy as np
 
-from . import _kernels
+from . import _compiled, _kernels
 from . import _messages as msg
-from ._bias import PcfFilter, _check_kernel
-from ._conventions import GraphicsApi, _check_api
-from ._formulas import formulas
-from ._frame import LightFrame, _frame, check_aim, light_entries, stack_matrix, zero_direction_noise
-from ._frustum import (
-    NEAR_FAR_SLACK,
-    Frustum,
-    _texels,
-    bounded_frustum,
-    margins,
-    projection_terms,
-)
-from ._passes import extent, spread
-from ._pcf import _border_texels
-from ._scene import STABLE_NEEDS_UP, SceneOptions, scene_core
+from ._bias import PcfFilter
+from ._conventions import GraphicsApi
+from ._fit_arrays import FitEntries, Inputs, fit_arrays
+from ._frame import LightFrame, check_aim, stack_matrix
+from ._frustum import Frustum
+from ._shadow_setup import ShadowSetup
+from ._spec import FitKey, ShadowMapSpec, api_rows, spec_from_options
+from ._specialize import formulas
 from ._validate import (
     Array,
     Checks,
@@ -43,127 +37,39 @@ from ._validate import (
     all_finite,
     batch_shape,
     convert,
-    flat_batch,
+    is_tracer,
     non_finite,
     raise_recorded,
-    raise_status,
     recorded_jit,
     require_last,
     require_matrix,
     require_vertices,
     shape_error,
 )
+from .lights import DirectionalLight, PointLight
 
-
-class ShadowSetup(NamedTuple):
-    """Everything a renderer needs to draw and apply one shadow map.
-
-    Attributes:
-        frame: the :class:`LightFrame`.
-        frustum: the adaptive :class:`Frustum`.
-        world_to_light: ``(*batch, 4, 4)`` world to light coordinates.
-        blocker_to_world: ``(*batch, 4, 4)`` the blocker's placement (identity if none).
-        blocker_to_clip: ``(*batch, 4, 4)`` the article's ``M_BlockerLocalToShadowMap``:
-            draw the shadow map with it (``gl_Position = blocker_to_clip * p_local``).
-        world_to_texture: ``(*batch, 4, 4)`` the article's ``M_WorldToShadowMapST``:
-            world points to ``(s q, t q, r q, q)``.
-    """
-
-    frame: LightFrame
-    frustum: Frustum
-    world_to_light: Array
-    blocker_to_world: Array
-    blocker_to_clip: Array
-    world_to_texture: Array
-
-
-def _placed(xp: ModuleType, checks: Checks, B: Array, p: Array) -> Array:
-    """``(*batch, N, 3)`` points through the placement ``B``, with the homogeneous divide."""
-    w = xp.sum(p * B[..., None, 3, :3], axis=-1) + B[..., None, 3, 3]
-    checks.require(xp.all(w > 0, axis=-1), msg.PROJECTIVE_PLACEMENT)
-    h = xp.matmul(p, xp.matrix_transpose(B[..., :3, :3])) + B[..., None, :3, 3]
-    return h / xp.where(w > 0, w, xp.ones_like(w))[..., None]
-
-
-def fit_core(
-    ctx: Context,
-    checks: Checks,
-    light: Array,
-    verts: Array,
-    B: Array | None,
-    margins: tuple[float, float],
-    near: Array | None,
-    far: Array | None,
-    aim: str,
-) -> ShadowSetup:
-    """The array path of :func:`fit_shadow` on shape-checked arrays; checks the values."""
-    xp = ctx.xp
-    checks.require(all_finite(xp, light, 1), non_finite("light_position"))
-    checks.require(all_finite(xp, verts, 2), non_finite("blocker_vertices"))
-    world = check_placement(checks, verts, B)
-    s = spread(xp, light, world, aim=aim)
-    frame = _frame(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
-    ext = extent(xp, light, world, frame.x_axis, frame.y_axis, frame.z_axis)
-    if near is not None:
-        checks.require(xp.isfinite(near), msg.NEAR_NOT_FINITE)
-    if far is not None:
-        checks.require(xp.isfinite(far), msg.FAR_NOT_FINITE)
-    frustum = bounded_frustum(ctx, checks, ext, s.reach, margins, near, far)
-    return setup_from(ctx, checks, frame, frustum, B)
-
-
-def check_placement(checks: Checks, verts: Array, B: Array | None) -> Array:
-    """The vertices in world coordinates, with the placement's checks."""
-    xp = checks.ctx.xp
-    if B is None:
-        return verts
-    checks.require(all_finite(xp, B, 2), non_finite("blocker_to_world"))
-    return _placed(xp, checks, B, verts)
-
-
-def setup_from(
-    ctx: Context, checks: Checks, frame: LightFrame, frustum: Frustum, B: Array | None
-) -> ShadowSetup:
-    """The matrices of a trusted frame and frustum, in closed form."""
-    xp = ctx.xp
-    F = formulas(xp)
-    W = light_entries(xp, frame)
-    clip = F.clip_rows(W, projection_terms(xp, frustum))
-    tex = F.texture_rows(clip)
-    if B is not None:
-        b = tuple(B[..., i // 4, i % 4] for i in range(16))
-        clip = F.compose_rows(clip, b)
-    shape = tuple(frustum.near.shape)
-    placement = xp.eye(4, dtype=ctx.dtype) if B is None else B
-    return ShadowSetup(
-        frame=frame,
-        frustum=frustum,
-        world_to_light=checks.poison(stack_matrix(xp, W), 2),
-        blocker_to_world=xp.broadcast_to(placement, (*shape, 4, 4)),
-        blocker_to_clip=checks.poison(stack_matrix(xp, clip), 2),
-        world_to_texture=checks.poison(stack_matrix(xp, tex), 2),
-    )
+__all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
 
 def fit_shadow(
-    light_position: Any,
+    light: Any,
     blocker_vertices: Any,
-    map_size: int | tuple[int, int],
+    map_size: int | tuple[int, int] | ShadowMapSpec,
     *,
-    border_texels: int | None = None,
     blocker_to_world: Any = None,
-    margin: float | tuple[float, float] | None = None,
+    receivers: Any = None,
+    up: Any = None,
     near: Any = None,
     far: Any = None,
     aim: Literal["mean", "bbox"] = "mean",
     method: Literal["mdv", "optimized"] = "mdv",
-    receivers: Any = None,
-    api: GraphicsApi = "opengl",
-    reversed_z: bool = False,
-    up: Any = None,
-    stable: bool = False,
+    border_texels: int | None = None,
     pcf_radius: int | None = None,
     pcf_filter: PcfFilter = "box",
+    margin: float | tuple[float, float] | None = None,
+    api: GraphicsApi = "opengl",
+    reversed_z: bool = False,
+    stable: bool = False,
 ) -> ShadowSetup:
     r"""Nagy's projective shadow texture for one point or directional light and one blocker.
 
@@ -266,14 +172,14 @@ def fit_shadow(
     check_aim(aim)
     if method not in ("mdv", "optimized"):
         raise ValueError(f"method: expected 'mdv' or 'optimized', got {method!r}")
-    if border_texels is None:
-        border_texels = 1 if pcf_radius is None else _pcf_border(pcf_radius, pcf_filter)
-    m = margins(map_size, border_texels, margin)
-    _check_api(api, reversed_z)
-    if not isinstance(stable, bool | np.bool_):
-        raise ValueError(f"stable: expected True or False, got {stable!r}")
-    ctx, (light, verts, B, n, f, R, U) = convert(
-        light_position=light_position,
+    spec = _spec(map_size, border_texels, pcf_radius, pcf_filter, margin, api, reversed_z, stable)
+    if isinstance(light, PointLight | DirectionalLight):
+        directional: bool | None = isinstance(light, DirectionalLight)
+        raw = light[0]
+    else:
+        directional, raw = None, light
+    ctx, (L, verts, B, n, f, R, U) = convert(
+        light=raw,
         blocker_vertices=blocker_vertices,
         blocker_to_world=blocker_to_world,
         near=near,
@@ -281,258 +187,227 @@ def fit_shadow(
         receivers=receivers,
         up=up,
     )
-    homogeneous = light.ndim >= 1 and light.shape[-1] == 4
-    if homogeneous or R is not None or U is not None or api != "opengl" or reversed_z or stable:
-        if method != "mdv":
-            raise ValueError(
-                "method: 'optimized' fits point lights (x, y, z) without receivers, api, "
-                "reversed_z, up or stable; use method='mdv' with them"
-            )
-        opts = SceneOptions(
-            api, bool(reversed_z), bool(stable), homogeneous, _texels("map_size", map_size)
-        )
-        return _fit_scene(ctx, light, verts, B, n, f, R, U, m, aim, opts)
-    require_last("light_position", light, 3, hint="a light position is (x, y, z)")
-    require_vertices("blocker_vertices", verts)
-    shape = light.shape[:-1]
-    if B is not None or n is not None or f is not None or shape != verts.shape[:-2]:
-        shape = _batch_shape(light, verts, B, n, f)
+    directional, L = _light_kind(ctx, directional, L)
+    a = Inputs(L, verts, B, R, U, n, f)
+    shape = _check_shapes(a)
+    key = FitKey(
+        directional=directional,
+        aim_bbox=aim == "bbox",
+        stable=bool(spec.stable),
+        margins=spec.margins,
+        texels=spec.size,
+        api=api_rows(spec.api, bool(spec.reversed_z)),
+        has_placement=B is not None,
+        has_receivers=R is not None,
+        has_up=U is not None,
+        has_near=n is not None,
+        has_far=f is not None,
+    )
+    _check_static(key, method, spec)
     if method == "optimized":
-        from ._fitting import optimized_setup
-
-        checks = Checks(ctx)
-        world = check_placement(checks, verts, B)
-        return optimized_setup(ctx, checks, light, world, B, m, n, f)
+        return _optimized(ctx, a, key.margins)
     if ctx.is_jax and not ctx.lazy:
-        run, messages = _jitted_fit(m, aim, B is None, n is None, f is None)
+        run, messages = _jitted_fit(key)
         setup: ShadowSetup
-        setup, bad = run(light, verts, B, n, f)
+        setup, bad = run(*a)
         raise_recorded(messages, bad)
         return setup
     if not ctx.is_jax and _kernels.available():
-        return _fit_compiled(ctx, shape, light, verts, B, m, n, f, aim)
-    return fit_core(ctx, Checks(ctx), light, verts, B, m, n, f, aim)
+        return _compiled.fit(ctx, key, shape, a)
+    checks = Checks(ctx)
+    if ctx.is_jax:
+        return assemble(ctx, checks, key, shape, a.B, fit_arrays(ctx, checks, key, a))
+    with np.errstate(all="ignore"):  # invalid entries are reported by the checks, in order
+        entries = fit_arrays(ctx, checks, key, a)
+    return assemble(ctx, checks, key, shape, a.B, entries)
 
 
-def _pcf_border(radius: int, filter: PcfFilter) -> int:
-    k, filt = _check_kernel(radius, filter)
-    return _border_texels(k, filt)
+def _spec(
+    map_size: Any,
+    border_texels: int | None,
+    pcf_radius: int | None,
+    pcf_filter: PcfFilter,
+    margin: Any,
+    api: GraphicsApi,
+    reversed_z: bool,
+    stable: bool,
+) -> ShadowMapSpec:
+    """The map's spec: given, or made from the keyword options (cached when hashable)."""
+    options = {
+        "border_texels": border_texels,
+        "pcf_radius": pcf_radius,
+        "pcf_filter": pcf_filter,
+        "margin": margin,
+        "api": api,
+        "reversed_z": reversed_z,
+        "stable": stable,
+    }
+    if isinstance(map_size, ShadowMapSpec):
+        changed = [
+            k for k, v in options.items() if v != _DEFAULTS[k] or type(v) is not type(_DEFAULTS[k])
+        ]
+        if changed:
+            raise ValueError(
+                f"{', '.join(changed)}: given both in the ShadowMapSpec and as keywords; "
+                "set them in the spec"
+            )
+        return map_size
+    try:
+        return spec_from_options(map_size, **options)
+    except TypeError:  # unhashable (a list): made without the cache
+        return ShadowMapSpec(map_size, **options)
 
 
-def _fit_scene(
-    ctx: Context,
-    light: Array,
-    verts: Array,
-    B: Array | None,
-    n: Array | None,
-    f: Array | None,
-    R: Array | None,
-    U: Array | None,
-    m: tuple[float, float],
-    aim: str,
-    opts: SceneOptions,
-) -> ShadowSetup:
-    """The scene options' boundary: shapes, then the array path (a cached jit for JAX)."""
-    if light.ndim < 1 or light.shape[-1] not in (3, 4):
-        raise shape_error(
-            "light_position",
-            "(*batch, 3) or (*batch, 4)",
-            tuple(light.shape),
-            "a point light is (x, y, z); a homogeneous light (x, y, z, w), w = 0 directional",
+_DEFAULTS: dict[str, Any] = {
+    "border_texels": None,
+    "pcf_radius": None,
+    "pcf_filter": "box",
+    "margin": None,
+    "api": "opengl",
+    "reversed_z": False,
+    "stable": False,
+}
+
+
+def _light_kind(ctx: Context, directional: bool | None, L: Array) -> tuple[bool, Array]:
+    """The light's kind and its ``(*batch, 3)`` array: a position or a direction toward it."""
+    hint = "a point light is (x, y, z); a homogeneous light (x, y, z, w), w = 0 directional"
+    if directional is not None:
+        require_last("light", L, 3, hint="a typed light holds (*batch, 3) arrays")
+        return directional, L
+    if L.ndim < 1 or L.shape[-1] not in (3, 4):
+        raise shape_error("light", "(*batch, 3) or (*batch, 4)", tuple(L.shape), hint)
+    if L.shape[-1] == 3:
+        return False, L
+    if ctx.lazy and is_tracer(L):
+        raise ValueError(
+            "light: the kind of a homogeneous light (x, y, z, w) is read from the values of "
+            "w, which a traced JAX array does not have; pass sm.PointLight(position) or "
+            "sm.DirectionalLight(direction) under jit, vmap or grad"
         )
-    require_vertices("blocker_vertices", verts)
-    if R is not None:
-        require_vertices("receivers", R)
-    if U is not None:
-        require_last("up", U, 3, hint="an up hint is (x, y, z)")
-    if opts.stable:
-        for name, mm, size in (("x", m[0], opts.texels[0]), ("y", m[1], opts.texels[1])):
-            if mm * size <= 1:
-                raise ValueError(
-                    f"map_size: stable=True needs more than one texel inside the border "
-                    f"along {name} (got {mm * size:g})"
-                )
-    _batch_shape(light, verts, B, n, f, R, U)
-    if opts.stable and U is None and not opts.homogeneous:
-        raise ValueError(STABLE_NEEDS_UP)
-    if ctx.is_jax and not ctx.lazy:
-        absent = tuple(v is None for v in (B, n, f, R, U))
-        run, messages = _jitted_scene(m, aim, opts, absent)
-        setup: ShadowSetup
-        setup, bad = run(light, verts, B, n, f, R, U)
-        raise_recorded(messages, bad)
-        return setup
-    return scene_fit(ctx, Checks(ctx), light, verts, B, n, f, R, U, m, aim, opts)
+    w = np.asarray(L[..., 3])
+    if not w.any():
+        return True, L[..., :3]
+    if w.all():
+        with np.errstate(all="ignore"):
+            return False, L[..., :3] / L[..., 3:]
+    raise ValueError(
+        "light: a batch mixes point lights (w != 0) and directional lights (w = 0); their "
+        "fits differ in kind: call fit_shadow once per kind (split the batch by w == 0), "
+        "or pass sm.PointLight / sm.DirectionalLight"
+    )
 
 
-def scene_fit(
+def _check_shapes(a: Inputs) -> tuple[int, ...]:
+    """The arrays' shapes, and the broadcast batch shape."""
+    require_vertices("blocker_vertices", a.verts)
+    named = [("light", a.light.shape[:-1]), ("blocker_vertices", a.verts.shape[:-2])]
+    if a.B is not None:
+        require_matrix("blocker_to_world", a.B)
+        named.append(("blocker_to_world", a.B.shape[:-2]))
+    if a.R is not None:
+        require_vertices("receivers", a.R)
+        named.append(("receivers", a.R.shape[:-2]))
+    if a.U is not None:
+        require_last("up", a.U, 3, hint="an up hint is (x, y, z)")
+        named.append(("up", a.U.shape[:-1]))
+    named += [(n, v.shape) for n, v in (("near", a.near), ("far", a.far)) if v is not None]
+    return batch_shape(*(s for _, s in named), names=[n for n, _ in named])
+
+
+def _check_static(key: FitKey, method: str, spec: ShadowMapSpec) -> None:
+    """The option combinations refused whatever the values."""
+    if key.directional and (key.has_near or key.has_far):
+        raise ValueError(
+            "near/far: a directional light's depth range is placed by the fit (its frame's "
+            "origin moves behind every caster and counted receiver); leave near and far None "
+            "and pass receivers= to widen the range"
+        )
+    if key.stable and not key.directional and not key.has_up:
+        raise ValueError(msg.STABLE_NEEDS_UP)
+    options = key.directional or key.has_receivers or key.has_up or spec.api != "opengl"
+    if method == "optimized" and (options or spec.reversed_z or spec.stable):
+        raise ValueError(
+            "method: 'optimized' fits point lights without receivers, api, reversed_z, up "
+            "or stable; use method='mdv' with them"
+        )
+
+
+def _optimized(ctx: Context, a: Inputs, m: tuple[float, float]) -> ShadowSetup:
+    from ._fitting import optimized_setup
+
+    checks = Checks(ctx)
+    xp = ctx.xp
+    checks.require(all_finite(xp, a.light, 1), non_finite("light"))
+    checks.require(all_finite(xp, a.verts, 2), non_finite("blocker_vertices"))
+    world = a.verts
+    if a.B is not None:
+        checks.require(all_finite(xp, a.B, 2), non_finite("blocker_to_world"))
+        F = formulas(xp)
+        b = tuple(a.B[..., None, i // 4, i % 4] for i in range(16))
+        *p, w = F.place(b, a.verts[..., 0], a.verts[..., 1], a.verts[..., 2])
+        checks.require(xp.all(w > 0, axis=-1), msg.PROJECTIVE_PLACEMENT)
+        world = xp.stack(p, axis=-1)
+    return optimized_setup(ctx, checks, a.light, world, a.B, m, a.near, a.far)
+
+
+def assemble(
     ctx: Context,
     checks: Checks,
-    light: Array,
-    verts: Array,
+    key: FitKey,
+    shape: tuple[int, ...],
     B: Array | None,
-    n: Array | None,
-    f: Array | None,
-    R: Array | None,
-    U: Array | None,
-    m: tuple[float, float],
-    aim: str,
-    opts: SceneOptions,
+    e: FitEntries,
 ) -> ShadowSetup:
-    """:func:`scene_core` and its matrices, on shape-checked arrays."""
+    """The :class:`ShadowSetup` of a fit's per-entry results (invalid entries poisoned)."""
     xp = ctx.xp
-    checks.require(all_finite(xp, light, 1), non_finite("light_position"))
-    checks.require(all_finite(xp, verts, 2), non_finite("blocker_vertices"))
-    world = check_placement(checks, verts, B)
-    frame, frustum, W, clip, tex = scene_core(
-        ctx, checks, light, world, B, R, U, m, n, f, aim, opts
-    )
-    shape = tuple(frustum.near.shape)
+    if checks.invalid is not None:
+        checks.invalid = xp.broadcast_to(checks.invalid, shape)
+
+    def vec(v: tuple[Array, ...]) -> Array:
+        stacked = xp.stack([xp.broadcast_to(c, shape) for c in v], axis=-1)
+        return checks.poison(stacked, 1)
+
+    def matrix(entries: tuple[Array, ...]) -> Array:
+        return checks.poison(xp.broadcast_to(stack_matrix(xp, entries), (*shape, 4, 4)), 2)
+
+    def field(v: Array) -> Array:
+        return checks.poison(xp.broadcast_to(xp.asarray(v, dtype=ctx.dtype), shape), 0)
+
+    half_x, half_y, near, far, cx, cy = e.box
+    mx, my = (xp.broadcast_to(ctx.constant(m), shape) for m in key.margins)
+    frustum = Frustum(
+        field(half_x), field(half_y), field(near), field(far), mx, my, field(cx), field(cy),
+        key.directional,
+    )  # fmt: skip
+    clip = e.clip
+    if B is not None:
+        clip = formulas(xp).compose_rows(clip, tuple(B[..., i // 4, i % 4] for i in range(16)))
     placement = xp.eye(4, dtype=ctx.dtype) if B is None else B
     return ShadowSetup(
-        frame=frame,
+        frame=LightFrame(vec(e.origin), vec(e.axes[0:3]), vec(e.axes[3:6]), vec(e.axes[6:9])),
         frustum=frustum,
-        world_to_light=checks.poison(xp.broadcast_to(stack_matrix(xp, W), (*shape, 4, 4)), 2),
+        world_to_light=matrix(e.W),
         blocker_to_world=xp.broadcast_to(placement, (*shape, 4, 4)),
-        blocker_to_clip=checks.poison(xp.broadcast_to(stack_matrix(xp, clip), (*shape, 4, 4)), 2),
-        world_to_texture=checks.poison(xp.broadcast_to(stack_matrix(xp, tex), (*shape, 4, 4)), 2),
+        blocker_to_clip=matrix(clip),
+        world_to_texture=matrix(e.tex),
     )
 
 
-def _batch_shape(
-    light: Array,
-    verts: Array,
-    B: Array | None,
-    near: Array | None,
-    far: Array | None,
-    R: Array | None = None,
-    U: Array | None = None,
-) -> tuple[int, ...]:
-    """The broadcast batch shape of ``fit_shadow``'s arguments (checks ``B``'s shape)."""
-    if B is not None:
-        require_matrix("blocker_to_world", B)
-    named = [("light_position", light.shape[:-1]), ("blocker_vertices", verts.shape[:-2])]
-    named += [("blocker_to_world", B.shape[:-2])] if B is not None else []
-    named += [(name, v.shape) for name, v in (("near", near), ("far", far)) if v is not None]
-    named += [("receivers", R.shape[:-2])] if R is not None else []
-    named += [("up", U.shape[:-1])] if U is not None else []
-    return batch_shape(*(s for _, s in named), names=[name for name, _ in named])
-
-
 @functools.cache
-def _jitted_scene(
-    m: tuple[float, float], aim: str, opts: SceneOptions, absent: tuple[bool, ...]
-) -> tuple[Any, list[str]]:
-    """:func:`scene_fit` under ``jax.jit`` for concrete JAX input (``absent``: cache key)."""
+def _jitted_fit(key: FitKey) -> tuple[Any, list[str]]:
+    """:func:`fit_arrays` and :func:`assemble` under ``jax.jit`` for concrete JAX input."""
 
-    def core(ctx: Context, checks: Checks, *a: Array) -> ShadowSetup:
-        light, verts, B, near, far, R, U = a
-        return scene_fit(ctx, checks, light, verts, B, near, far, R, U, m, aim, opts)
-
-    return recorded_jit(core, _batch_of)
-
-
-@functools.cache
-def _jitted_fit(m: tuple[float, float], aim: str, *absent: bool) -> tuple[Any, list[str]]:
-    """:func:`fit_core` under ``jax.jit`` for concrete JAX input (``absent``: cache key)."""
-
-    def core(ctx: Context, checks: Checks, *a: Array) -> ShadowSetup:
-        light, verts, B, near, far = a
-        return fit_core(ctx, checks, light, verts, B, m, near, far, aim)
+    def core(ctx: Context, checks: Checks, *arrays: Array) -> ShadowSetup:
+        a = Inputs(*arrays)
+        shape = _check_shapes(a)
+        return assemble(ctx, checks, key, shape, a.B, fit_arrays(ctx, checks, key, a))
 
     return recorded_jit(core, _batch_of)
 
 
 def _batch_of(setup: ShadowSetup) -> tuple[int, ...]:
     return tuple(setup.frustum.near.shape)
-
-
-# The compiled loop's status bits and the array path's messages, in check order.
-_STATUS_MESSAGES = (
-    (_kernels.NONFINITE_LIGHT, non_finite("light_position")),
-    (_kernels.NONFINITE_VERTICES, non_finite("blocker_vertices")),
-    (_kernels.NONFINITE_PLACEMENT, non_finite("blocker_to_world")),
-    (_kernels.PROJECTIVE_PLACEMENT, msg.PROJECTIVE_PLACEMENT),
-    (_kernels.ZERO_DIRECTION, msg.ZERO_DIRECTION),
-    (_kernels.BEHIND_LIGHT, msg.BEHIND_LIGHT),
-    (_kernels.ZERO_SILHOUETTE, msg.ZERO_SILHOUETTE),
-    (_kernels.NEAR_NOT_FINITE, msg.NEAR_NOT_FINITE),
-    (_kernels.FAR_NOT_FINITE, msg.FAR_NOT_FINITE),
-    (_kernels.NEAR_POSITIVE, msg.NEAR_POSITIVE),
-    (_kernels.NEAR_FAR, msg.NEAR_FAR),
-    (_kernels.NEAR_CLIPS, msg.NEAR_CLIPS),
-    (_kernels.FAR_CLIPS, msg.FAR_CLIPS),
-    (_kernels.OVERFLOW, msg.OVERFLOW),
-)
-
-
-_IDENTITY = np.eye(4).reshape(1, 4, 4)
-_NONE = np.zeros(1)
-
-
-def _fit_compiled(
-    ctx: Context,
-    shape: tuple[int, ...],
-    light: Array,
-    verts: Array,
-    B: Array | None,
-    m: tuple[float, float],
-    near: Array | None,
-    far: Array | None,
-    aim: str,
-) -> ShadowSetup:
-    """:func:`fit_core`'s results from the compiled loop (NumPy input, Numba installed)."""
-    count = math.prod(shape)
-    out = np.empty((count, _kernels.ROW), dtype=ctx.dtype)
-    mats = np.empty((count, 4, 4, 4), dtype=ctx.dtype)
-    status = np.empty(count, dtype=np.int32)
-    options = _options(aim, B is not None, near is not None, far is not None, m, ctx.dtype)
-    _kernels.fit_kernel()(
-        flat_batch(light, shape, (3,)) if shape else light[None],
-        flat_batch(verts, shape, verts.shape[-2:]) if shape else verts[None],
-        _IDENTITY if B is None else flat_batch(B, shape, (4, 4)),
-        _NONE if near is None else flat_batch(near, shape, ()),
-        _NONE if far is None else flat_batch(far, shape, ()),
-        options,
-        out,
-        mats,
-        status,
-    )
-    if status[0] if count == 1 else status.any():
-        raise_status(status.reshape(shape), _status_messages(verts))
-    # Views of the two output blocks (first-axis indexing: the cheapest views NumPy makes).
-    if shape:
-        v = np.moveaxis(out.reshape(*shape, _kernels.ROW), -1, 0)
-        M = np.moveaxis(mats.reshape(*shape, 4, 4, 4), -3, 0)
-        frame = LightFrame(*(np.moveaxis(v[i : i + 3], 0, -1) for i in (0, 3, 6, 9)))
-        frustum = Frustum(*v[12:20])
-    else:
-        v, M = out[0], mats[0]
-        frame = LightFrame(v[0:3], v[3:6], v[6:9], v[9:12])
-        frustum = Frustum(*(v[..., i] for i in range(12, 20)))  # 0-d arrays, not scalars
-    return ShadowSetup(frame, frustum, M[0], M[3], M[1], M[2])
-
-
-@functools.lru_cache(maxsize=64)
-def _options(
-    aim: str, has_b: bool, has_near: bool, has_far: bool, m: tuple[float, float], dtype: Any
-) -> Array:
-    """The compiled loop's options (cached: the same few sets recur every frame)."""
-    eps = float(np.finfo(dtype).eps)
-    flags = [aim == "bbox", has_b, has_near, has_far, *m, eps, NEAR_FAR_SLACK, dtype == np.float32]
-    options = np.array(flags, dtype=np.float64)
-    options.flags.writeable = False
-    return options
-
-
-def _status_messages(verts: Array) -> tuple[tuple[int, str], ...]:
-    """The loop's messages; a non-finite sum of finite vertices is an overflow."""
-    if bool(np.isfinite(verts).all()):
-        return tuple(
-            (bit, msg.OVERFLOW if bit == _kernels.NONFINITE_VERTICES else message)
-            for bit, message in _STATUS_MESSAGES
-        )
-    return _STATUS_MESSAGES
 
 
 def receiver_texture_matrix(setup: ShadowSetup, receiver_to_world: Any) -> Array:

@@ -18,10 +18,10 @@ from __future__ import annotations
 from types import ModuleType
 from typing import Any
 
-from ._formulas import formulas
 from ._frame import LightFrame, frame_arrays
 from ._frustum import Frustum, blocker_reach, bounded_frustum, check_blocker, margins
 from ._passes import extent
+from ._specialize import formulas
 from ._validate import (
     Array,
     Checks,

@@ -63,14 +63,18 @@ def test_homogeneous_point_light_is_the_point_light() -> None:
     assert not bool(b.frustum.orthographic)
 
 
-def test_mixed_batch_selects_per_entry() -> None:
+def test_mixed_batch_is_refused_and_typed_lights_fit_each_kind() -> None:
     lights = np.array([[0.0, 0.0, 0.0, 1.0], [0.2, 0.3, -1.0, 0.0]])
-    s = sm.fit_shadow(lights, BOX, 64)
-    np.testing.assert_array_equal(s.frustum.orthographic, [False, True])
-    for i in range(2):
-        one = sm.fit_shadow(lights[i], BOX, 64)
-        np.testing.assert_allclose(s.blocker_to_clip[i], one.blocker_to_clip, atol=1e-14)
-    np.testing.assert_array_equal(s.blocker_to_clip[:, 3], [[0, 0, 1, 0], [0, 0, 0, 1]])
+    with pytest.raises(ValueError, match="light: a batch mixes point lights"):
+        sm.fit_shadow(lights, BOX, 64)
+    point = sm.fit_shadow(sm.PointLight(lights[0, :3]), BOX, 64)
+    sun = sm.fit_shadow(sm.DirectionalLight(lights[1, :3]), BOX, 64)
+    for typed, light in ((point, lights[0]), (sun, lights[1])):
+        one = sm.fit_shadow(light, BOX, 64)
+        np.testing.assert_array_equal(typed.blocker_to_clip, one.blocker_to_clip)
+    assert not point.frustum.orthographic and sun.frustum.orthographic
+    np.testing.assert_array_equal(point.blocker_to_clip[3, :3], point.frame.z_axis)
+    np.testing.assert_array_equal(sun.blocker_to_clip[3], [0, 0, 0, 1])
 
 
 def test_orthographic_frustum_projection() -> None:
@@ -97,24 +101,34 @@ def test_orthographic_frustum_projection() -> None:
 
 
 def test_zero_directional_light_raises_and_poisons() -> None:
-    with pytest.raises(ValueError, match="light_position: zero directional light"):
+    with pytest.raises(ValueError, match="light: zero directional light"):
         sm.fit_shadow(np.zeros(4), BOX, 64)
-    lights = jnp.asarray([[0.2, 0.3, -1.0, 0.0], [0.0, 0.0, 0.0, 0.0]])
-    out = jax.jit(lambda L: sm.fit_shadow(L, jnp.asarray(BOX), 64))(lights)
+    lights = jnp.asarray([[0.2, 0.3, -1.0], [0.0, 0.0, 0.0]])
+    fit = jax.jit(lambda L: sm.fit_shadow(sm.DirectionalLight(L), jnp.asarray(BOX), 64))
+    out = fit(lights)
     assert bool(jnp.all(jnp.isfinite(out.blocker_to_clip[0])))
     assert bool(jnp.all(jnp.isnan(out.blocker_to_clip[1])))
 
 
-@pytest.mark.parametrize("light", [[0.2, 0.3, -1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-def test_jax_matches_numpy_and_gradients_are_finite(light: Any) -> None:
+def test_homogeneous_light_under_jit_asks_for_a_typed_light() -> None:
+    # Its kind would depend on the traced values of w: refused, never both fits.
+    with pytest.raises(ValueError, match=r"pass sm.PointLight\(position\) or"):
+        jax.jit(lambda L: sm.fit_shadow(L, jnp.asarray(BOX), 64))(jnp.ones(4))
+
+
+@pytest.mark.parametrize(
+    ("light", "typed"),
+    [([0.2, 0.3, -1.0, 0.0], sm.DirectionalLight), ([0.0, 0.0, 0.0, 1.0], sm.PointLight)],
+)
+def test_jax_matches_numpy_and_gradients_are_finite(light: Any, typed: Any) -> None:
     ref = sm.fit_shadow(np.array(light), BOX, 64)
     got = sm.fit_shadow(jnp.asarray(light), jnp.asarray(BOX), 64)
     np.testing.assert_allclose(np.asarray(got.blocker_to_clip), ref.blocker_to_clip, atol=1e-12)
 
     def loss(L: Any, V: Any) -> Any:
-        return jnp.sum(sm.fit_shadow(L, V, 64).world_to_texture)
+        return jnp.sum(sm.fit_shadow(typed(L), V, 64).world_to_texture)
 
-    grads = jax.grad(loss, argnums=(0, 1))(jnp.asarray(light), jnp.asarray(BOX))
+    grads = jax.grad(loss, argnums=(0, 1))(jnp.asarray(light[:3]), jnp.asarray(BOX))
     assert all(bool(jnp.all(jnp.isfinite(g))) for g in grads)
 
 
@@ -318,5 +332,5 @@ def test_pcf_radius_sets_the_border() -> None:
     np.testing.assert_array_equal(a.blocker_to_clip, b.blocker_to_clip)
     c = sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, pcf_radius=3, pcf_filter="bilinear")
     assert float(c.frustum.margin_x) == (64 - 2 * 4) / 64
-    d = sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, pcf_radius=3, border_texels=1)  # explicit wins
-    assert float(d.frustum.margin_x) == 62 / 64
+    with pytest.raises(ValueError, match="border_texels and pcf_radius: give one of"):
+        sm.fit_shadow([0.0, 0.0, 0.0], BOX, 64, pcf_radius=3, border_texels=1)

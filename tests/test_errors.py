@@ -241,19 +241,14 @@ VALUE_CASES = {
         ("direction:", "zero"),
     ),
     "fit_shadow: zero directional light": Case(
-        lambda L, V: sm.fit_shadow(L, V, 64), (np.zeros(4), VERTS),
-        (np.array([0.2, 0.3, -1.0, 0.0]), VERTS), ("light_position:", "zero directional light"),
+        lambda d, V: sm.fit_shadow(sm.DirectionalLight(d), V, 64), (np.zeros(3), VERTS),
+        (np.array([0.2, 0.3, -1.0]), VERTS), ("light:", "zero directional light"),
     ),
     "fit_shadow: up parallel to the light direction": Case(
-        lambda L, V, U: sm.fit_shadow(L, V, 64, up=U),
-        (np.array([0.0, 0.0, 1.0, 0.0]), VERTS, np.array([0.0, 0.0, 2.0])),
-        (np.array([0.0, 0.0, 1.0, 0.0]), VERTS, np.array([0.0, 1.0, 0.0])),
+        lambda d, V, U: sm.fit_shadow(sm.DirectionalLight(d), V, 64, up=U),
+        (np.array([0.0, 0.0, 1.0]), VERTS, np.array([0.0, 0.0, 2.0])),
+        (np.array([0.0, 0.0, 1.0]), VERTS, np.array([0.0, 1.0, 0.0])),
         ("up:", "parallel"),
-    ),
-    "fit_shadow: stable point light without up": Case(
-        lambda L, V: sm.fit_shadow(L, V, 64, stable=True),
-        (np.array([0.5, -0.3, 0.0, 1.0]), VERTS), (np.array([0.2, 0.3, -1.0, 0.0]), VERTS),
-        ("up:", "stable=True"),
     ),
     "fit_shadow: non-finite receiver": Case(
         lambda L, V, R: sm.fit_shadow(L, V, 64, receivers=R),
@@ -261,8 +256,8 @@ VALUE_CASES = {
         ("receivers:", "non-finite"),
     ),
     "fit_shadow: directional light with a vertex at NaN": Case(
-        lambda L, V: sm.fit_shadow(L, V, 64), (np.array([0.2, 0.3, -1.0, 0.0]),
-        _with(VERTS, (1, 2), np.nan)), (np.array([0.2, 0.3, -1.0, 0.0]), VERTS),
+        lambda d, V: sm.fit_shadow(sm.DirectionalLight(d), V, 64), (np.array([0.2, 0.3, -1.0]),
+        _with(VERTS, (1, 2), np.nan)), (np.array([0.2, 0.3, -1.0]), VERTS),
         ("blocker_vertices:", "non-finite"),
     ),
     "receiver_texture_matrix: non-finite receiver_to_world": Case(
@@ -352,7 +347,7 @@ STATIC_CASES: dict[str, tuple[Callable[[], Any], tuple[str, ...]]] = {
     "fit_shadow: unknown api": (
         lambda: sm.fit_shadow(LIGHT, VERTS, 64, api="gles"), ("api:", "'webgpu'")),
     "fit_shadow: light of 5 numbers": (
-        lambda: sm.fit_shadow(np.zeros(5), VERTS, 64), ("light_position:", "(*batch, 3)")),
+        lambda: sm.fit_shadow(np.zeros(5), VERTS, 64), ("light:", "(*batch, 3)")),
     "fit_shadow: up of 2 numbers": (
         lambda: sm.fit_shadow(LIGHT, VERTS, 64, up=np.ones(2)), ("up:", "(*batch, 3)")),
     "planar: plane of 3 numbers": (
@@ -393,6 +388,17 @@ STATIC_CASES: dict[str, tuple[Callable[[], Any], tuple[str, ...]]] = {
         lambda: sm.adaptive_frustum(FRAME, VERTS, 64, margin=1.5), ("margin:", "(0, 1]")),
     "blocker_projection: not a frustum": (
         lambda: sm.blocker_projection((1.0, 2.0)), ("frustum:", "Frustum")),  # type: ignore[arg-type]
+    "fit_shadow: stable point light without up": (
+        lambda: sm.fit_shadow(LIGHT, VERTS, 64, stable=True), ("up:", "stable=True")),
+    "fit_shadow: near for a directional light": (
+        lambda: sm.fit_shadow(sm.DirectionalLight(LIGHT), VERTS, 64, near=1.0),
+        ("near/far:", "placed by the fit")),
+    "fit_shadow: mixed point and directional lights": (
+        lambda: sm.fit_shadow(np.array([[0, 0, 1, 0], [0, 0, 0, 1.0]]), VERTS, 64),
+        ("light:", "mixes point lights")),
+    "fit_shadow: spec and keyword options": (
+        lambda: sm.fit_shadow(LIGHT, VERTS, sm.ShadowMapSpec(64), api="vulkan"),
+        ("api:", "set them in the spec")),
     "fit_shadow: map too small": (
         lambda: sm.fit_shadow(LIGHT, VERTS, 1), ("map_size:", "1x1")),
     "fit_shadow: placement not 4x4": (
@@ -426,11 +432,12 @@ def test_static_conditions_raise(call: tuple[Callable[[], Any], tuple[str, ...]]
         lambda p, L: sm.planar_projection(p[:3], L),
         lambda p, L: sm.fit_shadow(L[:3], jnp.zeros((0, 3)), 64),
         lambda p, L: sm.fit_shadow(L[:3], jnp.ones((4, 3)), 2),
+        lambda p, L: sm.fit_shadow(L, jnp.ones((4, 3)), 64),
     ],
-    ids=["shape", "empty vertex set", "map too small"],
+    ids=["shape", "empty vertex set", "map too small", "homogeneous light"],
 )
 def test_static_conditions_raise_under_jit_too(fn: Callable[..., Any]) -> None:
-    with pytest.raises(ValueError, match=r"plane:|vertices:|map_size:"):
+    with pytest.raises(ValueError, match=r"plane:|vertices:|map_size:|light:"):
         jax.jit(fn)(jnp.asarray(PLANE), jnp.asarray(LIGHT4))
 
 

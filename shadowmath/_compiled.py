@@ -1,0 +1,91 @@
+""":func:`fit_shadow` through the compiled loop of :mod:`._loops` (NumPy input, Numba installed).
+
+Packs the trusted arrays as the loop reads them (batch entry ``i`` of an operand at
+``i % len``), runs it, raises the first failed check in the order of
+:mod:`._status`, and returns views of the loop's two output blocks.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import Any
+
+import numpy as np
+
+from . import _kernels
+from ._fit_arrays import Inputs
+from ._frame import LightFrame
+from ._frustum import NEAR_FAR_SLACK, Frustum
+from ._shadow_setup import ShadowSetup
+from ._spec import FitKey
+from ._status import fit_messages
+from ._validate import Array, Context, flat_batch, raise_status
+
+#: One output row: origin, X, Y, Z (3 each), then the eight numeric frustum fields;
+#: one matrix block (4, 4, 4): world_to_light, blocker_to_clip, world_to_texture, placement.
+ROW = 12 + 8
+
+_IDENTITY = np.eye(4).reshape(1, 4, 4)
+_NONE = np.zeros(1)
+_NO_POINTS = np.zeros((1, 1, 3))
+_NO_VECTOR = np.zeros((1, 3))
+
+
+def fit(ctx: Context, key: FitKey, shape: tuple[int, ...], a: Inputs) -> ShadowSetup:
+    """The fit of ``key`` for every batch entry, from the compiled loop."""
+    count = math.prod(shape)
+    out = np.empty((count, ROW), dtype=ctx.dtype)
+    mats = np.empty((count, 4, 4, 4), dtype=ctx.dtype)
+    status = np.empty(count, dtype=np.int32)
+    arrays = (
+        flat_batch(a.light, shape, (3,)),
+        flat_batch(a.verts, shape, a.verts.shape[-2:]),
+        _IDENTITY if a.B is None else flat_batch(a.B, shape, (4, 4)),
+        _NO_POINTS if a.R is None else flat_batch(a.R, shape, a.R.shape[-2:]),
+        _NO_VECTOR if a.U is None else flat_batch(a.U, shape, (3,)),
+    )
+    given = tuple(_NONE if v is None else flat_batch(v, shape, ()) for v in (a.near, a.far))
+    _kernels.loops().fit_loop(arrays, given, _options(key, ctx.dtype), key.api, out, mats, status)
+    if status[0] if count == 1 else status.any():
+        finite = bool(np.isfinite(a.verts).all())
+        raise_status(status.reshape(shape), fit_messages(finite))
+    return _views(key, shape, out, mats)
+
+
+def _views(key: FitKey, shape: tuple[int, ...], out: Array, mats: Array) -> ShadowSetup:
+    """The setup as views of the two output blocks (first-axis indexing: the cheapest views)."""
+    if shape:
+        v = np.moveaxis(out.reshape(*shape, ROW), -1, 0)
+        M = np.moveaxis(mats.reshape(*shape, 4, 4, 4), -3, 0)
+        frame = LightFrame(*(np.moveaxis(v[i : i + 3], 0, -1) for i in (0, 3, 6, 9)))
+        frustum = _frustum(tuple(v[12:20]), key.directional)
+    else:
+        v, M = out[0], mats[0]
+        frame = LightFrame(v[0:3], v[3:6], v[6:9], v[9:12])
+        fields = tuple(v[..., i] for i in range(12, 20))  # 0-d arrays, not scalars
+        frustum = _frustum(fields, key.directional)
+    return ShadowSetup(frame, frustum, M[0], M[3], M[1], M[2])
+
+
+def _frustum(v: tuple[Array, ...], directional: bool) -> Frustum:
+    return Frustum(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], directional)
+
+
+@functools.lru_cache(maxsize=64)
+def _options(key: FitKey, dtype: Any) -> tuple[Any, ...]:
+    """The loop's static options, in the order :func:`._loops.fit_loop` reads them."""
+    return (
+        key.aim_bbox,
+        key.has_placement,
+        key.has_receivers,
+        key.has_up,
+        dtype == np.float32,
+        key.margins,
+        float(np.finfo(dtype).eps),
+        key.stable,
+        (float(key.texels[0]), float(key.texels[1])),
+        key.directional,
+        (key.has_near, key.has_far),
+        NEAR_FAR_SLACK,
+    )

@@ -1,0 +1,334 @@
+"""The fits' per-vertex and per-entry formulas, one source for every backend.
+
+The fits (:mod:`._fit_arrays` on whole arrays, :mod:`._loops` compiled per
+batch entry) are two drivers of the same steps:
+
+1. a pass over the vertices (through the placement, :func:`place`): sums,
+   bounds and scales;
+2. the frame (:func:`fit_axes`);
+3. a pass in light coordinates (:func:`to_light`): ratios or box, depth range;
+4. the sides (:func:`point_sides`, :func:`box_sides`, :func:`stable_sides`);
+5. a pass over the receivers (:func:`receiver_counted`) that widens the depth range;
+6. the depth range (:func:`depth_range`; :func:`directional_origin` first for a
+   directional light) and the matrices (:func:`fit_rows`).
+
+Every step here is plain arithmetic written with the primitives ``where``,
+``sqrt``, ``fabs``, ``rint`` and ``isfinite`` (bound per backend by
+:func:`._formulas.specialize`), so the drivers differ only in how they loop and
+reduce. Flags that are static for a call (``has_up``, ``directional``, ...) are
+Python booleans: the array driver branches on them while tracing, the compiled
+loop at run time. Checks come back as booleans (True: valid), in the order of
+:data:`._status.FORMULA_CHECKS`; ``True`` means the check does not apply.
+
+Trusted inputs only: nothing here raises.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+# Backend primitives and the shared formulas, rebound by specialize().
+from ._formulas import (  # noqa: F401  (names the specialized copies look up)
+    clip_rows,
+    fabs,
+    frame_axes,
+    isfinite,
+    light_rows,
+    normalize3,
+    projection_rows,
+    rolled_axes,
+    sqrt,
+    where,
+)
+
+rint: Any = None  # round half to even; bound by specialize()
+
+
+def place(b: tuple[Any, ...], px: Any, py: Any, pz: Any) -> tuple[Any, Any, Any, Any]:
+    """A vertex through the placement ``b`` (16 row-major entries): world ``x, y, z`` and ``w``.
+
+    The homogeneous divide uses a safe ``w`` (1 where ``w <= 0``; such a vertex is
+    reported by the ``projective`` check).
+    """
+    w = b[12] * px + b[13] * py + b[14] * pz + b[15]
+    s = 1.0 / where(w > 0, w, 1.0)
+    return (
+        (b[0] * px + b[1] * py + b[2] * pz + b[3]) * s,
+        (b[4] * px + b[5] * py + b[6] * pz + b[7]) * s,
+        (b[8] * px + b[9] * py + b[10] * pz + b[11]) * s,
+        w,
+    )
+
+
+def to_light(ox: Any, oy: Any, oz: Any, a: tuple[Any, ...]) -> tuple[Any, Any, Any]:
+    """``(X . o, Y . o, Z . o)``: light coordinates of the offset ``o`` from the frame's origin."""
+    return (
+        ox * a[0] + oy * a[1] + oz * a[2],
+        ox * a[3] + oy * a[4] + oz * a[5],
+        ox * a[6] + oy * a[7] + oz * a[8],
+    )
+
+
+def fit_axes(
+    d: tuple[Any, Any, Any], up: tuple[Any, Any, Any], has_up: bool, coords: Any, eps: float
+) -> tuple[tuple[Any, ...], Any, Any, Any]:
+    """The frame of the viewing direction ``d``: axes ``X, Y, Z`` (9) and three checks.
+
+    Nagy's helper axis (:func:`._formulas.frame_axes`), or with an up hint the
+    look-at frame: ``Y`` the part of ``up`` perpendicular to ``Z``, ``X = Z x Y``
+    (:func:`._formulas.rolled_axes` at angle 0). Checks: ``d`` nonzero (a
+    directional light's own direction), ``d`` longer than the rounding noise of
+    the coordinates (``32 eps coords``; a point light at the blocker's centre),
+    ``up`` nonzero and not within ``256 eps`` radians of ``d``.
+    """
+    if has_up:
+        one = d[0] * 0.0 + 1.0
+        r = rolled_axes(d[0], d[1], d[2], up[0], up[1], up[2], one, one - 1.0)
+        axes = (r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8])
+        length = r[9]
+        up_len = where(fabs(up[0]) >= fabs(up[1]), fabs(up[0]), fabs(up[1]))
+        up_len = where(up_len >= fabs(up[2]), up_len, fabs(up[2]))
+        tolerance = 256.0 * eps
+        ok_up = (up_len > 0) & (r[10] > tolerance * tolerance)
+    else:
+        f = frame_axes(d[0], d[1], d[2])
+        axes = (f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8])
+        length = f[9]
+        ok_up = True
+    return axes, length > 0, length > 32.0 * eps * coords, ok_up
+
+
+def point_sides(
+    hi_x: Any, lo_x: Any, hi_y: Any, lo_y: Any, z_min: Any, reach: Any, eps: float
+) -> tuple[Any, Any, Any, Any]:
+    """The article's symmetric frustum: half-widths ``max(hi, -lo)`` of the ratios, two checks.
+
+    Thresholds relative to the blocker's reach from the light (``noise = 32 eps
+    reach``): a vertex is in front only when its ``z`` clears the rounding noise
+    of light coordinates, and a silhouette has width only when its ratios clear
+    ``2 noise / z_min``, in any units.
+    """
+    noise = 32.0 * eps * reach
+    half_x = where(hi_x >= -lo_x, hi_x, -lo_x)
+    half_y = where(hi_y >= -lo_y, hi_y, -lo_y)
+    ratio_noise = 2.0 * noise / where(z_min > 0, z_min, 1.0)
+    ok_sil = (half_x > ratio_noise) & (half_y > ratio_noise)
+    return half_x, half_y, z_min > noise, ok_sil
+
+
+def box_sides(
+    hi_x: Any, lo_x: Any, hi_y: Any, lo_y: Any, reach: Any, eps: float
+) -> tuple[Any, Any, Any, Any, Any]:
+    """A directional light's box: half-widths and centre of the light-space bounds, a check."""
+    half_x, half_y = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
+    noise = 64.0 * eps * reach  # twice the coordinates' noise, as for the ratios
+    ok_sil = (half_x > noise) & (half_y > noise)
+    return half_x, half_y, 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y), ok_sil
+
+
+def stable_sides(
+    r2_max: Any,
+    c: tuple[Any, Any, Any],
+    a: tuple[Any, ...],
+    texels: tuple[Any, Any, Any, Any],
+    reach: Any,
+    eps: float,
+) -> tuple[Any, Any, Any, Any, Any]:
+    """A stable map's box: the bounding sphere enlarged by half a texel, centre snapped.
+
+    ``texels = (m_x, m_y, width, height)``. The half-width ``h`` holds the sphere
+    of radius ``r`` after the centre moved by up to half a texel:
+    ``h (1 - 1 / (m W)) = r``, one texel being ``2 h / (m W)``. The centre's
+    coordinates along ``X`` and ``Y`` from the world origin, ``c . X``, are
+    rounded to whole texels, so the texel grid is anchored in world space.
+    Returns the half-widths, the centre's offsets from ``c`` and a check.
+    """
+    mx, my, width, height = texels
+    radius = sqrt(r2_max)
+    half_x = radius / (1.0 - 1.0 / (mx * width))
+    half_y = radius / (1.0 - 1.0 / (my * height))
+    tx, ty = 2.0 * half_x / (mx * width), 2.0 * half_y / (my * height)
+    ax = c[0] * a[0] + c[1] * a[1] + c[2] * a[2]
+    ay = c[0] * a[3] + c[1] * a[4] + c[2] * a[5]
+    safe_tx, safe_ty = where(tx > 0, tx, 1.0), where(ty > 0, ty, 1.0)
+    cx = rint(ax / safe_tx) * tx - ax
+    cy = rint(ay / safe_ty) * ty - ay
+    noise = 64.0 * eps * reach
+    return half_x, half_y, cx, cy, (half_x > noise) & (half_y > noise)
+
+
+def receiver_counted(
+    x: Any, y: Any, z: Any, sides: tuple[Any, Any, Any, Any], directional: bool
+) -> Any:
+    """True for a receiver point inside the map's side planes (and, for a point, in front).
+
+    ``sides = (s_x, s_y, c_x, c_y)``: NDC ``x = s_x (u - c_x)`` with ``u = x / z``
+    (perspective) or ``u = x`` (orthographic).
+    """
+    sx, sy, cx, cy = sides
+    if directional:
+        u, v = x, y
+    else:
+        safe_z = where(z > 0, z, 1.0)
+        u, v = x / safe_z, y / safe_z
+    inside = (fabs(sx * (u - cx)) <= 1.0) & (fabs(sy * (v - cy)) <= 1.0)
+    return inside & ((z > 0) | directional)
+
+
+def directional_origin(
+    z_lo: Any, z_hi: Any, half_x: Any, half_y: Any, c: tuple[Any, Any, Any], a: tuple[Any, ...]
+) -> tuple[Any, Any, Any, Any]:
+    """The directional frame's origin, behind everything counted, and the shift along ``Z``.
+
+    ``origin = c + Z (z_lo - pad)``, ``pad = (z_hi - z_lo) + max(h_x, h_y)``: the
+    depth range plus the box's size, so that ``near > 0`` with room to spare even
+    for a flat blocker seen face-on (``z_hi = z_lo``).
+    """
+    pad = (z_hi - z_lo) + where(half_x >= half_y, half_x, half_y)
+    shift = z_lo - pad
+    return c[0] + shift * a[6], c[1] + shift * a[7], c[2] + shift * a[8], shift
+
+
+def depth_range(
+    z: tuple[Any, Any, Any, Any],
+    given: tuple[Any, Any],
+    has: tuple[bool, bool],
+    slack: float,
+) -> tuple[Any, Any, tuple[Any, ...]]:
+    """``near`` and ``far``: given, or ``z_lo (1 - slack)`` and ``z_hi (1 + slack)``; checks.
+
+    ``z = (z_lo, z_hi, zb_min, zb_max)``: the counted range and the blocker's own.
+    Checks (in order): given near finite, given far finite, given near ``> 0``,
+    ``near < far``, given near not cutting into the blocker, given far neither.
+    """
+    z_lo, z_hi, zb_min, zb_max = z
+    if has[0]:
+        near = given[0]
+        ok_nf, ok_pos, ok_nclip = isfinite(near), near > 0, near <= zb_min
+    else:
+        near = z_lo * (1.0 - slack)
+        ok_nf, ok_pos, ok_nclip = True, True, True
+    if has[1]:
+        far = given[1]
+        ok_ff, ok_fclip = isfinite(far), far >= zb_max
+    else:
+        far = z_hi * (1.0 + slack)
+        ok_ff, ok_fclip = True, True
+    return near, far, (ok_nf, ok_ff, ok_pos, near < far, ok_nclip, ok_fclip)
+
+
+def ortho_rows(sx: Any, sxc: Any, sy: Any, syc: Any, near: Any, far: Any) -> tuple[Any, ...]:
+    """The nonzero entries of an orthographic box's projection (light to OpenGL clip).
+
+    ``P = [[sx, 0, 0, -sx cx], [0, sy, 0, -sy cy], [0, 0, a, b], [0, 0, 0, 1]]``,
+    ``a = 2 / (f - n)``, ``b = -(f + n) / (f - n)``: depth ``-1`` at near, ``+1`` at far.
+    """
+    inv = 1.0 / (far - near)
+    return sx, sxc, sy, syc, 2.0 * inv, -(far + near) * inv
+
+
+def ortho_clip_rows(w: tuple[Any, ...], p: tuple[Any, ...]) -> tuple[Any, ...]:
+    """``P @ world_to_light`` for an orthographic ``P`` (:func:`ortho_rows`), 16 entries."""
+    sx, sxc, sy, syc, a, b = p
+    zero = fabs(w[0]) * 0.0  # +0.0 in the array's dtype
+    return (
+        sx * w[0], sx * w[1], sx * w[2], sx * w[3] + sxc,
+        sy * w[4], sy * w[5], sy * w[6], sy * w[7] + syc,
+        a * w[8], a * w[9], a * w[10], a * w[11] + b,
+        zero, zero, zero, zero + 1.0,
+    )  # fmt: skip
+
+
+def _cdot(c: tuple[float, ...], i: int, m0: Any, m1: Any, m2: Any, m3: Any) -> Any:
+    """Row ``i`` of the constant ``c`` (16 floats) times a column: exact zeros and ones skipped.
+
+    (So the identity costs nothing on whole arrays; the first term is always formed,
+    which keeps the type the same for the compiled loop.)
+    """
+    c0, c1, c2, c3 = c[4 * i], c[4 * i + 1], c[4 * i + 2], c[4 * i + 3]
+    t = m0 if c0 == 1.0 else c0 * m0
+    started = c0 != 0.0
+    if c1 != 0.0:
+        u = m1 if c1 == 1.0 else c1 * m1
+        t = t + u if started else u
+        started = True
+    if c2 != 0.0:
+        u = m2 if c2 == 1.0 else c2 * m2
+        t = t + u if started else u
+        started = True
+    if c3 != 0.0:
+        u = m3 if c3 == 1.0 else c3 * m3
+        t = t + u if started else u
+    return t
+
+
+def const_times(c: tuple[float, ...], m: tuple[Any, ...]) -> tuple[Any, ...]:
+    """``C @ M`` for a constant ``C`` (16 row-major floats) and 16 row-major entries ``M``."""
+    return (
+        _cdot(c, 0, m[0], m[4], m[8], m[12]), _cdot(c, 0, m[1], m[5], m[9], m[13]),
+        _cdot(c, 0, m[2], m[6], m[10], m[14]), _cdot(c, 0, m[3], m[7], m[11], m[15]),
+        _cdot(c, 1, m[0], m[4], m[8], m[12]), _cdot(c, 1, m[1], m[5], m[9], m[13]),
+        _cdot(c, 1, m[2], m[6], m[10], m[14]), _cdot(c, 1, m[3], m[7], m[11], m[15]),
+        _cdot(c, 2, m[0], m[4], m[8], m[12]), _cdot(c, 2, m[1], m[5], m[9], m[13]),
+        _cdot(c, 2, m[2], m[6], m[10], m[14]), _cdot(c, 2, m[3], m[7], m[11], m[15]),
+        _cdot(c, 3, m[0], m[4], m[8], m[12]), _cdot(c, 3, m[1], m[5], m[9], m[13]),
+        _cdot(c, 3, m[2], m[6], m[10], m[14]), _cdot(c, 3, m[3], m[7], m[11], m[15]),
+    )  # fmt: skip
+
+
+def fit_rows(
+    origin: tuple[Any, Any, Any],
+    a: tuple[Any, ...],
+    box: tuple[Any, Any, Any, Any, Any, Any],
+    margins: tuple[float, float],
+    directional: bool,
+    api: tuple[tuple[float, ...], tuple[float, ...]],
+) -> tuple[tuple[Any, ...], tuple[Any, ...], tuple[Any, ...]]:
+    """``world_to_light`` (12), ``blocker_to_clip`` without placement (16), ``world_to_texture``.
+
+    ``box = (h_x, h_y, c_x, c_y, near, far)``, already safe (``h > 0``, ``far > near``).
+    ``api = (C, T C)``: OpenGL clip to the API's clip, and to its texture coordinates.
+    """
+    hx, hy, cx, cy, near, far = box
+    w = light_rows(
+        origin[0], origin[1], origin[2], a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8]
+    )
+    sx, sy = margins[0] / hx, margins[1] / hy
+    if directional:
+        gl = ortho_clip_rows(w, ortho_rows(sx, -sx * cx, sy, -sy * cy, near, far))
+    else:
+        gl = clip_rows(w, projection_rows(sx, sy, cx, cy, near, far))
+    return w, const_times(api[0], gl), const_times(api[1], gl)
+
+
+def safe_box(
+    half_x: Any, half_y: Any, cx: Any, cy: Any, near: Any, far: Any
+) -> tuple[Any, Any, Any, Any, Any, Any]:
+    """The box with safe divisors (``h > 0``, ``far > near``); invalid entries are poisoned."""
+    return (
+        where(half_x > 0, half_x, 1.0),
+        where(half_y > 0, half_y, 1.0),
+        cx,
+        cy,
+        where(near > 0, near, 1.0),
+        where(far > near, far, where(near > 0, near, 1.0) + 1.0),
+    )
+
+
+FUNCTIONS = (
+    "place",
+    "to_light",
+    "fit_axes",
+    "point_sides",
+    "box_sides",
+    "stable_sides",
+    "receiver_counted",
+    "directional_origin",
+    "depth_range",
+    "ortho_rows",
+    "ortho_clip_rows",
+    "_cdot",
+    "const_times",
+    "fit_rows",
+    "safe_box",
+)

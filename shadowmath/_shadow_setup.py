@@ -1,0 +1,57 @@
+""":class:`ShadowSetup`, what every fit returns, and its matrices from a frame and frustum."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from ._frame import LightFrame, light_entries, stack_matrix
+from ._frustum import Frustum, projection_terms
+from ._specialize import formulas
+from ._validate import Array, Checks, Context
+
+
+class ShadowSetup(NamedTuple):
+    """Everything a renderer needs to draw and apply one shadow map.
+
+    Attributes:
+        frame: the :class:`LightFrame`.
+        frustum: the fitted :class:`Frustum` (``orthographic=True`` for a
+            directional light: a box, see :class:`Frustum`).
+        world_to_light: ``(*batch, 4, 4)`` world to light coordinates.
+        blocker_to_world: ``(*batch, 4, 4)`` the blocker's placement (identity if none).
+        blocker_to_clip: ``(*batch, 4, 4)`` the article's ``M_BlockerLocalToShadowMap``:
+            draw the shadow map with it (``gl_Position = blocker_to_clip * p_local``).
+        world_to_texture: ``(*batch, 4, 4)`` the article's ``M_WorldToShadowMapST``:
+            world points to ``(s q, t q, r q, q)``.
+    """
+
+    frame: LightFrame
+    frustum: Frustum
+    world_to_light: Array
+    blocker_to_world: Array
+    blocker_to_clip: Array
+    world_to_texture: Array
+
+
+def setup_from(
+    ctx: Context, checks: Checks, frame: LightFrame, frustum: Frustum, B: Array | None
+) -> ShadowSetup:
+    """The OpenGL matrices of a trusted frame and perspective frustum, in closed form."""
+    xp = ctx.xp
+    F = formulas(xp)
+    W = light_entries(xp, frame)
+    clip = F.clip_rows(W, projection_terms(xp, frustum))
+    tex = F.texture_rows(clip)
+    if B is not None:
+        b = tuple(B[..., i // 4, i % 4] for i in range(16))
+        clip = F.compose_rows(clip, b)
+    shape = tuple(frustum.near.shape)
+    placement = xp.eye(4, dtype=ctx.dtype) if B is None else B
+    return ShadowSetup(
+        frame=frame,
+        frustum=frustum,
+        world_to_light=checks.poison(stack_matrix(xp, W), 2),
+        blocker_to_world=xp.broadcast_to(placement, (*shape, 4, 4)),
+        blocker_to_clip=checks.poison(stack_matrix(xp, clip), 2),
+        world_to_texture=checks.poison(stack_matrix(xp, tex), 2),
+    )

@@ -1,0 +1,166 @@
+"""The shadow map's spec: what a renderer decides once per light, and the fits' cache key.
+
+:class:`ShadowMapSpec` is the public, hashable set of options (size, border or PCF
+kernel, graphics API, reversed Z, stable), checked once when it is made, like
+Filament's ``ShadowOptions`` or three.js's ``LightShadow``. :class:`FitKey` adds
+what the call's arguments make static (the light's kind, which optional arrays
+were given) and is the key of every cached jit and compiled loop variant.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ._bias import PcfFilter, _check_kernel
+from ._conventions import GraphicsApi, _check_api, _clip_from_gl, _texture_from_gl_clip
+from ._frustum import _margins, _texels
+from ._pcf import _border_texels
+
+
+@dataclasses.dataclass(frozen=True)
+class ShadowMapSpec:
+    """How one shadow map is laid out and used: the options of a fit that are not arrays.
+
+    Hashable and checked when made, so a renderer builds it once per light and
+    passes it every frame (``fit_shadow(light, vertices, spec)``); it is also the
+    cache key of the compiled and jitted fits.
+
+    Attributes:
+        size: ``(width, height)`` in texels (an int ``n`` means ``(n, n)``).
+        border_texels: texels left empty on each side; default 1, or
+            :func:`pcf_border_texels` of ``pcf_radius`` when a radius is given.
+        pcf_radius, pcf_filter: the PCF kernel the map will be filtered with; it
+            sets the default border (give ``border_texels`` or ``pcf_radius``, not both).
+        margin: force the fraction of the half-extent inside the border (a float or
+            ``(margin_x, margin_y)`` in ``(0, 1]``) instead of deriving it from the
+            size and border (exclusive with ``border_texels`` and ``pcf_radius``).
+        api: ``"opengl"`` (default), ``"vulkan"``, ``"direct3d"``, ``"metal"`` or
+            ``"webgpu"``: the clip and texture conventions of the matrices.
+        reversed_z: store depth 1 at near and 0 at far.
+        stable: snap a directional map to whole texels of a world-anchored grid at
+            a fixed scale (no shimmering); for a point light, a frame that cannot
+            jump (the fit then needs ``up``).
+
+    Raises:
+        ValueError: a non-integer or non-positive size, a map no larger than its
+            borders, a negative border, an unknown API or PCF filter, a margin outside
+            ``(0, 1]``, conflicting border options, or ``stable=True`` with a map of at
+            most one texel inside its border.
+
+    Example:
+        >>> spec = ShadowMapSpec(1024, pcf_radius=1, api="vulkan")
+        >>> spec.size, spec.margins
+        ((1024, 1024), (0.99609375, 0.99609375))
+    """
+
+    size: tuple[int, int]
+    border_texels: int | None = None
+    pcf_radius: int | None = None
+    pcf_filter: PcfFilter = "box"
+    margin: float | tuple[float, float] | None = None
+    api: GraphicsApi = "opengl"
+    reversed_z: bool = False
+    stable: bool = False
+
+    def __init__(
+        self,
+        size: int | tuple[int, int],
+        *,
+        border_texels: int | None = None,
+        pcf_radius: int | None = None,
+        pcf_filter: PcfFilter = "box",
+        margin: float | tuple[float, float] | None = None,
+        api: GraphicsApi = "opengl",
+        reversed_z: bool = False,
+        stable: bool = False,
+    ) -> None:
+        m: Any = margin
+        if isinstance(m, list | np.ndarray):  # hashable, as a spec must be
+            m = tuple(float(v) for v in m)
+        values = {
+            "size": _texels("map_size", size),
+            "border_texels": border_texels,
+            "pcf_radius": pcf_radius,
+            "pcf_filter": pcf_filter,
+            "margin": m,
+            "api": api,
+            "reversed_z": reversed_z,
+            "stable": stable,
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+        _check(self)
+
+    @property
+    def margins(self) -> tuple[float, float]:
+        """``(margin_x, margin_y)``: the fraction of the map's half-extent inside the border."""
+        return _spec_margins(self)
+
+    @property
+    def border(self) -> int:
+        """The border in texels actually used (``border_texels``, the PCF kernel's, or 1)."""
+        if self.border_texels is not None:
+            return self.border_texels
+        if self.pcf_radius is not None:
+            return _border_texels(*_check_kernel(self.pcf_radius, self.pcf_filter))
+        return 1
+
+
+def _check(spec: ShadowMapSpec) -> None:
+    _check_api(spec.api, spec.reversed_z)
+    if not isinstance(spec.stable, bool | np.bool_):
+        raise ValueError(f"stable: expected True or False, got {spec.stable!r}")
+    _check_kernel(0 if spec.pcf_radius is None else spec.pcf_radius, spec.pcf_filter)
+    given = [n for n in ("border_texels", "pcf_radius", "margin") if getattr(spec, n) is not None]
+    if len(given) > 1:
+        raise ValueError(
+            f"{' and '.join(given)}: give one of border_texels, pcf_radius and margin (each "
+            "sets the map's border)"
+        )
+    mx, my = spec.margins
+    if spec.stable:
+        for axis, m, size in (("x", mx, spec.size[0]), ("y", my, spec.size[1])):
+            if m * size <= 1:
+                raise ValueError(
+                    f"map_size: stable=True needs more than one texel inside the border "
+                    f"along {axis} (got {m * size:g})"
+                )
+
+
+@functools.lru_cache(maxsize=256)
+def _spec_margins(spec: ShadowMapSpec) -> tuple[float, float]:
+    return _margins(spec.size, spec.border, spec.margin)
+
+
+@functools.lru_cache(maxsize=256)
+def spec_from_options(size: Any, **options: Any) -> ShadowMapSpec:
+    """A spec from ``fit_shadow``'s keyword options (cached: the same few recur every frame)."""
+    return ShadowMapSpec(size, **options)
+
+
+class FitKey(NamedTuple):
+    """Everything static about one fit call: the key of its cached jit and compiled loop."""
+
+    directional: bool
+    aim_bbox: bool
+    stable: bool
+    margins: tuple[float, float]
+    texels: tuple[int, int]
+    api: tuple[tuple[float, ...], tuple[float, ...]]  # OpenGL clip -> API clip, -> texture
+    has_placement: bool
+    has_receivers: bool
+    has_up: bool
+    has_near: bool
+    has_far: bool
+
+
+@functools.lru_cache(maxsize=256)
+def api_rows(api: str, reversed_z: bool) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """``C`` and ``T C`` of :func:`api_convention` as 16 row-major floats each."""
+    C = tuple(v for row in _clip_from_gl(api, reversed_z) for v in row)
+    TC = tuple(v for row in _texture_from_gl_clip(api, reversed_z) for v in row)
+    return C, TC

@@ -1,0 +1,85 @@
+"""Bind the per-entry formulas to a backend: NumPy or JAX arrays, Python or Numba scalars.
+
+The formulas of :mod:`._formulas` and :mod:`._fit_formulas` are written with five
+primitives (``where``, ``sqrt``, ``fabs``, ``rint``, ``isfinite``). :func:`specialize`
+copies every one of them into one namespace where those names mean one backend's
+functions, so a specialized formula calls specialized formulas: the frame, the
+frustum, the fits and the matrices are written once and the backends cannot drift.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import types
+from collections.abc import Callable
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from . import _fit_formulas, _formulas
+
+_MODULES = ((_formulas, _formulas.FUNCTIONS), (_fit_formulas, _fit_formulas.FUNCTIONS))
+
+
+def specialize(
+    primitives: dict[str, Any], wrap: Callable[[Any], Any] | None = None
+) -> types.SimpleNamespace:
+    """Copies of the formulas with the primitives bound to one backend.
+
+    ``wrap`` (e.g. ``numba.njit``) is applied to each copy; the copies call one
+    another through the same namespace, so a compiled formula calls compiled ones.
+    """
+    namespace: dict[str, Any] = {}
+    for module, _ in _MODULES:
+        namespace.update(vars(module))
+    namespace.update(primitives)
+    names = [name for _, functions in _MODULES for name in functions]
+    for name in names:
+        func = namespace[name]
+        copy = types.FunctionType(func.__code__, namespace, name, func.__defaults__)
+        namespace[name] = wrap(copy) if wrap is not None else copy
+    return types.SimpleNamespace(**{name: namespace[name] for name in names})
+
+
+@functools.cache
+def formulas(xp: ModuleType) -> types.SimpleNamespace:
+    """The formulas specialized to the array namespace ``xp`` (NumPy or ``jax.numpy``)."""
+    where = xp.where if xp is not np else _numpy_where
+    return specialize(
+        {"where": where, "sqrt": xp.sqrt, "fabs": xp.abs, "rint": xp.round, "isfinite": xp.isfinite}
+    )
+
+
+@functools.cache
+def scalar_formulas() -> types.SimpleNamespace:
+    """The formulas on Python floats: one NumPy batch entry without the array overhead."""
+    return specialize(
+        {
+            "where": _scalar_where,
+            "sqrt": math.sqrt,
+            "fabs": abs,
+            "rint": _rint,
+            "isfinite": math.isfinite,
+        }
+    )
+
+
+def _scalar_where(c: Any, a: Any, b: Any) -> Any:
+    return a if c else b
+
+
+def _rint(x: float) -> float:
+    return float(round(x))  # half to even, as NumPy's round
+
+
+def _numpy_where(c: Any, a: Any, b: Any) -> Any:
+    """``np.where`` keeping the arrays' dtype: a Python float is weak, as in JAX.
+
+    (``np.where`` turns a Python float into a float64 array, which would
+    promote float32 work to float64.)
+    """
+    dtypes = [v.dtype for v in (a, b) if isinstance(v, np.ndarray | np.generic)]
+    out = np.where(c, a, b)
+    return out.astype(np.result_type(*dtypes), copy=False) if dtypes else out

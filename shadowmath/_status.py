@@ -1,0 +1,87 @@
+"""One table of the fits' value checks: their order, their status bits and their messages.
+
+A fit's per-entry formulas (:mod:`._fit_formulas`) return their checks as booleans
+(True: valid). The array path hands each to ``Checks.require`` with its message
+from this table; the compiled loops set the check's bit in a status word, and the
+boundary raises the message of the first failing bit, in the same order. The bit
+of a check is ``1 << index`` in :data:`FIT_CHECKS`, so order, bit and message can
+never disagree.
+"""
+
+from __future__ import annotations
+
+from . import _messages as msg
+from ._validate import non_finite
+
+#: The fits' checks in the order their failures are reported.
+FIT_CHECKS: tuple[tuple[str, str], ...] = (
+    ("light", non_finite("light")),
+    ("vertices", non_finite("blocker_vertices")),
+    ("placement", non_finite("blocker_to_world")),
+    ("receivers", non_finite("receivers")),
+    ("up", non_finite("up")),
+    ("projective", msg.PROJECTIVE_PLACEMENT),
+    ("zero_light", msg.ZERO_DIRECTIONAL),
+    ("direction", msg.ZERO_DIRECTION),
+    ("up_parallel", msg.UP_PARALLEL),
+    ("behind", msg.BEHIND_LIGHT),
+    ("silhouette", msg.ZERO_SILHOUETTE),
+    ("near_finite", msg.NEAR_NOT_FINITE),
+    ("far_finite", msg.FAR_NOT_FINITE),
+    ("near_positive", msg.NEAR_POSITIVE),
+    ("near_far", msg.NEAR_FAR),
+    ("near_clips", msg.NEAR_CLIPS),
+    ("far_clips", msg.FAR_CLIPS),
+    ("overflow", msg.OVERFLOW),
+)
+
+_INDEX = {name: i for i, (name, _) in enumerate(FIT_CHECKS)}
+
+
+def bit(name: str) -> int:
+    """The status bit of the check ``name``."""
+    return 1 << _INDEX[name]
+
+
+# Bits used by the compiled loops (module constants: Numba freezes them at compile time).
+LIGHT = bit("light")
+VERTICES = bit("vertices")
+PLACEMENT = bit("placement")
+RECEIVERS = bit("receivers")
+UP = bit("up")
+PROJECTIVE = bit("projective")
+OVERFLOW = bit("overflow")
+
+#: The order of the checks that the per-entry formulas return as a tuple of booleans.
+FORMULA_CHECKS = (
+    "zero_light",
+    "direction",
+    "up_parallel",
+    "behind",
+    "silhouette",
+    "near_finite",
+    "far_finite",
+    "near_positive",
+    "near_far",
+    "near_clips",
+    "far_clips",
+)
+FORMULA_BITS = tuple(bit(name) for name in FORMULA_CHECKS)
+
+
+def fit_messages(vertices_finite: bool) -> tuple[tuple[int, str], ...]:
+    """``(bit, message)`` in report order; a non-finite sum of finite vertices is an overflow."""
+    out = []
+    for i, (name, message) in enumerate(FIT_CHECKS):
+        if name == "vertices" and vertices_finite:
+            message = msg.OVERFLOW
+        out.append((1 << i, message))
+    return tuple(out)
+
+
+# planar_projection's loop: its own five checks, in order.
+PLANAR_NONFINITE_PLANE = 1
+PLANAR_NONFINITE_LIGHT = 2
+PLANAR_ZERO_NORMAL = 4
+PLANAR_ZERO_LIGHT = 8
+PLANAR_IN_PLANE = 16

@@ -1,0 +1,45 @@
+"""Typed lights: the light's kind is its type, never a value read at run time.
+
+Each light is a NamedTuple of arrays, so it is a JAX pytree (``jit``, ``vmap`` and
+``grad`` go through it) and takes leading batch dimensions like every array in
+shadowmath. :func:`fit_shadow` picks the fit by the type: both kinds are never
+computed for one entry. The homogeneous form ``(x, y, z, w)`` is read into one of
+these types once per call (see :func:`fit_shadow`).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from ._validate import Array
+
+
+class PointLight(NamedTuple):
+    """A point light (shining every way from a point): a perspective shadow map.
+
+    Attributes:
+        position: ``(*batch, 3)`` the light's position ``(x, y, z)`` in world coordinates.
+
+    Example:
+        >>> import numpy as np
+        >>> PointLight(np.array([0.0, 4.0, 2.0])).position.shape
+        (3,)
+    """
+
+    position: Array
+
+
+class DirectionalLight(NamedTuple):
+    """A directional light (parallel rays, like the sun): an orthographic shadow map.
+
+    Attributes:
+        direction: ``(*batch, 3)`` a vector pointing from the scene *toward* the
+            light (any nonzero length): the homogeneous light ``(x, y, z, 0)``.
+
+    Example:
+        >>> import numpy as np
+        >>> DirectionalLight(np.array([0.3, 1.0, -0.2])).direction.shape
+        (3,)
+    """
+
+    direction: Array
