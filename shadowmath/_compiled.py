@@ -38,15 +38,22 @@ def fit(ctx: Context, key: FitKey, shape: tuple[int, ...], a: Inputs) -> ShadowS
     out = np.empty((count, ROW), dtype=ctx.dtype)
     mats = np.empty((count, 4, 4, 4), dtype=ctx.dtype)
     status = np.empty(count, dtype=np.int32)
-    arrays = (
-        flat_batch(a.light, shape, (3,)),
-        flat_batch(a.verts, shape, a.verts.shape[-2:]),
+    one = count == 1
+    _kernels.loops().fit_loop(
+        a.light.reshape(1, 3) if one else flat_batch(a.light, shape, (3,)),
+        a.verts.reshape(1, *a.verts.shape[-2:])
+        if one
+        else flat_batch(a.verts, shape, a.verts.shape[-2:]),
         _IDENTITY if a.B is None else flat_batch(a.B, shape, (4, 4)),
         _NO_POINTS if a.R is None else flat_batch(a.R, shape, a.R.shape[-2:]),
         _NO_VECTOR if a.U is None else flat_batch(a.U, shape, (3,)),
+        _NONE if a.near is None else flat_batch(a.near, shape, ()),
+        _NONE if a.far is None else flat_batch(a.far, shape, ()),
+        options(key, ctx.dtype),
+        out,
+        mats,
+        status,
     )
-    given = tuple(_NONE if v is None else flat_batch(v, shape, ()) for v in (a.near, a.far))
-    _kernels.loops().fit_loop(arrays, given, _options(key, ctx.dtype), key.api, out, mats, status)
     if status[0] if count == 1 else status.any():
         finite = bool(np.isfinite(a.verts).all())
         raise_status(status.reshape(shape), fit_messages(finite))
@@ -73,19 +80,25 @@ def _frustum(v: tuple[Array, ...], directional: bool) -> Frustum:
 
 
 @functools.lru_cache(maxsize=64)
-def _options(key: FitKey, dtype: Any) -> tuple[Any, ...]:
-    """The loop's static options, in the order :func:`._loops.fit_loop` reads them."""
-    return (
+def options(key: FitKey, dtype: Any) -> Array:
+    """The loop's static options as one read-only float64 array (see :func:`._loops._unpack`)."""
+    values = (
         key.aim_bbox,
         key.has_placement,
         key.has_receivers,
         key.has_up,
         dtype == np.float32,
-        key.margins,
+        *key.margins,
         float(np.finfo(dtype).eps),
         key.stable,
-        (float(key.texels[0]), float(key.texels[1])),
+        *key.texels,
         key.directional,
-        (key.has_near, key.has_far),
+        key.has_near,
+        key.has_far,
         NEAR_FAR_SLACK,
+        *key.api[0],
+        *key.api[1],
     )
+    opts = np.array(values, dtype=np.float64)
+    opts.flags.writeable = False
+    return opts

@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 from ._frustum import NEAR_FAR_SLACK
 from ._spec import FitKey
-from ._specialize import formulas
+from ._specialize import formulas, scalar_formulas
 from ._status import FIT_CHECKS, FORMULA_CHECKS
 from ._validate import Array, Checks, Context, all_finite
 
@@ -46,10 +46,53 @@ class Inputs(NamedTuple):
     far: Array | None
 
 
-def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs) -> FitEntries:
+class Driver(NamedTuple):
+    """How one call runs the steps: its namespace, and its formulas per vertex and per entry.
+
+    On whole arrays both are ``formulas(xp)`` and per-entry values are ``(*batch,)``
+    arrays (``expand`` broadcasts them against ``(*batch, N)``). For one NumPy
+    entry (batch shape ``()``) the per-entry steps run on Python floats
+    (``scalar_formulas()``), which costs microseconds instead of the 0-d array
+    overhead of hundreds of NumPy calls; the vertex passes stay NumPy.
+    """
+
+    xp: ModuleType
+    Fv: SimpleNamespace  # per-vertex formulas (whole arrays)
+    Fe: SimpleNamespace  # per-entry formulas
+    eps: float
+    scalar: bool
+
+    def entry(self, v: Array) -> Array:
+        """A reduction's result as a per-entry value."""
+        return float(v) if self.scalar else v
+
+    def expand(self, values: tuple[Array, ...]) -> tuple[Array, ...]:
+        """Per-entry values broadcast against ``(*batch, N)`` vertex components."""
+        return values if self.scalar else tuple(v[..., None] for v in values)
+
+    def bounds(self, x: Array) -> tuple[Array, Array]:
+        return self.entry(self.xp.max(x, axis=-1)), self.entry(self.xp.min(x, axis=-1))
+
+    def sums(self, c: Components) -> tuple[Array, ...]:
+        return tuple(self.entry(self.xp.sum(v, axis=-1)) for v in c)
+
+    def max_abs(self, *vs: Array) -> Array:
+        xp = self.xp
+        out = xp.max(xp.abs(vs[0]), axis=-1)
+        for v in vs[1:]:
+            out = xp.maximum(out, xp.max(xp.abs(v), axis=-1))
+        return self.entry(out)
+
+
+def driver(ctx: Context, scalar: bool) -> Driver:
+    """The driver of one call; ``scalar`` for one NumPy entry."""
+    F = formulas(ctx.xp)
+    return Driver(ctx.xp, F, scalar_formulas() if scalar else F, ctx.eps, scalar)
+
+
+def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs, d: Driver) -> FitEntries:
     """The fit of ``key`` on shape-checked arrays; every value check goes to ``checks``."""
     xp = ctx.xp
-    F = formulas(xp)
     flags: dict[str, Array] = {
         "light": all_finite(xp, a.light, 1),
         "vertices": all_finite(xp, a.verts, 2),
@@ -60,9 +103,9 @@ def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs) -> FitEntri
         flags["receivers"] = all_finite(xp, a.R, 2)
     if a.U is not None:
         flags["up"] = all_finite(xp, a.U, 1)
-    world = _world(xp, F, a.verts, a.B, flags)
+    world = _world(d, a.verts, a.B, flags)
     fit = _directional if key.directional else _point
-    entries = fit(ctx, F, key, a, world, flags)
+    entries = fit(d, key, a, world, flags)
     for name, _ in FIT_CHECKS:  # in report order
         ok = flags.get(name, True)
         if ok is not True:
@@ -73,121 +116,92 @@ def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs) -> FitEntri
 _MESSAGES = dict(FIT_CHECKS)
 
 
-def _world(
-    xp: ModuleType, F: SimpleNamespace, verts: Array, B: Array | None, flags: dict[str, Array]
-) -> Components:
+def _world(d: Driver, verts: Array, B: Array | None, flags: dict[str, Array]) -> Components:
     """The vertices' world components, through the placement (checked: ``w > 0``)."""
     px, py, pz = verts[..., 0], verts[..., 1], verts[..., 2]
     if B is None:
         return px, py, pz
     b = tuple(B[..., None, i // 4, i % 4] for i in range(16))
-    x, y, z, w = F.place(b, px, py, pz)
-    flags["projective"] = xp.all(w > 0, axis=-1)
+    x, y, z, w = d.Fv.place(b, px, py, pz)
+    flags["projective"] = d.xp.all(w > 0, axis=-1)
     return x, y, z
 
 
-def _components(v: Array | None) -> Components:
+def _components(d: Driver, v: Array | None) -> Components:
     if v is None:
         return 0.0, 0.0, 0.0
-    return v[..., 0], v[..., 1], v[..., 2]
+    return d.entry(v[..., 0]), d.entry(v[..., 1]), d.entry(v[..., 2])
 
 
-def _expand(values: tuple[Array, ...]) -> tuple[Array, ...]:
-    """Per-entry components broadcast against ``(*batch, N)`` vertex components."""
-    return tuple(v[..., None] for v in values)
-
-
-def _finite3(xp: ModuleType, s: tuple[Array, ...]) -> Array:
-    return xp.isfinite(s[0]) & xp.isfinite(s[1]) & xp.isfinite(s[2])
-
-
-def _bounds(xp: ModuleType, x: Array) -> tuple[Array, Array]:
-    return xp.max(x, axis=-1), xp.min(x, axis=-1)
-
-
-def _max_abs(xp: ModuleType, *vs: Array) -> Array:
-    out = xp.max(xp.abs(vs[0]), axis=-1)
-    for v in vs[1:]:
-        out = xp.maximum(out, xp.max(xp.abs(v), axis=-1))
-    return out
+def _finite3(d: Driver, s: tuple[Array, ...]) -> Array:
+    return d.Fe.isfinite(s[0]) & d.Fe.isfinite(s[1]) & d.Fe.isfinite(s[2])
 
 
 def _point(
-    ctx: Context,
-    F: SimpleNamespace,
-    key: FitKey,
-    a: Inputs,
-    world: Components,
-    flags: dict[str, Array],
+    d: Driver, key: FitKey, a: Inputs, world: Components, flags: dict[str, Array]
 ) -> FitEntries:
     """The article's MDV fit of a point light (with or without ``up``), on whole arrays."""
-    xp, eps = ctx.xp, ctx.eps
-    L = _components(a.light)
-    o = tuple(p - lc[..., None] for p, lc in zip(world, L, strict=True))
-    sums = tuple(xp.sum(c, axis=-1) for c in o)
+    xp, eps = d.xp, d.eps
+    L = _components(d, a.light)
+    o = tuple(p - lc for p, lc in zip(world, d.expand(L), strict=True))
+    sums = d.sums(o)
     if key.aim_bbox:
-        d = tuple(0.5 * (hi + lo) for hi, lo in (_bounds(xp, c) for c in o))
+        aim = tuple(0.5 * (hi + lo) for hi, lo in (d.bounds(c) for c in o))
     else:
-        d = tuple(s / o[0].shape[-1] for s in sums)
-    flags["overflow"] = _finite3(xp, sums)
-    reach = _max_abs(xp, *o)
-    coords = xp.maximum(_max_abs(xp, *world), _max_abs(xp, a.light))
-    axes, _, flags["direction"], flags["up_parallel"] = F.fit_axes(
-        d, _components(a.U), key.has_up, coords, eps
+        aim = tuple(s / o[0].shape[-1] for s in sums)
+    flags["overflow"] = _finite3(d, sums)
+    reach = d.max_abs(*o)
+    coords = xp.maximum(d.max_abs(*world), d.max_abs(a.light))
+    axes, _, flags["direction"], flags["up_parallel"] = d.Fe.fit_axes(
+        aim, _components(d, a.U), key.has_up, coords, eps
     )
-    x, y, z = F.to_light(*o, _expand(axes))
+    x, y, z = d.Fv.to_light(*o, d.expand(axes))
     safe_z = xp.where(z > 0, z, xp.ones_like(z))
-    (hi_x, lo_x), (hi_y, lo_y) = _bounds(xp, x / safe_z), _bounds(xp, y / safe_z)
-    zb_max, zb_min = _bounds(xp, z)
-    half_x, half_y, flags["behind"], flags["silhouette"] = F.point_sides(
+    (hi_x, lo_x), (hi_y, lo_y) = d.bounds(x / safe_z), d.bounds(y / safe_z)
+    zb_max, zb_min = d.bounds(z)
+    half_x, half_y, flags["behind"], flags["silhouette"] = d.Fe.point_sides(
         hi_x, lo_x, hi_y, lo_y, zb_min, reach, eps
     )
     zero = 0.0 * half_x
     sides = (half_x, half_y, zero, zero)
-    z_lo, z_hi = _receivers(xp, F, key, a, L, axes, sides, (zb_min, zb_max))
-    return _finish(F, key, a, flags, L, axes, sides, (z_lo, z_hi, zb_min, zb_max))
+    z_lo, z_hi = _receivers(d, key, a, L, axes, sides, (zb_min, zb_max))
+    return _finish(d, key, a, flags, L, axes, sides, (z_lo, z_hi, zb_min, zb_max))
 
 
 def _directional(
-    ctx: Context,
-    F: SimpleNamespace,
-    key: FitKey,
-    a: Inputs,
-    world: Components,
-    flags: dict[str, Array],
+    d: Driver, key: FitKey, a: Inputs, world: Components, flags: dict[str, Array]
 ) -> FitEntries:
     """The orthographic fit of a directional light (box or stable), on whole arrays."""
-    xp, eps = ctx.xp, ctx.eps
-    d = tuple(-c for c in _components(a.light))
-    coords = _max_abs(xp, *world)
-    axes, flags["zero_light"], _, flags["up_parallel"] = F.fit_axes(
-        d, _components(a.U), key.has_up, coords, eps
+    xp, eps = d.xp, d.eps
+    toward = tuple(-c for c in _components(d, a.light))
+    coords = d.max_abs(*world)
+    axes, flags["zero_light"], _, flags["up_parallel"] = d.Fe.fit_axes(
+        toward, _components(d, a.U), key.has_up, coords, eps
     )
-    sums = tuple(xp.sum(c, axis=-1) for c in world)
-    flags["overflow"] = _finite3(xp, sums)
+    sums = d.sums(world)
+    flags["overflow"] = _finite3(d, sums)
     if key.stable:  # the bounding sphere about the mean turns with the blocker
         c = tuple(s / world[0].shape[-1] for s in sums)
     else:
-        c = tuple(0.5 * (hi + lo) for hi, lo in (_bounds(xp, p) for p in world))
-    o = tuple(p - cc[..., None] for p, cc in zip(world, c, strict=True))
-    reach = _max_abs(xp, *o)
-    x, y, z = F.to_light(*o, _expand(axes))
-    zb_max, zb_min = _bounds(xp, z)
+        c = tuple(0.5 * (hi + lo) for hi, lo in (d.bounds(p) for p in world))
+    o = tuple(p - cc for p, cc in zip(world, d.expand(c), strict=True))
+    reach = d.max_abs(*o)
+    x, y, z = d.Fv.to_light(*o, d.expand(axes))
+    zb_max, zb_min = d.bounds(z)
     if key.stable:
-        r2 = xp.max(x * x + y * y + z * z, axis=-1)
+        r2 = d.entry(xp.max(x * x + y * y + z * z, axis=-1))
         texels = (*key.margins, *key.texels)
-        *sides, flags["silhouette"] = F.stable_sides(r2, c, axes, texels, reach, eps)
+        *sides, flags["silhouette"] = d.Fe.stable_sides(r2, c, axes, texels, reach, eps)
     else:
-        *sides, flags["silhouette"] = F.box_sides(*_bounds(xp, x), *_bounds(xp, y), reach, eps)
-    z_lo, z_hi = _receivers(xp, F, key, a, c, axes, tuple(sides), (zb_min, zb_max))
-    *origin, shift = F.directional_origin(z_lo, z_hi, sides[0], sides[1], c, axes)
+        *sides, flags["silhouette"] = d.Fe.box_sides(*d.bounds(x), *d.bounds(y), reach, eps)
+    z_lo, z_hi = _receivers(d, key, a, c, axes, tuple(sides), (zb_min, zb_max))
+    *origin, shift = d.Fe.directional_origin(z_lo, z_hi, sides[0], sides[1], c, axes)
     z = (z_lo - shift, z_hi - shift, zb_min - shift, zb_max - shift)
-    return _finish(F, key, a, flags, tuple(origin), axes, tuple(sides), z)
+    return _finish(d, key, a, flags, tuple(origin), axes, tuple(sides), z)
 
 
 def _receivers(
-    xp: ModuleType,
-    F: SimpleNamespace,
+    d: Driver,
     key: FitKey,
     a: Inputs,
     origin: tuple[Array, ...],
@@ -198,20 +212,26 @@ def _receivers(
     """The depth range widened over the receiver points inside the map's sides."""
     if a.R is None:
         return zb
-    o = tuple(r - oc[..., None] for r, oc in zip(_components(a.R), origin, strict=True))
-    x, y, z = F.to_light(*o, _expand(axes))
+    xp = d.xp
+    o = tuple(r - oc for r, oc in zip(_components_of(a.R), d.expand(origin), strict=True))
+    x, y, z = d.Fv.to_light(*o, d.expand(axes))
     half_x, half_y, cx, cy = sides
-    safe_hx = xp.where(half_x > 0, half_x, xp.ones_like(half_x))
-    safe_hy = xp.where(half_y > 0, half_y, xp.ones_like(half_y))
-    s = _expand((key.margins[0] / safe_hx, key.margins[1] / safe_hy, cx, cy))
-    counted = F.receiver_counted(x, y, z, s, key.directional)
-    z_lo = xp.minimum(zb[0], xp.min(xp.where(counted, z, zb[0][..., None]), axis=-1))
-    z_hi = xp.maximum(zb[1], xp.max(xp.where(counted, z, zb[1][..., None]), axis=-1))
-    return z_lo, z_hi
+    safe_hx = d.Fe.where(half_x > 0, half_x, 1.0)
+    safe_hy = d.Fe.where(half_y > 0, half_y, 1.0)
+    s = d.expand((key.margins[0] / safe_hx, key.margins[1] / safe_hy, cx, cy))
+    counted = d.Fv.receiver_counted(x, y, z, s, key.directional)
+    lo, hi = d.expand(zb)
+    z_lo = d.entry(xp.min(xp.where(counted, z, lo), axis=-1))
+    z_hi = d.entry(xp.max(xp.where(counted, z, hi), axis=-1))
+    return d.Fe.where(z_lo < zb[0], z_lo, zb[0]), d.Fe.where(z_hi > zb[1], z_hi, zb[1])
+
+
+def _components_of(v: Array) -> Components:
+    return v[..., 0], v[..., 1], v[..., 2]
 
 
 def _finish(
-    F: SimpleNamespace,
+    d: Driver,
     key: FitKey,
     a: Inputs,
     flags: dict[str, Any],
@@ -221,7 +241,9 @@ def _finish(
     z: tuple[Array, Array, Array, Array],
 ) -> FitEntries:
     """The depth range and its checks, then the matrices from safe values."""
-    near, far, ok = F.depth_range(z, (a.near, a.far), (key.has_near, key.has_far), NEAR_FAR_SLACK)
+    given = tuple(None if v is None else d.entry(v) for v in (a.near, a.far))
+    F = d.Fe
+    near, far, ok = F.depth_range(z, given, (key.has_near, key.has_far), NEAR_FAR_SLACK)
     flags.update(zip(FORMULA_CHECKS[5:], ok, strict=True))
     half_x, half_y, cx, cy = sides
     safe = F.safe_box(half_x, half_y, cx, cy, near, far)

@@ -261,13 +261,38 @@ def _check_finite(L: Any, U: Any, b: Any, o: Any) -> int:
 
 
 @_njit
-def fit_loop(arrays: Any, given: Any, o: Any, api: Any, out: Any, mats: Any, status: Any) -> None:
-    """Every batch entry's fit. ``arrays = (light, verts, placement, receivers, up)``,
-    ``given = (near, far)`` (``(count or 1,)`` each), ``o`` the static options:
-    ``(aim_bbox, has_b, has_r, has_up, single, margins, eps, stable, texels,
-    directional, (has_near, has_far), slack)``, ``api = (C, T C)``.
+def _tuple16(v: Any, k: int) -> Any:
+    return (
+        v[k], v[k + 1], v[k + 2], v[k + 3], v[k + 4], v[k + 5], v[k + 6], v[k + 7],
+        v[k + 8], v[k + 9], v[k + 10], v[k + 11], v[k + 12], v[k + 13], v[k + 14], v[k + 15],
+    )  # fmt: skip
+
+
+@_njit
+def _unpack(opts: Any) -> Any:
+    """The static options from their float64 array (one array: the cheapest to dispatch).
+
+    Layout (:func:`._compiled.options`): aim_bbox, has_b, has_r, has_up, single, m_x,
+    m_y, eps, stable, width, height, directional, has_near, has_far, slack, C (16), T C (16).
     """
-    light, verts, placement, recv, ups = arrays
+    o = (
+        opts[0] != 0, opts[1] != 0, opts[2] != 0, opts[3] != 0, opts[4] != 0,
+        (opts[5], opts[6]), opts[7], opts[8] != 0, (opts[9], opts[10]), opts[11] != 0,
+        (opts[12] != 0, opts[13] != 0), opts[14],
+    )  # fmt: skip
+    return o, (_tuple16(opts, 15), _tuple16(opts, 31))
+
+
+@_njit
+def fit_loop(
+    light: Any, verts: Any, placement: Any, recv: Any, ups: Any, near: Any, far: Any,
+    opts: Any, out: Any, mats: Any, status: Any,
+) -> None:  # fmt: skip
+    """Every batch entry's fit; operands are ``(count or 1, ...)``, read at ``i % len``.
+
+    ``near``, ``far``: ``(count or 1,)`` (ignored unless given); ``opts``: see :func:`_unpack`.
+    """
+    o, api = _unpack(opts)
     directional, has_nf, slack = o[9], o[10], o[11]
     for i in range(out.shape[0]):
         Lr, Ur = _row(light, i), _row(ups, i)
@@ -280,16 +305,16 @@ def fit_loop(arrays: Any, given: Any, o: Any, api: Any, out: Any, mats: Any, sta
         else:
             st, origin, a, sides, z = _point_entry(L, V, b, R, U, o)
         st |= _check_finite(L, U, b, o)
-        nf = (float(_row(given[0], i)), float(_row(given[1], i)))
-        near, far, ok = depth_range(z, nf, has_nf, slack)
+        nf = (float(_row(near, i)), float(_row(far, i)))
+        n, f, ok = depth_range(z, nf, has_nf, slack)
         st |= _flags(ok, 5)
         status[i] = st
         hx, hy, cx, cy = sides
-        safe = safe_box(hx, hy, cx, cy, near, far)
+        safe = safe_box(hx, hy, cx, cy, n, f)
         W, clip, tex = fit_rows(origin, a, safe, o[5], directional, api)
         if o[1]:
             clip = compose_rows(clip, b)
-        _store(out[i], mats[i], (origin, a, (hx, hy, near, far), o[5], (cx, cy)), (W, clip, tex, b))
+        _store(out[i], mats[i], (origin, a, (hx, hy, n, f), o[5], (cx, cy)), (W, clip, tex, b))
 
 
 @_njit

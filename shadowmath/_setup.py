@@ -24,12 +24,12 @@ from . import _compiled, _kernels
 from . import _messages as msg
 from ._bias import PcfFilter
 from ._conventions import GraphicsApi
-from ._fit_arrays import FitEntries, Inputs, fit_arrays
+from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
 from ._frame import LightFrame, check_aim, stack_matrix
 from ._frustum import Frustum
 from ._shadow_setup import ShadowSetup
 from ._spec import FitKey, ShadowMapSpec, api_rows, spec_from_options
-from ._specialize import formulas
+from ._specialize import formulas, scalar_formulas
 from ._validate import (
     Array,
     Checks,
@@ -216,9 +216,13 @@ def fit_shadow(
         return _compiled.fit(ctx, key, shape, a)
     checks = Checks(ctx)
     if ctx.is_jax:
-        return assemble(ctx, checks, key, shape, a.B, fit_arrays(ctx, checks, key, a))
+        entries = fit_arrays(ctx, checks, key, a, driver(ctx, scalar=False))
+        return assemble(ctx, checks, key, shape, a.B, entries)
+    scalar = not shape
     with np.errstate(all="ignore"):  # invalid entries are reported by the checks, in order
-        entries = fit_arrays(ctx, checks, key, a)
+        entries = fit_arrays(ctx, checks, key, a, driver(ctx, scalar))
+    if scalar:
+        return assemble_one(ctx, key, a.B, entries)
     return assemble(ctx, checks, key, shape, a.B, entries)
 
 
@@ -394,6 +398,27 @@ def assemble(
     )
 
 
+def assemble_one(ctx: Context, key: FitKey, B: Array | None, e: FitEntries) -> ShadowSetup:
+    """:func:`assemble` for one NumPy entry computed on Python floats (valid: checks raised)."""
+    dtype = ctx.dtype
+    clip = e.clip
+    if B is not None:
+        clip = scalar_formulas().compose_rows(clip, tuple(B.reshape(16).tolist()))
+    W = (*e.W, 0.0, 0.0, 0.0, 1.0)
+    mats = np.array((W, clip, e.tex), dtype=dtype).reshape(3, 4, 4)
+    half_x, half_y, near, far, cx, cy = e.box
+    fields = np.array((half_x, half_y, near, far, *key.margins, cx, cy), dtype=dtype)
+    frame = np.array((*e.origin, *e.axes), dtype=dtype).reshape(4, 3)
+    return ShadowSetup(
+        frame=LightFrame(*frame),
+        frustum=Frustum(*(fields[..., i] for i in range(8)), key.directional),  # type: ignore[call-arg]
+        world_to_light=mats[0],
+        blocker_to_world=np.eye(4, dtype=dtype) if B is None else B,
+        blocker_to_clip=mats[1],
+        world_to_texture=mats[2],
+    )
+
+
 @functools.cache
 def _jitted_fit(key: FitKey) -> tuple[Any, list[str]]:
     """:func:`fit_arrays` and :func:`assemble` under ``jax.jit`` for concrete JAX input."""
@@ -401,7 +426,8 @@ def _jitted_fit(key: FitKey) -> tuple[Any, list[str]]:
     def core(ctx: Context, checks: Checks, *arrays: Array) -> ShadowSetup:
         a = Inputs(*arrays)
         shape = _check_shapes(a)
-        return assemble(ctx, checks, key, shape, a.B, fit_arrays(ctx, checks, key, a))
+        entries = fit_arrays(ctx, checks, key, a, driver(ctx, scalar=False))
+        return assemble(ctx, checks, key, shape, a.B, entries)
 
     return recorded_jit(core, _batch_of)
 

@@ -40,7 +40,11 @@ def specialize(
         func = namespace[name]
         copy = types.FunctionType(func.__code__, namespace, name, func.__defaults__)
         namespace[name] = wrap(copy) if wrap is not None else copy
-    return types.SimpleNamespace(**{name: namespace[name] for name in names})
+    exported = [*names, *_PRIMITIVES]
+    return types.SimpleNamespace(**{name: namespace[name] for name in exported})
+
+
+_PRIMITIVES = ("where", "sqrt", "fabs", "rint", "isfinite")
 
 
 @functools.cache
