@@ -84,20 +84,24 @@ def fit_shadow(
     writes the same products in row-vector order, ``B * W * P``.)
 
     Arguments:
-        light_position: ``(*batch, 3)`` a point light, or ``(*batch, 4)`` a
-            homogeneous light ``(x, y, z, w)``: ``w != 0`` the point ``xyz / w``,
-            ``w == 0`` a **directional** light whose ``xyz`` points toward the light.
-            ``w`` is a value (not static under ``jax.jit``): both fits are computed
-            for every entry and selected per entry with ``where``.
+        light: a :class:`PointLight` or :class:`DirectionalLight` (the kind is the
+            type: only its fit runs, also under ``jit``); a ``(*batch, 3)`` point
+            light position; or a ``(*batch, 4)`` homogeneous light ``(x, y, z, w)``,
+            read once per call: all ``w != 0`` point lights at ``xyz / w``, all
+            ``w == 0`` **directional** lights whose ``xyz`` points toward the light.
+            A batch mixing both kinds is refused (split it by ``w == 0``), and so is
+            a homogeneous light under a JAX transformation (pass a typed light).
         blocker_vertices: ``(*batch, N, 3)`` in the blocker's local coordinates
             (world coordinates when ``blocker_to_world`` is None).
-        map_size: ``size`` or ``(width, height)`` of the shadow map in texels.
-        border_texels: texels left empty on each side of the map (default 1, or
-            :func:`pcf_border_texels` ``(pcf_radius, pcf_filter)`` when a radius is given).
+        map_size: ``size`` or ``(width, height)`` of the shadow map in texels, or a
+            :class:`ShadowMapSpec` holding it with the options below (then give
+            none of them as keywords).
         blocker_to_world: ``(*batch, 4, 4)`` the blocker's local-to-world placement.
-        margin, near, far: as in :func:`adaptive_frustum` (for a directional light,
-            ``near`` and ``far`` are ``z`` in the returned frame, whose origin is
-            placed by the fit: leave them None).
+        near, far: as in :func:`adaptive_frustum`, point lights only (a directional
+            light's frame origin, and so its depth range, is placed by the fit).
+        border_texels, pcf_radius, pcf_filter, margin, api, reversed_z, stable: the
+            map's options, as in :class:`ShadowMapSpec` (one of ``border_texels``,
+            ``pcf_radius`` and ``margin`` at most).
         aim: as in :func:`light_frame` (for ``method="mdv"``).
         method: ``"mdv"`` (default) the article's frame and symmetric frustum;
             ``"optimized"`` the frame and off-centre frustum of
@@ -147,16 +151,20 @@ def fit_shadow(
     so every vertex lies within the margins, some vertex on each of the four
     (``blocker_to_clip`` is affine: last row ``(0, 0, 0, 1)``).
 
-    The options other than ``pcf_radius`` run on the array path (NumPy or JAX,
-    whole arrays); the compiled loop serves point lights with the default options.
+    Every light and option runs the same fit steps (:mod:`._fit_formulas`): in the
+    compiled loop for NumPy input with the ``fast`` extra, on whole arrays otherwise.
 
     Raises:
         ValueError: everything :func:`light_frame` and :func:`adaptive_frustum`
             raise, a non-finite or wrongly shaped ``blocker_to_world``, a zero
             directional light, receivers of the wrong shape or non-finite, an
             unknown ``api`` (the message lists the valid ones), an ``up`` zero or
-            parallel to the light's direction, ``stable=True`` for a point light
-            without ``up`` (value errors are NaN outputs under JAX transformations).
+            parallel to the light's direction (value errors are NaN outputs under JAX
+            transformations); and, whatever the values: ``stable=True`` for a point
+            light without ``up``, ``near``/``far`` for a directional light, a batch
+            of homogeneous lights mixing ``w = 0`` and ``w != 0``, a homogeneous
+            light under a JAX transformation, options given both in a
+            :class:`ShadowMapSpec` and as keywords.
 
     Example:
         >>> import numpy as np
@@ -165,8 +173,9 @@ def fit_shadow(
         >>> clip = (s.blocker_to_clip @ np.c_[box, np.ones(8)].T).T
         >>> float(np.abs(clip[:, 0] / clip[:, 3]).max().round(6))
         0.98
-        >>> sun = fit_shadow([0.3, 1.0, -0.2, 0.0], box, 100, api="vulkan")  # directional
-        >>> bool(sun.frustum.orthographic), sun.blocker_to_clip[3].tolist()
+        >>> spec = ShadowMapSpec(100, api="vulkan")
+        >>> sun = fit_shadow(DirectionalLight(np.array([0.3, 1.0, -0.2])), box, spec)
+        >>> sun.frustum.orthographic, sun.blocker_to_clip[3].tolist()
         (True, [0.0, 0.0, 0.0, 1.0])
     """
     check_aim(aim)

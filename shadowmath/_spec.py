@@ -52,7 +52,7 @@ class ShadowMapSpec:
             most one texel inside its border.
 
     Example:
-        >>> spec = ShadowMapSpec(1024, pcf_radius=1, api="vulkan")
+        >>> spec = ShadowMapSpec(1024, pcf_radius=2, api="vulkan")  # a 5x5 box kernel
         >>> spec.size, spec.margins
         ((1024, 1024), (0.99609375, 0.99609375))
     """

@@ -9,7 +9,7 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._layout import column_major_bytes
+from shadowmath import column_major_bytes
 
 #: Debian packages that provide a headless EGL context (Mesa's llvmpipe without a GPU):
 #: the EGL loader, the GL library glcontext opens beside it, and Mesa's drivers.

@@ -9,7 +9,7 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._setup import ShadowSetup, fit_shadow
+from shadowmath import ShadowSetup, fit_shadow
 
 from ._context import program, set_matrix, set_uniform
 from ._resources import GpuScene, Prepared, PreparedLight

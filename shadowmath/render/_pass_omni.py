@@ -9,8 +9,7 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._cube import cube_face_projection, cube_face_views
-from shadowmath._setup import ShadowSetup
+from shadowmath import ShadowSetup, cube_face_projection, cube_face_views
 
 from ._context import program, set_matrix, set_uniform
 from ._pass_depth import depth_bias_option

@@ -9,8 +9,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._planar import planar_projection
-from shadowmath._setup import ShadowSetup
+from shadowmath import ShadowSetup, planar_projection
 
 from ._context import program, set_matrix
 from ._pass_texture import blocker_maps, fit_per_blocker

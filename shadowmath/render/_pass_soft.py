@@ -18,8 +18,7 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._setup import ShadowSetup
-from shadowmath._soft import area_light_samples, pyramid_to_unit_cube
+from shadowmath import ShadowSetup, area_light_samples, pyramid_to_unit_cube
 
 from ._context import image_size, program, resolve_context, set_matrix, set_uniform
 from ._pass_depth import depth_bias_option, fit_depth, pcf_radius_option, world_to_light_clip

@@ -18,9 +18,7 @@ import numpy as np
 import wgpu
 from numpy.typing import NDArray
 
-from shadowmath._conventions import api_convention
-from shadowmath._layout import column_major_bytes
-from shadowmath._setup import ShadowSetup
+from shadowmath import ShadowSetup, api_convention, column_major_bytes
 
 from ._context import check_matrix
 from ._context import image_size as _image_size

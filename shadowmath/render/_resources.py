@@ -15,7 +15,7 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._setup import ShadowSetup
+from shadowmath import ShadowSetup
 
 from ._context import check_matrix, check_mesh, set_uniform
 

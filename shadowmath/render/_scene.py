@@ -11,7 +11,7 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._setup import ShadowSetup
+from shadowmath import ShadowSetup
 
 from ._context import check_matrix, resolve_context
 from ._context import image_size as _image_size
