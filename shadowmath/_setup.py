@@ -199,19 +199,8 @@ def fit_shadow(
     directional, L = _light_kind(ctx, directional, L)
     a = Inputs(L, verts, B, R, U, n, f)
     shape = _check_shapes(a)
-    key = FitKey(
-        directional=directional,
-        aim_bbox=aim == "bbox",
-        stable=bool(spec.stable),
-        margins=spec.margins,
-        texels=spec.size,
-        api=api_rows(spec.api, bool(spec.reversed_z)),
-        has_placement=B is not None,
-        has_receivers=R is not None,
-        has_up=U is not None,
-        has_near=n is not None,
-        has_far=f is not None,
-    )
+    given = (B is not None, R is not None, U is not None, n is not None, f is not None)
+    key = _fit_key(directional, aim == "bbox", spec, given)
     _check_static(key, method, spec)
     if method == "optimized":
         return _optimized(ctx, a, key.margins)
@@ -280,6 +269,22 @@ _DEFAULTS: dict[str, Any] = {
     "reversed_z": False,
     "stable": False,
 }
+
+
+@functools.lru_cache(maxsize=256)
+def _fit_key(
+    directional: bool, aim_bbox: bool, spec: ShadowMapSpec, given: tuple[bool, ...]
+) -> FitKey:
+    """The static key of a call (cached: the same few recur every frame)."""
+    return FitKey(
+        directional,
+        aim_bbox,
+        bool(spec.stable),
+        spec.margins,
+        spec.size,
+        api_rows(spec.api, bool(spec.reversed_z)),
+        *given,
+    )
 
 
 def _light_kind(ctx: Context, directional: bool | None, L: Array) -> tuple[bool, Array]:
