@@ -156,8 +156,9 @@ def _point(
         aim, _components(d, a.U), key.has_up, coords, eps
     )
     x, y, z = d.Fv.to_light(*o, d.expand(axes))
-    safe_z = xp.where(z > 0, z, xp.ones_like(z))
-    (hi_x, lo_x), (hi_y, lo_y) = d.bounds(x / safe_z), d.bounds(y / safe_z)
+    # One reciprocal per vertex, as the compiled loop and adaptive_frustum's pass compute it.
+    inv_z = 1 / xp.where(z > 0, z, xp.ones_like(z))
+    (hi_x, lo_x), (hi_y, lo_y) = d.bounds(x * inv_z), d.bounds(y * inv_z)
     zb_max, zb_min = d.bounds(z)
     half_x, half_y, flags["behind"], flags["silhouette"] = d.Fe.point_sides(
         hi_x, lo_x, hi_y, lo_y, zb_min, reach, eps
