@@ -19,6 +19,7 @@ from ._frame import LightFrame
 from ._frustum import NEAR_FAR_SLACK, Frustum
 from ._shadow_setup import ShadowSetup
 from ._spec import FitKey
+from ._specialize import scalar_formulas
 from ._status import fit_messages
 from ._validate import Array, Context, flat_batch, raise_status
 
@@ -32,14 +33,35 @@ _NO_POINTS = np.zeros((1, 1, 3))
 _NO_VECTOR = np.zeros((1, 3))
 
 
-def fit(ctx: Context, key: FitKey, shape: tuple[int, ...], a: Inputs) -> ShadowSetup:
-    """The fit of ``key`` for every batch entry, from the compiled loop."""
+#: The most vertices plus receiver points of one fit that the Python loop runs
+#: (without Numba; beyond it the array path is faster).
+PYTHON_LOOP_POINTS = 64
+
+
+def fit(
+    ctx: Context, key: FitKey, shape: tuple[int, ...], a: Inputs, *, python: bool = False
+) -> ShadowSetup:
+    """The fit of ``key`` for every batch entry, from the compiled loop (or, ``python``,
+    the same loop run by Python on lists: one small fit without Numba)."""
     count = math.prod(shape)
     out = np.empty((count, ROW), dtype=ctx.dtype)
     mats = np.empty((count, 4, 4, 4), dtype=ctx.dtype)
     status = np.empty(count, dtype=np.int32)
     one = count == 1
-    _kernels.loops().fit_loop(
+    arrays = (*operands(shape, a, one), options(key, ctx.dtype))
+    if python:
+        scalar_formulas().fit_loop(*(v.tolist() for v in arrays), out, mats, status)
+    else:
+        _kernels.loops().fit_loop(*arrays, out, mats, status)
+    if status[0] if one else status.any():
+        finite = bool(np.isfinite(a.verts).all())
+        raise_status(status.reshape(shape), fit_messages(finite))
+    return _views(key, shape, out, mats)
+
+
+def operands(shape: tuple[int, ...], a: Inputs, one: bool) -> tuple[Array, ...]:
+    """The loop's array operands, ``(count or 1, ...)`` each."""
+    return (
         a.light.reshape(1, 3) if one else flat_batch(a.light, shape, (3,)),
         a.verts.reshape(1, *a.verts.shape[-2:])
         if one
@@ -49,15 +71,7 @@ def fit(ctx: Context, key: FitKey, shape: tuple[int, ...], a: Inputs) -> ShadowS
         _NO_VECTOR if a.U is None else flat_batch(a.U, shape, (3,)),
         _NONE if a.near is None else flat_batch(a.near, shape, ()),
         _NONE if a.far is None else flat_batch(a.far, shape, ()),
-        options(key, ctx.dtype),
-        out,
-        mats,
-        status,
     )
-    if status[0] if count == 1 else status.any():
-        finite = bool(np.isfinite(a.verts).all())
-        raise_status(status.reshape(shape), fit_messages(finite))
-    return _views(key, shape, out, mats)
 
 
 def _views(key: FitKey, shape: tuple[int, ...], out: Array, mats: Array) -> ShadowSetup:

@@ -239,41 +239,34 @@ def ortho_clip_rows(w: tuple[Any, ...], p: tuple[Any, ...]) -> tuple[Any, ...]:
     )  # fmt: skip
 
 
-def _cdot(c: tuple[float, ...], i: int, m0: Any, m1: Any, m2: Any, m3: Any) -> Any:
-    """Row ``i`` of the constant ``c`` (16 floats) times a column: exact zeros and ones skipped.
+def _term(c: float, m: Any) -> Any:
+    return m if c == 1.0 else c * m
+
+
+def _crow(c: tuple[float, ...], i: int, m: tuple[Any, ...]) -> tuple[Any, Any, Any, Any]:
+    """Row ``i`` of ``C @ M`` for a constant ``C`` (16 floats): exact zeros and ones skipped.
 
     (So the identity costs nothing on whole arrays; the first term is always formed,
     which keeps the type the same for the compiled loop.)
     """
     c0, c1, c2, c3 = c[4 * i], c[4 * i + 1], c[4 * i + 2], c[4 * i + 3]
-    t = m0 if c0 == 1.0 else c0 * m0
+    r0, r1, r2, r3 = _term(c0, m[0]), _term(c0, m[1]), _term(c0, m[2]), _term(c0, m[3])
     started = c0 != 0.0
-    if c1 != 0.0:
-        u = m1 if c1 == 1.0 else c1 * m1
-        t = t + u if started else u
-        started = True
-    if c2 != 0.0:
-        u = m2 if c2 == 1.0 else c2 * m2
-        t = t + u if started else u
-        started = True
-    if c3 != 0.0:
-        u = m3 if c3 == 1.0 else c3 * m3
-        t = t + u if started else u
-    return t
+    for k, ck in ((1, c1), (2, c2), (3, c3)):
+        if ck != 0.0:
+            t0, t1 = _term(ck, m[4 * k]), _term(ck, m[4 * k + 1])
+            t2, t3 = _term(ck, m[4 * k + 2]), _term(ck, m[4 * k + 3])
+            if started:
+                r0, r1, r2, r3 = r0 + t0, r1 + t1, r2 + t2, r3 + t3
+            else:
+                r0, r1, r2, r3 = t0, t1, t2, t3
+            started = True
+    return r0, r1, r2, r3
 
 
 def const_times(c: tuple[float, ...], m: tuple[Any, ...]) -> tuple[Any, ...]:
     """``C @ M`` for a constant ``C`` (16 row-major floats) and 16 row-major entries ``M``."""
-    return (
-        _cdot(c, 0, m[0], m[4], m[8], m[12]), _cdot(c, 0, m[1], m[5], m[9], m[13]),
-        _cdot(c, 0, m[2], m[6], m[10], m[14]), _cdot(c, 0, m[3], m[7], m[11], m[15]),
-        _cdot(c, 1, m[0], m[4], m[8], m[12]), _cdot(c, 1, m[1], m[5], m[9], m[13]),
-        _cdot(c, 1, m[2], m[6], m[10], m[14]), _cdot(c, 1, m[3], m[7], m[11], m[15]),
-        _cdot(c, 2, m[0], m[4], m[8], m[12]), _cdot(c, 2, m[1], m[5], m[9], m[13]),
-        _cdot(c, 2, m[2], m[6], m[10], m[14]), _cdot(c, 2, m[3], m[7], m[11], m[15]),
-        _cdot(c, 3, m[0], m[4], m[8], m[12]), _cdot(c, 3, m[1], m[5], m[9], m[13]),
-        _cdot(c, 3, m[2], m[6], m[10], m[14]), _cdot(c, 3, m[3], m[7], m[11], m[15]),
-    )  # fmt: skip
+    return (*_crow(c, 0, m), *_crow(c, 1, m), *_crow(c, 2, m), *_crow(c, 3, m))
 
 
 def fit_rows(
@@ -327,7 +320,8 @@ FUNCTIONS = (
     "depth_range",
     "ortho_rows",
     "ortho_clip_rows",
-    "_cdot",
+    "_term",
+    "_crow",
     "const_times",
     "fit_rows",
     "safe_box",

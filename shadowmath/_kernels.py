@@ -20,8 +20,10 @@ import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from types import ModuleType
+from types import SimpleNamespace
 from typing import Any
+
+import numpy as np
 
 
 def available() -> bool:
@@ -82,15 +84,24 @@ def cache_dir(key: str) -> str:
 
 
 @functools.cache
-def loops() -> ModuleType:
-    """The module of compiled loops, compiled (or loaded) under its sources' cache key."""
+def loops() -> SimpleNamespace:
+    """The formulas and loops compiled by Numba (or loaded) under their sources' cache key."""
+    import numba
     from numba.core import config as numba_config
+
+    from ._specialize import scalar_primitives, specialize
 
     config: Any = numba_config
     old = config.CACHE_DIR
     config.CACHE_DIR = cache_dir(sources_hash())
     try:
-        from . import _loops
+        jit = numba.njit(cache=True, error_model="numpy")
+        primitives = {**scalar_primitives(), "where": jit(_select), "rint": np.rint}
+        return specialize(primitives, wrap=jit)
     finally:
         config.CACHE_DIR = old
-    return _loops
+
+
+def _select(c: Any, a: Any, b: Any) -> Any:
+    """``where`` on scalars, for Numba (module level, so that its disk cache finds it)."""
+    return a if c else b

@@ -1,8 +1,13 @@
-"""The compiled loops (Numba): one loop over the batch, the fits' steps per entry.
+"""The loops over the batch: the fits' steps per entry, for Numba or plain Python.
 
-Imported only through :func:`._kernels.loops`, which sets Numba's cache folder to
-one keyed on every source of the package, so that the machine code cached on disk
-can never be older than the formulas it inlines.
+Every function here is plain Python over scalars, written in the subset that
+Numba compiles (tuples, ``len``, ``a[i][j]`` indexing, ``math``). Like the
+formulas, they are specialized (:func:`._specialize.specialize`): compiled by
+Numba through :func:`._kernels.loops` (whose cache folder is keyed on every
+source of the package, so the machine code on disk can never be older than the
+formulas it inlines), or bound to Python floats for one small NumPy fit without
+Numba (:func:`._specialize.scalar_formulas`), where a Python loop over a few
+vertices beats hundreds of NumPy calls.
 
 Per entry, the passes that the fit needs, each reading the vertices once, then
 the frame, sides, depth range and matrices from the formulas of
@@ -17,48 +22,31 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numba
 import numpy as np
 
-from ._specialize import specialize
+from ._fit_formulas import (
+    box_sides,
+    depth_range,
+    directional_origin,
+    fit_axes,
+    fit_rows,
+    place,
+    point_sides,
+    receiver_counted,
+    safe_box,
+    stable_sides,
+    to_light,
+)
+from ._formulas import axes_from_z, compose_rows, normalize3, planar_entries
 from ._status import FORMULA_BITS, LIGHT, OVERFLOW, PLACEMENT, PROJECTIVE, RECEIVERS, UP, VERTICES
 
-_njit = numba.njit(cache=True, error_model="numpy")
-
-
-@numba.njit(cache=True)
-def _where(c: Any, a: Any, b: Any) -> Any:
-    return a if c else b
-
-
-# The formulas compiled for scalars: the same source as the array path.
-_F = specialize(
-    {"where": _where, "sqrt": math.sqrt, "fabs": abs, "rint": np.rint, "isfinite": math.isfinite},
-    wrap=_njit,
-)
-place = _F.place
-to_light = _F.to_light
-fit_axes = _F.fit_axes
-normalize3 = _F.normalize3
-axes_from_z = _F.axes_from_z
-point_sides = _F.point_sides
-box_sides = _F.box_sides
-stable_sides = _F.stable_sides
-receiver_counted = _F.receiver_counted
-directional_origin = _F.directional_origin
-depth_range = _F.depth_range
-safe_box = _F.safe_box
-fit_rows = _F.fit_rows
-compose_rows = _F.compose_rows
-planar_entries = _F.planar_entries
 _BITS = FORMULA_BITS
 
 
-@_njit
 def planar_loop(plane: Any, light: Any, eps: float, out: Any, status: Any) -> None:
     splitter = 134217729.0  # 2^27 + 1: the loop computes in float64
-    for i in range(out.shape[0]):
-        P, L = plane[i % plane.shape[0]], light[i % light.shape[0]]
+    for i in range(len(out)):
+        P, L = plane[i % len(plane)], light[i % len(light)]
         pi = (float(P[0]), float(P[1]), float(P[2]), float(P[3]))
         li = (float(L[0]), float(L[1]), float(L[2]), float(L[3]))
         st = 0
@@ -80,24 +68,22 @@ def planar_loop(plane: Any, light: Any, eps: float, out: Any, status: Any) -> No
             out[i, j] = e[j]
 
 
-@_njit
 def _vertex(V: Any, k: int, b: Any, has_b: bool) -> Any:
     """Vertex ``k`` in world coordinates and its ``w`` (1 without a placement)."""
-    vx, vy, vz = float(V[k, 0]), float(V[k, 1]), float(V[k, 2])
+    vx, vy, vz = float(V[k][0]), float(V[k][1]), float(V[k][2])
     if has_b:
         return place(b, vx, vy, vz)
     return vx, vy, vz, 1.0
 
 
-@_njit
 def _spread(V: Any, b: Any, has_b: bool, o: Any) -> tuple[Any, ...]:
     """Pass 1 about the point ``o``: sums and bounds of ``p - o``, reach, coords, status."""
     sx = sy = sz = reach = coords = raw = 0.0
     lo_x = lo_y = lo_z = math.inf
     hi_x = hi_y = hi_z = -math.inf
     st = 0
-    for k in range(V.shape[0]):
-        raw += float(V[k, 0]) + float(V[k, 1]) + float(V[k, 2])
+    for k in range(len(V)):
+        raw += float(V[k][0]) + float(V[k][1]) + float(V[k][2])
         px, py, pz, w = _vertex(V, k, b, has_b)
         if not w > 0:
             st |= PROJECTIVE
@@ -114,13 +100,12 @@ def _spread(V: Any, b: Any, has_b: bool, o: Any) -> tuple[Any, ...]:
     return (sx, sy, sz), (lo_x, lo_y, lo_z), (hi_x, hi_y, hi_z), reach, coords, st
 
 
-@_njit
 def _light_pass(V: Any, b: Any, has_b: bool, o: Any, a: Any, ratios: bool) -> Any:
     """Pass 2: bounds of ``x, y`` (or ``x / z, y / z``) and ``z`` about ``o``; max ``|p - o|^2``."""
     hx = hy = hz = -math.inf
     lx = ly = lz = math.inf
     r2 = reach = 0.0
-    for k in range(V.shape[0]):
+    for k in range(len(V)):
         px, py, pz, _ = _vertex(V, k, b, has_b)
         ox, oy, oz = px - o[0], py - o[1], pz - o[2]
         x, y, z = to_light(ox, oy, oz, a)
@@ -134,13 +119,12 @@ def _light_pass(V: Any, b: Any, has_b: bool, o: Any, a: Any, ratios: bool) -> An
     return (hx, lx, hy, ly, hz, lz), r2, reach
 
 
-@_njit
 def _receiver_range(R: Any, o: Any, a: Any, sides: Any, zb: Any, directional: bool) -> Any:
     """The depth range widened over the receiver points inside the sides; finite flag."""
     z_lo, z_hi = zb
     raw = 0.0
-    for k in range(R.shape[0]):
-        rx, ry, rz = float(R[k, 0]), float(R[k, 1]), float(R[k, 2])
+    for k in range(len(R)):
+        rx, ry, rz = float(R[k][0]), float(R[k][1]), float(R[k][2])
         raw += rx + ry + rz
         x, y, z = to_light(rx - o[0], ry - o[1], rz - o[2], a)
         if receiver_counted(x, y, z, sides, directional):
@@ -148,13 +132,11 @@ def _receiver_range(R: Any, o: Any, a: Any, sides: Any, zb: Any, directional: bo
     return z_lo, z_hi, math.isfinite(raw)
 
 
-@_njit
 def _sides(hx: float, hy: float, margins: Any, cx: float, cy: float) -> Any:
     """``(s_x, s_y, c_x, c_y)`` of :func:`receiver_counted` with safe half-widths."""
     return (margins[0] / (hx if hx > 0 else 1.0), margins[1] / (hy if hy > 0 else 1.0), cx, cy)
 
 
-@_njit
 def _flags(ok: Any, first: int) -> int:
     """Status bits of the formula checks ``ok`` (starting at ``FORMULA_BITS[first]``)."""
     st = 0
@@ -164,12 +146,11 @@ def _flags(ok: Any, first: int) -> int:
     return st
 
 
-@_njit
 def _point_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
     """One point light's fit. ``o``: the options tuple of :func:`fit_loop`."""
     aim_bbox, has_b, has_r, has_up, single, margins, eps = o[0], o[1], o[2], o[3], o[4], o[5], o[6]
     s, lo, hi, reach, coords, st = _spread(V, b, has_b, L)
-    n = V.shape[0]
+    n = len(V)
     if aim_bbox:
         d = (0.5 * (hi[0] + lo[0]), 0.5 * (hi[1] + lo[1]), 0.5 * (hi[2] + lo[2]))
     else:
@@ -197,7 +178,6 @@ def _point_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
     return st, (L[0], L[1], L[2]), a, box, (z_lo, z_hi, zb_min, zb_max)
 
 
-@_njit
 def _directional_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
     """One directional light's fit. ``o``: the options tuple of :func:`fit_loop`."""
     has_b, has_r, has_up, stable, margins, eps, texels = o[1], o[2], o[3], o[7], o[5], o[6], o[8]
@@ -205,7 +185,7 @@ def _directional_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
     s, lo, hi, _, coords, st = _spread(V, b, has_b, zero3)
     a, ok_light, _, ok_up = fit_axes((-L[0], -L[1], -L[2]), U, has_up, coords, eps)
     st |= _flags((ok_light,), 0) | _flags((ok_up,), 2)
-    n = V.shape[0]
+    n = len(V)
     if stable:
         c = (s[0] / n, s[1] / n, s[2] / n)
     else:
@@ -229,24 +209,21 @@ def _directional_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
     return st, (ox, oy, oz), a, (half_x, half_y, cx, cy), z
 
 
-@_njit
 def _row(V: Any, i: int) -> Any:
-    return V[i % V.shape[0]]
+    return V[i % len(V)]
 
 
-@_njit
 def _entries(M: Any, i: int) -> Any:
     """Batch entry ``i`` of ``(count or 1, 4, 4)`` matrices as 16 floats."""
-    m = M[i % M.shape[0]]
+    m = M[i % len(M)]
     return (
-        float(m[0, 0]), float(m[0, 1]), float(m[0, 2]), float(m[0, 3]),
-        float(m[1, 0]), float(m[1, 1]), float(m[1, 2]), float(m[1, 3]),
-        float(m[2, 0]), float(m[2, 1]), float(m[2, 2]), float(m[2, 3]),
-        float(m[3, 0]), float(m[3, 1]), float(m[3, 2]), float(m[3, 3]),
+        float(m[0][0]), float(m[0][1]), float(m[0][2]), float(m[0][3]),
+        float(m[1][0]), float(m[1][1]), float(m[1][2]), float(m[1][3]),
+        float(m[2][0]), float(m[2][1]), float(m[2][2]), float(m[2][3]),
+        float(m[3][0]), float(m[3][1]), float(m[3][2]), float(m[3][3]),
     )  # fmt: skip
 
 
-@_njit
 def _check_finite(L: Any, U: Any, b: Any, o: Any) -> int:
     st = 0
     if not (math.isfinite(L[0]) and math.isfinite(L[1]) and math.isfinite(L[2])):
@@ -260,7 +237,6 @@ def _check_finite(L: Any, U: Any, b: Any, o: Any) -> int:
     return st
 
 
-@_njit
 def _tuple16(v: Any, k: int) -> Any:
     return (
         v[k], v[k + 1], v[k + 2], v[k + 3], v[k + 4], v[k + 5], v[k + 6], v[k + 7],
@@ -268,7 +244,6 @@ def _tuple16(v: Any, k: int) -> Any:
     )  # fmt: skip
 
 
-@_njit
 def _unpack(opts: Any) -> Any:
     """The static options from their float64 array (one array: the cheapest to dispatch).
 
@@ -283,7 +258,6 @@ def _unpack(opts: Any) -> Any:
     return o, (_tuple16(opts, 15), _tuple16(opts, 31))
 
 
-@_njit
 def fit_loop(
     light: Any, verts: Any, placement: Any, recv: Any, ups: Any, near: Any, far: Any,
     opts: Any, out: Any, mats: Any, status: Any,
@@ -294,7 +268,7 @@ def fit_loop(
     """
     o, api = _unpack(opts)
     directional, has_nf, slack = o[9], o[10], o[11]
-    for i in range(out.shape[0]):
+    for i in range(len(out)):
         Lr, Ur = _row(light, i), _row(ups, i)
         L = (float(Lr[0]), float(Lr[1]), float(Lr[2]))
         U = (float(Ur[0]), float(Ur[1]), float(Ur[2]))
@@ -317,7 +291,6 @@ def fit_loop(
         _store(out[i], mats[i], (origin, a, (hx, hy, n, f), o[5], (cx, cy)), (W, clip, tex, b))
 
 
-@_njit
 def _store(row: Any, mat: Any, fields: Any, matrices: Any) -> None:
     """One entry's output row (frame, frustum) and its four matrices."""
     origin, a, box, margins, offsets = fields
@@ -336,3 +309,23 @@ def _store(row: Any, mat: Any, fields: Any, matrices: Any) -> None:
         mat[1, j // 4, j % 4] = clip[j]
         mat[2, j // 4, j % 4] = tex[j]
         mat[3, j // 4, j % 4] = b[j]
+
+
+FUNCTIONS = (
+    "planar_loop",
+    "_vertex",
+    "_spread",
+    "_light_pass",
+    "_receiver_range",
+    "_sides",
+    "_flags",
+    "_point_entry",
+    "_directional_entry",
+    "_row",
+    "_entries",
+    "_check_finite",
+    "_tuple16",
+    "_unpack",
+    "fit_loop",
+    "_store",
+)

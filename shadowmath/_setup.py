@@ -212,6 +212,8 @@ def fit_shadow(
         return setup
     if not ctx.is_jax and _kernels.available():
         return _compiled.fit(ctx, key, shape, a)
+    if not ctx.is_jax and not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS:
+        return _compiled.fit(ctx, key, shape, a, python=True)
     checks = Checks(ctx)
     if ctx.is_jax:
         entries = fit_arrays(ctx, checks, key, a, driver(ctx, scalar=False))
@@ -331,6 +333,10 @@ def _check_shapes(a: Inputs) -> tuple[int, ...]:
         named.append(("up", a.U.shape[:-1]))
     named += [(n, v.shape) for n, v in (("near", a.near), ("far", a.far)) if v is not None]
     return batch_shape(*(s for _, s in named), names=[n for n, _ in named])
+
+
+def _points(a: Inputs) -> int:
+    return int(a.verts.shape[-2]) + (0 if a.R is None else int(a.R.shape[-2]))
 
 
 def _check_static(key: FitKey, method: str, spec: ShadowMapSpec) -> None:

@@ -1,6 +1,7 @@
 """Bind the per-entry formulas to a backend: NumPy or JAX arrays, Python or Numba scalars.
 
-The formulas of :mod:`._formulas` and :mod:`._fit_formulas` are written with five
+The formulas of :mod:`._formulas` and :mod:`._fit_formulas` (and the loops of
+:mod:`._loops` that drive them per entry) are written with five
 primitives (``where``, ``sqrt``, ``fabs``, ``rint``, ``isfinite``). :func:`specialize`
 copies every one of them into one namespace where those names mean one backend's
 functions, so a specialized formula calls specialized formulas: the frame, the
@@ -18,9 +19,13 @@ from typing import Any
 
 import numpy as np
 
-from . import _fit_formulas, _formulas
+from . import _fit_formulas, _formulas, _loops
 
-_MODULES = ((_formulas, _formulas.FUNCTIONS), (_fit_formulas, _fit_formulas.FUNCTIONS))
+_MODULES = (
+    (_formulas, _formulas.FUNCTIONS),
+    (_fit_formulas, _fit_formulas.FUNCTIONS),
+    (_loops, _loops.FUNCTIONS),
+)
 
 
 def specialize(
@@ -58,16 +63,19 @@ def formulas(xp: ModuleType) -> types.SimpleNamespace:
 
 @functools.cache
 def scalar_formulas() -> types.SimpleNamespace:
-    """The formulas on Python floats: one NumPy batch entry without the array overhead."""
-    return specialize(
-        {
-            "where": _scalar_where,
-            "sqrt": math.sqrt,
-            "fabs": abs,
-            "rint": _rint,
-            "isfinite": math.isfinite,
-        }
-    )
+    """The formulas and loops on Python floats: one NumPy batch entry without array overhead."""
+    return specialize(scalar_primitives())
+
+
+def scalar_primitives() -> dict[str, Any]:
+    """The primitives on Python floats (Numba compiles the same ones for its scalars)."""
+    return {
+        "where": _scalar_where,
+        "sqrt": math.sqrt,
+        "fabs": abs,
+        "rint": _rint,
+        "isfinite": math.isfinite,
+    }
 
 
 def _scalar_where(c: Any, a: Any, b: Any) -> Any:
@@ -75,7 +83,7 @@ def _scalar_where(c: Any, a: Any, b: Any) -> Any:
 
 
 def _rint(x: float) -> float:
-    return float(round(x))  # half to even, as NumPy's round
+    return float(np.rint(x))  # half to even, as NumPy's round (and Numba's np.rint)
 
 
 def _numpy_where(c: Any, a: Any, b: Any) -> Any:
