@@ -14,6 +14,8 @@ from __future__ import annotations
 from types import ModuleType, SimpleNamespace
 from typing import Any, NamedTuple
 
+import numpy as np
+
 from ._frustum import NEAR_FAR_SLACK
 from ._spec import FitKey
 from ._specialize import formulas, scalar_formulas
@@ -247,6 +249,13 @@ def _finish(
     near, far, ok = F.depth_range(z, given, (key.has_near, key.has_far), NEAR_FAR_SLACK)
     flags.update(zip(FORMULA_CHECKS[5:], ok, strict=True))
     half_x, half_y, cx, cy = sides
+    if a.R is not None and d.xp is not np:
+        # A non-finite receiver is only counted out (a where), which would give it a zero
+        # derivative: link it into the matrices by 0 * its non-finite entries (NaN exactly
+        # there, 0 elsewhere), so that its derivative is NaN too. JAX only: NumPy raises.
+        xp = d.xp
+        link = sum(xp.sum(xp.where(xp.isfinite(c), 0.0, c), axis=-1) for c in _components_of(a.R))
+        cx = cx + 0.0 * link
     safe = F.safe_box(half_x, half_y, cx, cy, near, far)
     W, clip, tex = F.fit_rows(origin, axes, safe, key.margins, key.directional, key.api)
     return FitEntries(origin, axes, (half_x, half_y, near, far, cx, cy), W, clip, tex)

@@ -39,13 +39,33 @@ _enabled = [
 
 @contextlib.contextmanager
 def disabled() -> Iterator[None]:
-    """Within the block, NumPy input runs the array path instead of the compiled loops."""
+    """Within the block, NumPy input runs as without Numba (no compiled loop)."""
     old = _enabled[0]
     _enabled[0] = False
     try:
         yield
     finally:
         _enabled[0] = old
+
+
+def python_loop() -> bool:
+    """One small NumPy fit without Numba may run the loop in Python (not in :func:`array_path`)."""
+    return _python[0]
+
+
+_python = [True]
+
+
+@contextlib.contextmanager
+def array_path() -> Iterator[None]:
+    """Within the block, NumPy input runs the array path: no compiled loop, no Python loop."""
+    old = _python[0]
+    _python[0] = False
+    try:
+        with disabled():
+            yield
+    finally:
+        _python[0] = old
 
 
 _PACKAGE = Path(__file__).resolve().parent

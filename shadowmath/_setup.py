@@ -212,7 +212,8 @@ def fit_shadow(
         return setup
     if not ctx.is_jax and _kernels.available():
         return _compiled.fit(ctx, key, shape, a)
-    if not ctx.is_jax and not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS:
+    small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
+    if not ctx.is_jax and small and _kernels.python_loop():
         return _compiled.fit(ctx, key, shape, a, python=True)
     checks = Checks(ctx)
     if ctx.is_jax:

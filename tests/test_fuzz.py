@@ -195,7 +195,7 @@ def test_fuzz_light_frame_from_direction(direction: np.ndarray, length: float) -
 
 def _array_path() -> contextlib.AbstractContextManager[None]:
     """Run on whole arrays (no compiled loop) inside the block."""
-    return _kernels.disabled()
+    return _kernels.array_path()
 
 
 def _check_fit(p: Placement, map_size: Any, border: int, dtype: Any) -> None:

@@ -36,7 +36,7 @@ DTYPES = pytest.mark.parametrize("dtype", [np.float64, np.float32], ids=["f64", 
 
 def array_path() -> contextlib.AbstractContextManager[None]:
     """Run on whole arrays (no compiled loop) inside the block."""
-    return _kernels.disabled()
+    return _kernels.array_path()
 
 
 def test_numba_is_installed_for_the_compiled_path() -> None:
@@ -56,9 +56,18 @@ def _helper(frame: sm.LightFrame) -> np.ndarray:
     return np.asarray(sm.helper_axis(frame.z_axis))
 
 
+LOOPS = pytest.mark.parametrize("loop", ["compiled", "python"])
+
+
+def _loop(loop: str) -> contextlib.AbstractContextManager[None]:
+    """The compiled loop, or the same loop run by Python (one small fit without Numba)."""
+    return contextlib.nullcontext() if loop == "compiled" else _kernels.disabled()
+
+
+@LOOPS
 @DTYPES
 @given(data=st.data())
-def test_compiled_loop_equals_array_path(dtype: Any, data: st.DataObject) -> None:
+def test_compiled_loop_equals_array_path(loop: str, dtype: Any, data: st.DataObject) -> None:
     p = data.draw(placements(dtype))
     map_size, border = data.draw(sized_maps())
     aim = data.draw(st.sampled_from(["mean", "bbox"]))
@@ -73,7 +82,8 @@ def test_compiled_loop_equals_array_path(dtype: Any, data: st.DataObject) -> Non
             ref = sm.fit_shadow(light, verts, map_size, **options)
         except ValueError:  # aim="bbox" may leave a vertex behind the light: not this test's
             assume(False)
-    fast = sm.fit_shadow(light, verts, map_size, **options)
+    with _loop(loop):
+        fast = sm.fit_shadow(light, verts, map_size, **options)
     eps = float(np.finfo(dtype).eps)
     # The scene's condition (as in test_fuzz): coordinates' size over the blocker's, + ratio.
     r = np.linalg.norm(p.vertices - p.vertices.mean(0), axis=-1).max()
@@ -103,10 +113,11 @@ def test_compiled_loop_equals_array_path(dtype: Any, data: st.DataObject) -> Non
     assert fast.frustum.orthographic is False is ref.frustum.orthographic  # a 3-vector light
 
 
+@LOOPS
 @given(bad=invalid_placements())
-def test_both_paths_raise_the_same_error(bad: Any) -> None:
+def test_both_paths_raise_the_same_error(loop: str, bad: Any) -> None:
     bad = bad._replace(message=bad.message.replace("light_position:", "light:"))  # its name
-    with pytest.raises(ValueError, match=re.escape(bad.message)) as fast:
+    with _loop(loop), pytest.raises(ValueError, match=re.escape(bad.message)) as fast:
         sm.fit_shadow(*bad.args, 64)
     with array_path(), pytest.raises(ValueError, match=re.escape(bad.message)) as ref:
         sm.fit_shadow(*bad.args, 64)
