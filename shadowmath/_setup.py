@@ -16,6 +16,7 @@ formulas on the trusted arrays:
 from __future__ import annotations
 
 import functools
+import math
 from typing import Any, Literal
 
 import numpy as np
@@ -300,6 +301,12 @@ def _light_kind(ctx: Context, directional: bool | None, L: Array) -> tuple[bool,
         raise shape_error("light", "(*batch, 3) or (*batch, 4)", tuple(L.shape), hint)
     if L.shape[-1] == 3:
         return False, L
+    if L.ndim == 1 and not ctx.is_jax:  # one NumPy light: read w as a Python float
+        w1 = float(L[3])
+        if w1 == 0:
+            return True, L[:3]
+        if math.isfinite(w1):
+            return False, L[:3] / w1
     if ctx.lazy and is_tracer(L):
         raise ValueError(
             "light: the kind of a homogeneous light (x, y, z, w) is read from the values of "

@@ -131,6 +131,9 @@ def convert(**arrays: Any) -> tuple[Context, tuple[Array, ...]]:
     fast = _numpy_fast_path(arrays.values())
     if fast is not None:
         return fast, tuple(arrays.values())
+    mixed = _numpy_with_sequences(tuple(arrays.values()))
+    if mixed is not None:
+        return mixed
     inputs = [_as_input(name, v) for name, v in arrays.items() if v is not None]
     use_jax = any(is_jax(v) for v in inputs)
     lazy = use_jax and any(is_tracer(v) for v in inputs)
@@ -163,6 +166,31 @@ def _numpy_fast_path(values: Any) -> Context | None:
         elif v.dtype != dtype:
             return None
     return None if dtype is None else _NUMPY_CONTEXTS.get(dtype)
+
+
+def _numpy_with_sequences(values: tuple[Any, ...]) -> tuple[Context, tuple[Array, ...]] | None:
+    """Float ndarrays of one dtype beside short tuples or lists of integers (``up=(0, 1, 0)``).
+
+    The integers take the arrays' dtype, as the general rule gives them; anything
+    else (float sequences, which may promote, or what needs a check) returns None.
+    """
+    arrays = [v for v in values if type(v) is np.ndarray]
+    if not arrays or (ctx := _numpy_fast_path(arrays)) is None:
+        return None
+    out = []
+    for v in values:
+        if type(v) in (tuple, list):
+            try:
+                a = np.asarray(v)
+            except ValueError:
+                return None
+            if a.dtype.kind not in "iu":
+                return None
+            v = a.astype(ctx.dtype)
+        elif v is not None and type(v) is not np.ndarray:
+            return None
+        out.append(v)
+    return ctx, tuple(out)
 
 
 def _as_dtype(xp: ModuleType, value: Any, dtype: Any) -> Array:
