@@ -88,6 +88,7 @@ from ._soft import pyramid_to_unit_cube as pyramid_to_unit_cube
 from ._spec import ShadowMapSpec as ShadowMapSpec
 from .lights import DirectionalLight as DirectionalLight
 from .lights import PointLight as PointLight
+from .lights import SpotLight as SpotLight
 
 __version__ = "0.1.0"
 
@@ -104,6 +105,7 @@ __all__ = [
     "PointLight",
     "ShadowMapSpec",
     "ShadowSetup",
+    "SpotLight",
     "adaptive_frustum",
     "api_convention",
     "area_light_samples",

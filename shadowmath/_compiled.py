@@ -62,7 +62,7 @@ def fit(
 def operands(shape: tuple[int, ...], a: Inputs, one: bool) -> tuple[Array, ...]:
     """The loop's array operands, ``(count or 1, ...)`` each."""
     return (
-        a.light.reshape(1, 3) if one else flat_batch(a.light, shape, (3,)),
+        a.light.reshape(1, -1) if one else flat_batch(a.light, shape, a.light.shape[-1:]),
         a.verts.reshape(1, *a.verts.shape[-2:])
         if one
         else flat_batch(a.verts, shape, a.verts.shape[-2:]),
@@ -112,6 +112,7 @@ def options(key: FitKey, dtype: Any) -> Array:
         NEAR_FAR_SLACK,
         *key.api[0],
         *key.api[1],
+        key.spot,
     )
     opts = np.array(values, dtype=np.float64)
     opts.flags.writeable = False

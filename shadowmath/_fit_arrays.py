@@ -142,31 +142,44 @@ def _finite3(d: Driver, s: tuple[Array, ...]) -> Array:
 def _point(
     d: Driver, key: FitKey, a: Inputs, world: Components, flags: dict[str, Array]
 ) -> FitEntries:
-    """The article's MDV fit of a point light (with or without ``up``), on whole arrays."""
+    """The article's MDV fit of a point light (with or without ``up``), on whole arrays;
+    a spot light aims along its axis instead and clips the sides to its cone."""
     xp, eps = d.xp, d.eps
     L = _components(d, a.light)
     o = tuple(p - lc for p, lc in zip(world, d.expand(L), strict=True))
     sums = d.sums(o)
-    if key.aim_bbox:
+    if key.spot:
+        aim = tuple(d.entry(a.light[..., i]) for i in (3, 4, 5))
+        angle = d.entry(a.light[..., 7])
+        flags["spot_angle"] = (angle > 0) & (angle < 0.5 * np.pi)
+    elif key.aim_bbox:
         aim = tuple(0.5 * (hi + lo) for hi, lo in (d.bounds(c) for c in o))
     else:
         aim = tuple(s / o[0].shape[-1] for s in sums)
     flags["overflow"] = _finite3(d, sums)
     reach = d.max_abs(*o)
     coords = xp.maximum(d.max_abs(*world), d.max_abs(a.light))
-    axes, _, flags["direction"], flags["up_parallel"] = d.Fe.fit_axes(
+    axes, ok_nonzero, ok_direction, flags["up_parallel"] = d.Fe.fit_axes(
         aim, _components(d, a.U), key.has_up, coords, eps
     )
+    flags["spot" if key.spot else "direction"] = ok_nonzero if key.spot else ok_direction
     x, y, z = d.Fv.to_light(*o, d.expand(axes))
     # One reciprocal per vertex, as the compiled loop and adaptive_frustum's pass compute it.
     inv_z = 1 / xp.where(z > 0, z, xp.ones_like(z))
     (hi_x, lo_x), (hi_y, lo_y) = d.bounds(x * inv_z), d.bounds(y * inv_z)
     zb_max, zb_min = d.bounds(z)
-    half_x, half_y, flags["behind"], flags["silhouette"] = d.Fe.point_sides(
-        hi_x, lo_x, hi_y, lo_y, zb_min, reach, eps
-    )
-    zero = 0.0 * half_x
-    sides = (half_x, half_y, zero, zero)
+    if key.spot:
+        t = d.entry(a.light[..., 6])
+        *sides, flags["behind"], flags["outside_cone"], flags["silhouette"] = d.Fe.spot_sides(
+            (hi_x, lo_x, hi_y, lo_y), t, zb_min, reach, eps
+        )
+        sides = tuple(sides)
+    else:
+        half_x, half_y, flags["behind"], flags["silhouette"] = d.Fe.point_sides(
+            hi_x, lo_x, hi_y, lo_y, zb_min, reach, eps
+        )
+        zero = 0.0 * half_x
+        sides = (half_x, half_y, zero, zero)
     z_lo, z_hi = _receivers(d, key, a, L, axes, sides, (zb_min, zb_max))
     return _finish(d, key, a, flags, L, axes, sides, (z_lo, z_hi, zb_min, zb_max))
 

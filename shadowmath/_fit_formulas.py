@@ -116,6 +116,29 @@ def point_sides(
     return half_x, half_y, z_min > noise, ok_sil
 
 
+def spot_sides(
+    bounds: tuple[Any, Any, Any, Any], t: Any, z_min: Any, reach: Any, eps: float
+) -> tuple[Any, Any, Any, Any, Any, Any, Any]:
+    """A spot light's frustum: the ratios' bounds clipped to its cone's bounding square.
+
+    ``bounds = (hi_x, lo_x, hi_y, lo_y)`` of ``x / z``, ``y / z`` in the frame whose
+    ``Z`` is the cone's axis, ``t = tan(angle)``. The clipped bounds
+    ``[max(lo, -t), min(hi, t)]`` give an off-centre frustum (half-widths and
+    centres) that holds every caster inside the cone and no texel outside the
+    square ``|x / z|, |y / z| <= t`` around it. Checks: in front (as a point
+    light), inside the cone's square, a silhouette of nonzero width.
+    """
+    hi_x, lo_x, hi_y, lo_y = bounds
+    hx, lx = where(hi_x <= t, hi_x, t), where(lo_x >= -t, lo_x, -t)
+    hy, ly = where(hi_y <= t, hi_y, t), where(lo_y >= -t, lo_y, -t)
+    noise = 32.0 * eps * reach
+    ratio_noise = 2.0 * noise / where(z_min > 0, z_min, 1.0)
+    half_x, half_y = 0.5 * (hx - lx), 0.5 * (hy - ly)
+    ok_cone = (hx > lx) & (hy > ly)
+    ok_sil = (half_x > ratio_noise) & (half_y > ratio_noise)
+    return half_x, half_y, 0.5 * (hx + lx), 0.5 * (hy + ly), z_min > noise, ok_cone, ok_sil
+
+
 def box_sides(
     hi_x: Any, lo_x: Any, hi_y: Any, lo_y: Any, reach: Any, eps: float
 ) -> tuple[Any, Any, Any, Any, Any]:
@@ -313,6 +336,7 @@ FUNCTIONS = (
     "to_light",
     "fit_axes",
     "point_sides",
+    "spot_sides",
     "box_sides",
     "stable_sides",
     "receiver_counted",

@@ -34,11 +34,24 @@ from ._fit_formulas import (
     point_sides,
     receiver_counted,
     safe_box,
+    spot_sides,
     stable_sides,
     to_light,
 )
 from ._formulas import axes_from_z, compose_rows, normalize3, planar_entries
-from ._status import FORMULA_BITS, LIGHT, OVERFLOW, PLACEMENT, PROJECTIVE, RECEIVERS, UP, VERTICES
+from ._status import (
+    FORMULA_BITS,
+    LIGHT,
+    OUTSIDE_CONE,
+    OVERFLOW,
+    PLACEMENT,
+    PROJECTIVE,
+    RECEIVERS,
+    SPOT,
+    SPOT_ANGLE,
+    UP,
+    VERTICES,
+)
 
 _BITS = FORMULA_BITS
 
@@ -146,17 +159,27 @@ def _flags(ok: Any, first: int) -> int:
     return st
 
 
-def _point_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
-    """One point light's fit. ``o``: the options tuple of :func:`fit_loop`."""
+def _point_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any, S: Any) -> Any:
+    """One point (or spot) light's fit. ``o``: the options of :func:`fit_loop`; ``S``: a
+    spot light's axis, ``tan(angle)`` and angle."""
     aim_bbox, has_b, has_r, has_up, single, margins, eps = o[0], o[1], o[2], o[3], o[4], o[5], o[6]
+    spot = o[12]
     s, lo, hi, reach, coords, st = _spread(V, b, has_b, L)
     n = len(V)
-    if aim_bbox:
+    if spot:
+        d = (S[0], S[1], S[2])
+        if not (S[4] > 0 and S[4] < 0.5 * math.pi):
+            st |= SPOT_ANGLE
+    elif aim_bbox:
         d = (0.5 * (hi[0] + lo[0]), 0.5 * (hi[1] + lo[1]), 0.5 * (hi[2] + lo[2]))
     else:
         d = (s[0] / n, s[1] / n, s[2] / n)
     coords = max(coords, abs(L[0]), abs(L[1]), abs(L[2]))
-    a, _, ok_dir, ok_up = fit_axes(d, U, has_up, coords, eps)
+    a, ok_nonzero, ok_dir, ok_up = fit_axes(d, U, has_up, coords, eps)
+    if spot:
+        if not ok_nonzero:
+            st |= SPOT
+        ok_dir = True
     if single and not has_up:
         # The helper axis is decided on Z as returned (rounded to float32), as the
         # float32 array path decides it, so the documented rule holds for that frame.
@@ -166,15 +189,23 @@ def _point_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
     st |= _flags((ok_dir, ok_up), 1)
     bounds, _, _ = _light_pass(V, b, has_b, L, a, True)
     hx, lx, hy, ly, zb_max, zb_min = bounds
-    half_x, half_y, ok_behind, ok_sil = point_sides(hx, lx, hy, ly, zb_min, reach, eps)
+    if spot:
+        half_x, half_y, cx, cy, ok_behind, ok_cone, ok_sil = spot_sides(
+            (hx, lx, hy, ly), S[3], zb_min, reach, eps
+        )
+        if not ok_cone:
+            st |= OUTSIDE_CONE
+    else:
+        half_x, half_y, ok_behind, ok_sil = point_sides(hx, lx, hy, ly, zb_min, reach, eps)
+        cx = cy = 0.0
     st |= _flags((ok_behind, ok_sil), 3)
     z_lo, z_hi, ok_r = zb_min, zb_max, True
     if has_r:
-        sides = _sides(half_x, half_y, margins, 0.0, 0.0)
+        sides = _sides(half_x, half_y, margins, cx, cy)
         z_lo, z_hi, ok_r = _receiver_range(R, L, a, sides, (zb_min, zb_max), False)
     if not ok_r:
         st |= RECEIVERS
-    box = (half_x, half_y, 0.0, 0.0)
+    box = (half_x, half_y, cx, cy)
     return st, (L[0], L[1], L[2]), a, box, (z_lo, z_hi, zb_min, zb_max)
 
 
@@ -224,6 +255,21 @@ def _entries(M: Any, i: int) -> Any:
     )  # fmt: skip
 
 
+def _spot(Lr: Any, spot: bool) -> Any:
+    """A spot light's axis, ``tan(angle)`` and angle (columns 3 to 7 of its row), or zeros."""
+    if spot:
+        return (float(Lr[3]), float(Lr[4]), float(Lr[5]), float(Lr[6]), float(Lr[7]))
+    return (0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def _check_spot(S: Any, spot: bool) -> int:
+    if spot:
+        for v in S:
+            if not math.isfinite(v):
+                return LIGHT
+    return 0
+
+
 def _check_finite(L: Any, U: Any, b: Any, o: Any) -> int:
     st = 0
     if not (math.isfinite(L[0]) and math.isfinite(L[1]) and math.isfinite(L[2])):
@@ -248,12 +294,13 @@ def _unpack(opts: Any) -> Any:
     """The static options from their float64 array (one array: the cheapest to dispatch).
 
     Layout (:func:`._compiled.options`): aim_bbox, has_b, has_r, has_up, single, m_x,
-    m_y, eps, stable, width, height, directional, has_near, has_far, slack, C (16), T C (16).
+    m_y, eps, stable, width, height, directional, has_near, has_far, slack, C (16), T C (16),
+    spot.
     """
     o = (
         opts[0] != 0, opts[1] != 0, opts[2] != 0, opts[3] != 0, opts[4] != 0,
         (opts[5], opts[6]), opts[7], opts[8] != 0, (opts[9], opts[10]), opts[11] != 0,
-        (opts[12] != 0, opts[13] != 0), opts[14],
+        (opts[12] != 0, opts[13] != 0), opts[14], opts[47] != 0,
     )  # fmt: skip
     return o, (_tuple16(opts, 15), _tuple16(opts, 31))
 
@@ -271,14 +318,15 @@ def fit_loop(
     for i in range(len(out)):
         Lr, Ur = _row(light, i), _row(ups, i)
         L = (float(Lr[0]), float(Lr[1]), float(Lr[2]))
+        S = _spot(Lr, o[12])
         U = (float(Ur[0]), float(Ur[1]), float(Ur[2]))
         b = _entries(placement, i)
         V, R = _row(verts, i), _row(recv, i)
         if directional:
             st, origin, a, sides, z = _directional_entry(L, V, b, R, U, o)
         else:
-            st, origin, a, sides, z = _point_entry(L, V, b, R, U, o)
-        st |= _check_finite(L, U, b, o)
+            st, origin, a, sides, z = _point_entry(L, V, b, R, U, o, S)
+        st |= _check_finite(L, U, b, o) | _check_spot(S, o[12])
         nf = (float(_row(near, i)), float(_row(far, i)))
         n, f, ok = depth_range(z, nf, has_nf, slack)
         st |= _flags(ok, 5)
@@ -324,6 +372,8 @@ FUNCTIONS = (
     "_row",
     "_entries",
     "_check_finite",
+    "_spot",
+    "_check_spot",
     "_tuple16",
     "_unpack",
     "fit_loop",

@@ -52,3 +52,12 @@ STABLE_NEEDS_UP = (
     "up: stable=True needs an up hint for a point light, so that its frame cannot jump; "
     "pass up=(x, y, z)"
 )
+ZERO_SPOT = "light: the spot light's direction is zero; it must point along the axis of its cone"
+SPOT_ANGLE = (
+    "light: a spot light's angle is the half-angle of its cone and must lie in (0, pi/2) "
+    "radians; for a wider light use a point light's cube map"
+)
+OUTSIDE_CONE = (
+    "vertices: the blocker lies outside the spot light's cone (as seen from the light); "
+    "nothing of it can shadow what the spot lights"
+)

@@ -47,7 +47,7 @@ from ._validate import (
     require_vertices,
     shape_error,
 )
-from .lights import DirectionalLight, PointLight
+from .lights import DirectionalLight, PointLight, SpotLight
 
 __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
@@ -85,8 +85,8 @@ def fit_shadow(
     writes the same products in row-vector order, ``B * W * P``.)
 
     Arguments:
-        light: a :class:`PointLight` or :class:`DirectionalLight` (the kind is the
-            type: only its fit runs, also under ``jit``); a ``(*batch, 3)`` point
+        light: a :class:`PointLight`, :class:`SpotLight` or :class:`DirectionalLight`
+            (the kind is the type: only its fit runs, also under ``jit``); a ``(*batch, 3)`` point
             light position; or a ``(*batch, 4)`` homogeneous light ``(x, y, z, w)``,
             read once per call: all ``w != 0`` point lights at ``xyz / w``, all
             ``w == 0`` **directional** lights whose ``xyz`` points toward the light.
@@ -183,13 +183,13 @@ def fit_shadow(
     if method not in ("mdv", "optimized"):
         raise ValueError(f"method: expected 'mdv' or 'optimized', got {method!r}")
     spec = _spec(map_size, border_texels, pcf_radius, pcf_filter, margin, api, reversed_z, stable)
-    if isinstance(light, PointLight | DirectionalLight):
-        directional: bool | None = isinstance(light, DirectionalLight)
-        raw = light[0]
+    spot = isinstance(light, SpotLight)
+    if spot:
+        named = {"light.position": light[0], "light.direction": light[1], "light.angle": light[2]}
     else:
-        directional, raw = None, light
-    ctx, (L, verts, B, n, f, R, U) = convert(
-        light=raw,
+        named = {"light": light[0] if isinstance(light, PointLight | DirectionalLight) else light}
+    ctx, (*parts, verts, B, n, f, R, U) = convert(
+        **named,
         blocker_vertices=blocker_vertices,
         blocker_to_world=blocker_to_world,
         near=near,
@@ -197,11 +197,19 @@ def fit_shadow(
         receivers=receivers,
         up=up,
     )
-    directional, L = _light_kind(ctx, directional, L)
+    if spot:
+        directional, L = False, _spot_array(ctx, *parts)
+    else:
+        typed = (
+            isinstance(light, DirectionalLight)
+            if isinstance(light, PointLight | DirectionalLight)
+            else None
+        )
+        directional, L = _light_kind(ctx, typed, parts[0])
     a = Inputs(L, verts, B, R, U, n, f)
     shape = _check_shapes(a)
     given = (B is not None, R is not None, U is not None, n is not None, f is not None)
-    key = _fit_key(directional, aim == "bbox", spec, given)
+    key = _fit_key(directional, spot, aim == "bbox", spec, given)
     _check_static(key, method, spec)
     if method == "optimized":
         return _optimized(ctx, a, key.margins)
@@ -277,11 +285,12 @@ _DEFAULTS: dict[str, Any] = {
 
 @functools.lru_cache(maxsize=256)
 def _fit_key(
-    directional: bool, aim_bbox: bool, spec: ShadowMapSpec, given: tuple[bool, ...]
+    directional: bool, spot: bool, aim_bbox: bool, spec: ShadowMapSpec, given: tuple[bool, ...]
 ) -> FitKey:
     """The static key of a call (cached: the same few recur every frame)."""
     return FitKey(
         directional,
+        spot,
         aim_bbox,
         bool(spec.stable),
         spec.margins,
@@ -289,6 +298,19 @@ def _fit_key(
         api_rows(spec.api, bool(spec.reversed_z)),
         *given,
     )
+
+
+def _spot_array(ctx: Context, position: Array, direction: Array, angle: Array) -> Array:
+    """A spot light as one ``(*batch, 8)`` array: position, axis, ``tan(angle)``, angle."""
+    xp = ctx.xp
+    require_last("light.position", position, 3, hint="a position is (x, y, z)")
+    require_last("light.direction", direction, 3, hint="the cone's axis is (x, y, z)")
+    names = ("light.position", "light.direction", "light.angle")
+    shapes = (position.shape[:-1], direction.shape[:-1], angle.shape)
+    shape = batch_shape(*shapes, names=names)
+    a = xp.broadcast_to(angle, shape)[..., None]
+    parts = (xp.broadcast_to(position, (*shape, 3)), xp.broadcast_to(direction, (*shape, 3)))
+    return xp.concatenate([*parts, xp.tan(a), a], axis=-1)
 
 
 def _light_kind(ctx: Context, directional: bool | None, L: Array) -> tuple[bool, Array]:
@@ -357,7 +379,7 @@ def _check_static(key: FitKey, method: str, spec: ShadowMapSpec) -> None:
         )
     if key.stable and not key.directional and not key.has_up:
         raise ValueError(msg.STABLE_NEEDS_UP)
-    options = key.directional or key.has_receivers or key.has_up or spec.api != "opengl"
+    options = key.directional or key.spot or key.has_receivers or key.has_up or spec.api != "opengl"
     if method == "optimized" and (options or spec.reversed_z or spec.stable):
         raise ValueError(
             "method: 'optimized' fits point lights without receivers, api, reversed_z, up "

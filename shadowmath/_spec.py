@@ -146,6 +146,7 @@ class FitKey(NamedTuple):
     """Everything static about one fit call: the key of its cached jit and compiled loop."""
 
     directional: bool
+    spot: bool
     aim_bbox: bool
     stable: bool
     margins: tuple[float, float]

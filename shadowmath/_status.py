@@ -22,9 +22,12 @@ FIT_CHECKS: tuple[tuple[str, str], ...] = (
     ("up", non_finite("up")),
     ("projective", msg.PROJECTIVE_PLACEMENT),
     ("zero_light", msg.ZERO_DIRECTIONAL),
+    ("spot", msg.ZERO_SPOT),
+    ("spot_angle", msg.SPOT_ANGLE),
     ("direction", msg.ZERO_DIRECTION),
     ("up_parallel", msg.UP_PARALLEL),
     ("behind", msg.BEHIND_LIGHT),
+    ("outside_cone", msg.OUTSIDE_CONE),
     ("silhouette", msg.ZERO_SILHOUETTE),
     ("near_finite", msg.NEAR_NOT_FINITE),
     ("far_finite", msg.FAR_NOT_FINITE),
@@ -51,6 +54,9 @@ RECEIVERS = bit("receivers")
 UP = bit("up")
 PROJECTIVE = bit("projective")
 OVERFLOW = bit("overflow")
+SPOT = bit("spot")
+SPOT_ANGLE = bit("spot_angle")
+OUTSIDE_CONE = bit("outside_cone")
 
 #: The order of the checks that the per-entry formulas return as a tuple of booleans.
 FORMULA_CHECKS = (

@@ -43,3 +43,29 @@ class DirectionalLight(NamedTuple):
     """
 
     direction: Array
+
+
+class SpotLight(NamedTuple):
+    """A spot light: a point light shining into a cone. A perspective shadow map.
+
+    The frame's ``Z`` is the cone's axis (not the blocker's mean direction), and the
+    fitted frustum is the article's tight fit to the blocker's silhouette clipped to
+    the cone's bounding square ``|x / z|, |y / z| <= tan(angle)``: no texel is spent
+    outside that square, and no caster inside the cone is lost.
+
+    Attributes:
+        position: ``(*batch, 3)`` the light's position in world coordinates.
+        direction: ``(*batch, 3)`` the cone's axis, from the light toward what it lights
+            (any nonzero length).
+        angle: ``(*batch,)`` the cone's half-angle in radians, in ``(0, pi/2)``.
+
+    Example:
+        >>> import numpy as np
+        >>> spot = SpotLight(np.zeros(3), np.array([0.0, 0.0, 1.0]), np.array(0.5))
+        >>> spot.angle.shape
+        ()
+    """
+
+    position: Array
+    direction: Array
+    angle: Array
