@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from ._validate import Array
+from ._boundary._validate import Array
 
 
 class PointLight(NamedTuple):

@@ -1,7 +1,7 @@
 """The compiled loops never run stale formulas: their disk cache is keyed on every source.
 
 Numba keys a cached function to its own source file, while the loops of
-``shadowmath._loops`` inline formulas from other files. A copy of the package is
+``shadowmath._math._loops`` inline formulas from other files. A copy of the package is
 fitted in a fresh process (which compiles and caches the loops), one formula is
 changed in a file that is not ``_loops.py``, and a second fresh process must run
 the changed formula: its compiled result equals the array path's new result.
@@ -22,7 +22,7 @@ import shadowmath
 
 SCRIPT = """
 import json, numpy as np, shadowmath as sm
-from shadowmath import _kernels
+from shadowmath._backends import _kernels
 box = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], float)
 sun = np.array([0.3, 1.0, -0.2, 0.0])
 assert _kernels.available()
@@ -52,7 +52,7 @@ def test_a_changed_formula_reaches_the_compiled_loop_of_a_fresh_process(tmp_path
     fast, ref = _fit(tmp_path)
     np.testing.assert_allclose(fast, ref, rtol=1e-12, atol=1e-12)
     # An orthographic depth scale of 4 / (f - n) instead of 2 / (f - n): depth row doubled.
-    formulas = package / "_fit_formulas.py"
+    formulas = package / "_math" / "_fit_formulas.py"
     text = formulas.read_text()
     assert text.count("2.0 * inv, -(far + near) * inv") == 1
     formulas.write_text(

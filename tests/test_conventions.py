@@ -13,7 +13,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from shadowmath import GRAPHICS_APIS, api_convention
-from shadowmath._conventions import _clip_from_gl, _texture_from_clip, _texture_from_gl_clip
+from shadowmath._math._conventions import _clip_from_gl, _texture_from_clip, _texture_from_gl_clip
 
 TOP_LEFT_APIS = ("direct3d", "metal", "webgpu")
 

@@ -22,7 +22,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import shadowmath as sm
-from shadowmath import _kernels
+from shadowmath._backends import _kernels
 
 from .strategies import (
     Invalid,

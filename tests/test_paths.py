@@ -27,7 +27,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 import shadowmath as sm
-from shadowmath import _kernels
+from shadowmath._backends import _kernels
 
 from .strategies import invalid_placements, placements, sized_maps
 
@@ -173,7 +173,7 @@ def test_concrete_jax_runs_one_cached_jit_and_raises_eagerly() -> None:
     np.testing.assert_allclose(
         setup.blocker_to_clip, on_numpy.blocker_to_clip, rtol=1e-12, atol=1e-12
     )
-    from shadowmath._setup import _jitted_fit
+    from shadowmath._fits._setup import _jitted_fit
 
     before = _jitted_fit.cache_info().currsize
     sm.fit_shadow(light + 1.0, verts, 256)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import shadowmath as sm
-from shadowmath import _kernels
+from shadowmath._backends import _kernels
 
 BOX = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], dtype=float)
 AXIS = np.array([0.0, 0.0, 1.0])

@@ -63,7 +63,7 @@ class Mutation:
 MUTATIONS: tuple[Mutation, ...] = (
     Mutation(
         "a-stable-half-texel",
-        "shadowmath/_fit_formulas.py",
+        "shadowmath/_math/_fit_formulas.py",
         "half_x = radius / (1.0 - 1.0 / (mx * width))\n"
         "    half_y = radius / (1.0 - 1.0 / (my * height))",
         "half_x = radius / (1.0 - 0.5 / (mx * width))\n"
@@ -73,7 +73,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "b-directional-pad",
-        "shadowmath/_fit_formulas.py",
+        "shadowmath/_math/_fit_formulas.py",
         "pad = (z_hi - z_lo) + where(half_x >= half_y, half_x, half_y)",
         "pad = (z_hi - z_lo)",
         "directional origin padded by the depth range only, not the box size",
@@ -81,7 +81,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "stable-floor",
-        "shadowmath/_fit_formulas.py",
+        "shadowmath/_math/_fit_formulas.py",
         "cx = rint(ax / safe_tx) * tx - ax\n    cy = rint(ay / safe_ty) * ty - ay",
         "cx = rint(ax / safe_tx - 0.5) * tx - ax\n    cy = rint(ay / safe_ty - 0.5) * ty - ay",
         "stable centre snapped down (a floor) instead of to the nearest texel",
@@ -89,7 +89,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "stable-bbox-centre",
-        "shadowmath/_fit_arrays.py",
+        "shadowmath/_fits/_fit_arrays.py",
         "c = tuple(s / world[0].shape[-1] for s in sums)",
         "c = tuple(0.5 * (hi + lo) for hi, lo in (d.bounds(p) for p in world))",
         "stable sphere about the bounding box's centre, which moves as the blocker turns",
@@ -97,7 +97,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "receivers-toward-sun",
-        "shadowmath/_fit_formulas.py",
+        "shadowmath/_math/_fit_formulas.py",
         "return inside & ((z > 0) | directional)",
         "return inside & (z > 0)",
         "directional depth range ignores receivers between the sun and the blocker's centre",
@@ -105,7 +105,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "fit-far-slack",
-        "shadowmath/_fit_formulas.py",
+        "shadowmath/_math/_fit_formulas.py",
         "far = z_hi * (1.0 + slack)",
         "far = z_hi * (1.0 - slack)",
         "fit_shadow's default far plane inside the blocker (slack subtracted)",
@@ -113,7 +113,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "frustum-near-slack",
-        "shadowmath/_frustum.py",
+        "shadowmath/_math/_frustum.py",
         "near = z_min * (1 - NEAR_FAR_SLACK) if given_near is None else given_near",
         "near = z_min * (1 + NEAR_FAR_SLACK) if given_near is None else given_near",
         "adaptive_frustum's default near plane behind the nearest vertex (slack added)",
@@ -121,7 +121,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "axes-cross-sign",
-        "shadowmath/_formulas.py",
+        "shadowmath/_math/_formulas.py",
         "normalize3(zy * vz - zz * vy, zz * vx - zx * vz, zx * vy - zy * vx)",
         "normalize3(zy * vz + zz * vy, zz * vx - zx * vz, zx * vy - zy * vx)",
         "axes_from_z: a sign in X = Z x V",
@@ -129,7 +129,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "helper-axis-tie",
-        "shadowmath/_formulas.py",
+        "shadowmath/_math/_formulas.py",
         "pick_x = (ax <= ay) & (ax <= az)",
         "pick_x = (ax < ay) & (ax <= az)",
         "helper_axis3: a tie between |z_x| and |z_y| goes to Y instead of the lowest index",
@@ -137,7 +137,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "light-translation",
-        "shadowmath/_formulas.py",
+        "shadowmath/_math/_formulas.py",
         "ty = -(yx * ox + yy * oy + yz * oz)",
         "ty = -(yx * ox + yy * oy + yz * ox)",
         "light_rows: Y's translation uses the origin's x for its z",
@@ -145,7 +145,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "texture-half",
-        "shadowmath/_formulas.py",
+        "shadowmath/_math/_formulas.py",
         "0.5 * (c[0] + c[12]), 0.5 * (c[1] + c[13])",
         "1.0 * (c[0] + c[12]), 0.5 * (c[1] + c[13])",
         "texture_rows: s's x entry not halved (the 0.5 of (clip + w) / 2)",
@@ -153,7 +153,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "projection-depth",
-        "shadowmath/_formulas.py",
+        "shadowmath/_math/_formulas.py",
         "-2.0 * near * ratio",
         "-1.0 * near * ratio",
         "projection_rows: -n f / (f - n) instead of -2 n f / (f - n) (near off -1)",

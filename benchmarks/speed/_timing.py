@@ -113,7 +113,7 @@ def once(fn: Callable[[], object]) -> Timing:
 @contextlib.contextmanager
 def numpy_alone() -> Iterator[None]:
     """NumPy input runs the array path within the block, as without the ``fast`` extra."""
-    from shadowmath import _kernels
+    from shadowmath._backends import _kernels
 
     with _kernels.disabled():
         yield
@@ -121,7 +121,7 @@ def numpy_alone() -> Iterator[None]:
 
 def fast_extra() -> bool:
     """Whether the ``fast`` extra's compiled loops are there (Numba, not ``SHADOWMATH_NUMBA=0``)."""
-    from shadowmath import _kernels
+    from shadowmath._backends import _kernels
 
     return _kernels.available()
 

@@ -207,7 +207,8 @@ def run(cfg: Config) -> Section:
     section.notes.append(
         "fast extra: fit_shadow as installed, against PyGLM (a list of glm.vec3 made before "
         "timing, Python loops over the vertices). NumPy alone: the compiled loop disabled "
-        "(shadowmath._kernels.disabled(), as without Numba), against a hand-written NumPy fit "
+        "(shadowmath._backends._kernels.disabled(), as without Numba), against a hand-written "
+        "NumPy fit "
         "of the same options (benchmarks/speed/_numpy_fits.py; its matrices are checked once, "
         "not timed)."
     )

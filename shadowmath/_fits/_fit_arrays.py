@@ -16,11 +16,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._frustum import NEAR_FAR_SLACK
+from shadowmath._boundary._status import FIT_CHECKS, FORMULA_CHECKS
+from shadowmath._boundary._validate import Array, Checks, Context, all_finite
+from shadowmath._math._frustum import NEAR_FAR_SLACK
+from shadowmath._math._specialize import formulas, scalar_formulas
+
 from ._spec import FitKey
-from ._specialize import formulas, scalar_formulas
-from ._status import FIT_CHECKS, FORMULA_CHECKS
-from ._validate import Array, Checks, Context, all_finite
 
 Components = tuple[Array, Array, Array]
 

@@ -30,13 +30,28 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._frame import LightFrame, _frame, zero_direction_noise
-from ._frustum import Frustum, blocker_reach, bounded_frustum, check_blocker, margins
-from ._passes import extent, spread
+from shadowmath._boundary._validate import (
+    Array,
+    Checks,
+    Context,
+    all_finite,
+    convert,
+    non_finite,
+    require_last,
+)
+from shadowmath._math._frame import LightFrame, _frame, zero_direction_noise
+from shadowmath._math._frustum import (
+    Frustum,
+    blocker_reach,
+    bounded_frustum,
+    check_blocker,
+    margins,
+)
+from shadowmath._math._passes import extent, spread
+from shadowmath._math._smooth import rolled_frame, soft_bounds
+from shadowmath._math._specialize import formulas
+
 from ._shadow_setup import ShadowSetup, setup_from
-from ._smooth import rolled_frame, soft_bounds
-from ._specialize import formulas
-from ._validate import Array, Checks, Context, all_finite, convert, non_finite, require_last
 
 
 class FrustumFit(NamedTuple):

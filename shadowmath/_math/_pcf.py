@@ -28,8 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ._bias import PcfFilter, _check_kernel, _reach
-from ._validate import (
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     all_finite,
@@ -39,6 +38,8 @@ from ._validate import (
     require_last,
     shape_error,
 )
+
+from ._bias import PcfFilter, _check_kernel, _reach
 
 
 def _border_texels(radius: int, filter: PcfFilter) -> int:

@@ -16,11 +16,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import _messages as msg
-from ._frame import LightFrame, frame_arrays, stack_matrix
-from ._passes import Extent, extent
-from ._specialize import formulas
-from ._validate import (
+from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     Context,
@@ -30,6 +27,10 @@ from ._validate import (
     non_finite,
     require_vertices,
 )
+
+from ._frame import LightFrame, frame_arrays, stack_matrix
+from ._passes import Extent, extent
+from ._specialize import formulas
 
 #: Relative slack of the default near and far planes around the blocker:
 #: ``near = z_min * (1 - NEAR_FAR_SLACK)``, ``far = z_max * (1 + NEAR_FAR_SLACK)``.

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from ._frame import LightFrame, light_entries, stack_matrix
-from ._frustum import Frustum, projection_terms
-from ._specialize import formulas
-from ._validate import Array, Checks, Context
+from shadowmath._boundary._validate import Array, Checks, Context
+from shadowmath._math._frame import LightFrame, light_entries, stack_matrix
+from shadowmath._math._frustum import Frustum, projection_terms
+from shadowmath._math._specialize import formulas
 
 
 class ShadowSetup(NamedTuple):

@@ -15,10 +15,15 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._bias import PcfFilter, _check_kernel
-from ._conventions import GraphicsApi, _check_api, _clip_from_gl, _texture_from_gl_clip
-from ._frustum import _margins, _texels
-from ._pcf import _border_texels
+from shadowmath._math._bias import PcfFilter, _check_kernel
+from shadowmath._math._conventions import (
+    GraphicsApi,
+    _check_api,
+    _clip_from_gl,
+    _texture_from_gl_clip,
+)
+from shadowmath._math._frustum import _margins, _texels
+from shadowmath._math._pcf import _border_texels
 
 
 @dataclasses.dataclass(frozen=True)

@@ -21,17 +21,9 @@ from typing import Any, Literal
 
 import numpy as np
 
-from . import _compiled, _kernels
-from . import _messages as msg
-from ._bias import PcfFilter
-from ._conventions import GraphicsApi
-from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
-from ._frame import LightFrame, check_aim, stack_matrix
-from ._frustum import Frustum
-from ._shadow_setup import ShadowSetup
-from ._spec import FitKey, ShadowMapSpec, api_rows, spec_from_options
-from ._specialize import formulas, scalar_formulas
-from ._validate import (
+from shadowmath._backends import _kernels
+from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     Context,
@@ -47,7 +39,17 @@ from ._validate import (
     require_vertices,
     shape_error,
 )
-from .lights import DirectionalLight, PointLight, SpotLight
+from shadowmath._math._bias import PcfFilter
+from shadowmath._math._conventions import GraphicsApi
+from shadowmath._math._frame import LightFrame, check_aim, stack_matrix
+from shadowmath._math._frustum import Frustum
+from shadowmath._math._specialize import formulas, scalar_formulas
+from shadowmath.lights import DirectionalLight, PointLight, SpotLight
+
+from . import _compiled
+from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
+from ._shadow_setup import ShadowSetup
+from ._spec import FitKey, ShadowMapSpec, api_rows, spec_from_options
 
 __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 

@@ -13,15 +13,16 @@ from typing import Any
 
 import numpy as np
 
-from . import _kernels
+from shadowmath._backends import _kernels
+from shadowmath._boundary._status import fit_messages
+from shadowmath._boundary._validate import Array, Context, flat_batch, raise_status
+from shadowmath._math._frame import LightFrame
+from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
+from shadowmath._math._specialize import scalar_formulas
+
 from ._fit_arrays import Inputs
-from ._frame import LightFrame
-from ._frustum import NEAR_FAR_SLACK, Frustum
 from ._shadow_setup import ShadowSetup
 from ._spec import FitKey
-from ._specialize import scalar_formulas
-from ._status import fit_messages
-from ._validate import Array, Context, flat_batch, raise_status
 
 #: One output row: origin, X, Y, Z (3 each), then the eight numeric frustum fields;
 #: one matrix block (4, 4, 4): world_to_light, blocker_to_clip, world_to_texture, placement.

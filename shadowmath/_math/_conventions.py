@@ -48,7 +48,7 @@ from typing import Literal, NamedTuple, TypeAlias
 
 import numpy as np
 
-from ._validate import Array
+from shadowmath._boundary._validate import Array
 
 GraphicsApi: TypeAlias = Literal["opengl", "vulkan", "direct3d", "metal", "webgpu"]
 

@@ -12,10 +12,8 @@ from __future__ import annotations
 from types import ModuleType
 from typing import Any, Literal, NamedTuple
 
-from . import _messages as msg
-from ._passes import spread
-from ._specialize import formulas
-from ._validate import (
+from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     Context,
@@ -26,6 +24,9 @@ from ._validate import (
     require_last,
     require_vertices,
 )
+
+from ._passes import spread
+from ._specialize import formulas
 
 
 class LightFrame(NamedTuple):

@@ -24,6 +24,20 @@ from typing import Any
 
 import numpy as np
 
+from shadowmath._boundary._status import (
+    FORMULA_BITS,
+    LIGHT,
+    OUTSIDE_CONE,
+    OVERFLOW,
+    PLACEMENT,
+    PROJECTIVE,
+    RECEIVERS,
+    SPOT,
+    SPOT_ANGLE,
+    UP,
+    VERTICES,
+)
+
 from ._fit_formulas import (
     box_sides,
     depth_range,
@@ -39,19 +53,6 @@ from ._fit_formulas import (
     to_light,
 )
 from ._formulas import axes_from_z, compose_rows, normalize3, planar_entries
-from ._status import (
-    FORMULA_BITS,
-    LIGHT,
-    OUTSIDE_CONE,
-    OVERFLOW,
-    PLACEMENT,
-    PROJECTIVE,
-    RECEIVERS,
-    SPOT,
-    SPOT_ANGLE,
-    UP,
-    VERTICES,
-)
 
 _BITS = FORMULA_BITS
 

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from ._validate import require_matrix
+from shadowmath._boundary._validate import require_matrix
 
 
 def column_major_bytes(matrix: Any) -> bytes:

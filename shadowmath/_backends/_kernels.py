@@ -68,20 +68,20 @@ def array_path() -> Iterator[None]:
         _python[0] = old
 
 
-_PACKAGE = Path(__file__).resolve().parent
+_PACKAGE = Path(__file__).resolve().parent.parent
 
 
 def sources_hash() -> str:
-    """A hash of every Python source of the package's core, and of Python's and Numba's versions.
+    """A hash of every Python source of the package, and of Python's and Numba's versions.
 
-    The whole core (every ``*.py`` beside this file), not a list of the files the
-    loops import today: a new import can never escape the key.
+    The whole package (every ``*.py`` under it), not a list of the files the loops
+    import today: a new import can never escape the key.
     """
     import numba
 
     digest = hashlib.sha256(f"{sys.version}|{numba.__version__}".encode())
-    for path in sorted(_PACKAGE.glob("*.py")):
-        digest.update(path.name.encode())
+    for path in sorted(_PACKAGE.rglob("*.py")):
+        digest.update(str(path.relative_to(_PACKAGE)).encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:16]
 
@@ -109,7 +109,7 @@ def loops() -> SimpleNamespace:
     import numba
     from numba.core import config as numba_config
 
-    from ._specialize import scalar_primitives, specialize
+    from shadowmath._math._specialize import scalar_primitives, specialize
 
     config: Any = numba_config
     old = config.CACHE_DIR

@@ -7,10 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from . import _kernels, _status
-from ._frame import stack_matrix
-from ._specialize import formulas
-from ._validate import (
+from shadowmath._backends import _kernels
+from shadowmath._boundary import _status
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     Context,
@@ -22,6 +21,9 @@ from ._validate import (
     raise_status,
     require_last,
 )
+
+from ._frame import stack_matrix
+from ._specialize import formulas
 
 
 def planar_projection(plane: Any, light: Any) -> Array:

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ._validate import (
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     Context,
@@ -28,6 +28,7 @@ from ._validate import (
     non_finite,
     require_last,
 )
+
 from ._vector import cross, dot, norm
 
 _DEGENERATE = (

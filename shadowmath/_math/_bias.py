@@ -24,7 +24,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ._validate import (
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     all_finite,
@@ -34,6 +34,7 @@ from ._validate import (
     require_last,
     require_matrix,
 )
+
 from ._vector import cross, dot
 
 PcfFilter = Literal["box", "bilinear"]

@@ -14,9 +14,7 @@ from __future__ import annotations
 import operator
 from typing import Any
 
-from ._bias import _texel_size_on_surface
-from ._frustum import Frustum, _texels, frustum_arrays
-from ._validate import (
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     all_finite,
@@ -26,6 +24,9 @@ from ._validate import (
     require_last,
     require_matrix,
 )
+
+from ._bias import _texel_size_on_surface
+from ._frustum import Frustum, _texels, frustum_arrays
 from ._vector import dot
 
 

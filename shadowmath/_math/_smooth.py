@@ -18,11 +18,7 @@ from __future__ import annotations
 from types import ModuleType
 from typing import Any
 
-from ._frame import LightFrame, frame_arrays
-from ._frustum import Frustum, blocker_reach, bounded_frustum, check_blocker, margins
-from ._passes import extent
-from ._specialize import formulas
-from ._validate import (
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     Context,
@@ -33,6 +29,11 @@ from ._validate import (
     non_finite,
     require_last,
 )
+
+from ._frame import LightFrame, frame_arrays
+from ._frustum import Frustum, blocker_reach, bounded_frustum, check_blocker, margins
+from ._passes import extent
+from ._specialize import formulas
 
 
 def _smooth_max(

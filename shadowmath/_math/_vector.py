@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from ._validate import Array
+from shadowmath._boundary._validate import Array
 
 
 def dot(xp: ModuleType, a: Array, b: Array) -> Array:

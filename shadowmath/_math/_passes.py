@@ -14,7 +14,7 @@ from __future__ import annotations
 from types import ModuleType
 from typing import NamedTuple
 
-from ._validate import Array
+from shadowmath._boundary._validate import Array
 
 
 class Spread(NamedTuple):

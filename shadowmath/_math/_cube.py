@@ -37,8 +37,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._conventions import GraphicsApi, _check_api
-from ._validate import (
+from shadowmath._boundary._validate import (
     Array,
     Checks,
     all_finite,
@@ -47,6 +46,8 @@ from ._validate import (
     non_finite,
     require_last,
 )
+
+from ._conventions import GraphicsApi, _check_api
 from ._vector import norm
 
 # api -> (clip depth 0..1 instead of -1..1, NDC +y is the image's first row).

@@ -1,0 +1,1 @@
+"""The fits: fit_shadow's boundary, its array and compiled paths, the spec, the optimized fit."""

@@ -1,0 +1,1 @@
+"""Per-entry formulas (one source for every backend), their loops, and the topics' cores."""
