@@ -152,7 +152,7 @@ def _point(
     if key.spot:
         aim = tuple(d.entry(a.light[..., i]) for i in (3, 4, 5))
         angle = d.entry(a.light[..., 7])
-        flags["spot_angle"] = (angle > 0) & (angle < 0.5 * np.pi)
+        flags["spot_angle"] = d.Fe.spot_angle_ok(angle)
     elif key.aim_bbox:
         aim = tuple(0.5 * (hi + lo) for hi, lo in (d.bounds(c) for c in o))
     else:

@@ -139,6 +139,11 @@ def spot_sides(
     return half_x, half_y, 0.5 * (hx + lx), 0.5 * (hy + ly), z_min > noise, ok_cone, ok_sil
 
 
+def spot_angle_ok(angle: Any) -> Any:
+    """A spot light's half-angle lies in ``(0, pi/2)`` (a cone, not a half-space)."""
+    return (angle > 0) & (angle < 1.5707963267948966)
+
+
 def box_sides(
     hi_x: Any, lo_x: Any, hi_y: Any, lo_y: Any, reach: Any, eps: float
 ) -> tuple[Any, Any, Any, Any, Any]:
@@ -337,6 +342,7 @@ FUNCTIONS = (
     "fit_axes",
     "point_sides",
     "spot_sides",
+    "spot_angle_ok",
     "box_sides",
     "stable_sides",
     "receiver_counted",

@@ -48,6 +48,7 @@ from ._fit_formulas import (
     point_sides,
     receiver_counted,
     safe_box,
+    spot_angle_ok,
     spot_sides,
     stable_sides,
     to_light,
@@ -169,7 +170,7 @@ def _point_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any, S: Any) -> Any:
     n = len(V)
     if spot:
         d = (S[0], S[1], S[2])
-        if not (S[4] > 0 and S[4] < 0.5 * math.pi):
+        if not spot_angle_ok(S[4]):
             st |= SPOT_ANGLE
     elif aim_bbox:
         d = (0.5 * (hi[0] + lo[0]), 0.5 * (hi[1] + lo[1]), 0.5 * (hi[2] + lo[2]))
