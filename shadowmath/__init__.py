@@ -89,6 +89,8 @@ from ._math._soft import pyramid_to_unit_cube as pyramid_to_unit_cube
 from .lights import DirectionalLight as DirectionalLight
 from .lights import PointLight as PointLight
 from .lights import SpotLight as SpotLight
+from .receivers import Mesh as Mesh
+from .receivers import Triangles as Triangles
 
 __version__ = "0.1.0"
 
@@ -102,10 +104,12 @@ __all__ = [
     "Frustum",
     "FrustumFit",
     "LightFrame",
+    "Mesh",
     "PointLight",
     "ShadowMapSpec",
     "ShadowSetup",
     "SpotLight",
+    "Triangles",
     "adaptive_frustum",
     "api_convention",
     "area_light_samples",

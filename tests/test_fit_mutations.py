@@ -9,8 +9,9 @@ the implementation:
   snapped to the texel grid: every vertex inside the border margin;
 * a flat blocker facing the sun still gets a depth range with the blocker in it
   and the frame's origin behind it;
-* a directional light's depth range holds the receivers inside the map on the
-  sun's side of the blocker too (only a point light has a "behind").
+* a directional light's depth range holds the receivers inside the map beyond the
+  casters, while receivers on the sun's side of every caster (which nothing can
+  shadow) move nothing and get depths before ``near`` (lit).
 """
 
 from __future__ import annotations
@@ -136,17 +137,16 @@ def test_flat_blocker_facing_the_sun_lies_inside_the_depth_range(
     assert np.abs(ndc[:, 0]).max() <= mx + 1e-12 and np.abs(ndc[:, 1]).max() <= my + 1e-12
 
 
-# ---- receivers on the sun's side of the blocker --------------------------------------------
+# ---- receivers on either side of the blocker ---------------------------------------------
 
 
 @pytest.mark.parametrize("stable", [False, True], ids=["tight", "stable"])
-def test_directional_depth_range_holds_receivers_between_the_sun_and_the_blocker(
+def test_directional_depth_range_holds_receivers_beyond_and_ignores_those_before(
     stable: bool,
 ) -> None:
-    # The receivers= docstring: "its depth range also encloses every receiver point
-    # inside the side planes"; only a *point* light ignores receivers behind it. A sun
-    # has nothing behind it: a ceiling, a canopy or the blocker's own top face between
-    # the sun and the blocker must get depths in range, as must a floor beyond it.
+    # The receivers= docstring: the depth range holds every covered receiver that a
+    # caster can shadow; one on the sun's side of every caster cannot be shadowed, so
+    # it must not widen the range (depth precision) and gets a depth before near.
     rng = np.random.default_rng(11)
     n = 32
     r = 10.0 ** rng.uniform(-2, 2, n)
@@ -165,7 +165,17 @@ def test_directional_depth_range_holds_receivers_between_the_sun_and_the_blocker
     ndc = _ndc(s.blocker_to_clip, receivers)
     inside = (np.abs(ndc[..., 0]) <= 1) & (np.abs(ndc[..., 1]) <= 1)
     assert np.all(inside[:, : len(t)])  # the ray is in the map
-    assert np.all(np.abs(ndc[..., 2][inside]) < 1)
-    z = np.einsum("bmk,bk->bm", receivers - s.frame.origin[:, None, :], s.frame.z_axis)
-    assert np.all(z[inside] > 0)  # the origin is behind every counted receiver
+    # Depth along the sun's rays (away from the sun), and the casters' nearest.
+    depth = -np.einsum("bmk,bk->bm", receivers, toward)
+    first = (-np.einsum("bnk,bk->bn", blocker, toward)).min(axis=1)
+    before = depth < first[:, None]
+    assert before[inside].sum() > 100 and (~before[inside]).sum() > 100
+    assert np.all(np.abs(ndc[..., 2][inside & ~before]) < 1)  # can be shadowed: in range
+    assert np.all(ndc[..., 2][inside & before] < 1)  # nothing before the casters is beyond far
+    toward_sun = ndc[..., 2][:, len(t) - 10 : len(t)]  # 11 to 20 radii toward the sun
+    assert np.all(toward_sun < -1)  # before near: lit
     assert np.all(np.abs(_ndc(s.blocker_to_clip, blocker)[..., 2]) < 1)
+    # Those before every caster changed nothing: the fit without them is the same.
+    beyond = np.where((inside & before)[..., None], ray[:, :1], receivers)  # t = -20: beyond
+    same = sm.fit_shadow(light, blocker, 128, receivers=beyond, stable=stable)
+    np.testing.assert_allclose(same.blocker_to_clip, s.blocker_to_clip, rtol=1e-12, atol=0)

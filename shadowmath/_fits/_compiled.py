@@ -114,6 +114,7 @@ def options(key: FitKey, dtype: Any) -> Array:
         *key.api[0],
         *key.api[1],
         key.spot,
+        key.triangles,
     )
     opts = np.array(values, dtype=np.float64)
     opts.flags.writeable = False

@@ -11,6 +11,7 @@ reported with the same message as the compiled loop's.
 
 from __future__ import annotations
 
+import math
 from types import ModuleType, SimpleNamespace
 from typing import Any, NamedTuple
 
@@ -181,8 +182,8 @@ def _point(
         )
         zero = 0.0 * half_x
         sides = (half_x, half_y, zero, zero)
-    z_lo, z_hi = _receivers(d, key, a, L, axes, sides, (zb_min, zb_max))
-    return _finish(d, key, a, flags, L, axes, sides, (z_lo, z_hi, zb_min, zb_max))
+    z_hi = _receivers(d, key, a, L, axes, sides, zb_max)
+    return _finish(d, key, a, flags, L, axes, sides, (zb_min, z_hi, zb_min, zb_max))
 
 
 def _directional(
@@ -211,9 +212,9 @@ def _directional(
         *sides, flags["silhouette"] = d.Fe.stable_sides(r2, c, axes, texels, reach, eps)
     else:
         *sides, flags["silhouette"] = d.Fe.box_sides(*d.bounds(x), *d.bounds(y), reach, eps)
-    z_lo, z_hi = _receivers(d, key, a, c, axes, tuple(sides), (zb_min, zb_max))
-    *origin, shift = d.Fe.directional_origin(z_lo, z_hi, sides[0], sides[1], c, axes)
-    z = (z_lo - shift, z_hi - shift, zb_min - shift, zb_max - shift)
+    z_hi = _receivers(d, key, a, c, axes, tuple(sides), zb_max)
+    *origin, shift = d.Fe.directional_origin(zb_min, z_hi, sides[0], sides[1], c, axes)
+    z = (zb_min - shift, z_hi - shift, zb_min - shift, zb_max - shift)
     return _finish(d, key, a, flags, tuple(origin), axes, tuple(sides), z)
 
 
@@ -224,27 +225,35 @@ def _receivers(
     origin: tuple[Array, ...],
     axes: tuple[Array, ...],
     sides: tuple[Array, ...],
-    zb: tuple[Array, Array],
-) -> tuple[Array, Array]:
-    """The depth range widened over the receiver points inside the map's sides."""
+    z_hi: Array,
+) -> Array:
+    """The far end widened over the receivers (points or triangles) inside the map's sides.
+
+    Receivers never move ``near``: one nearer than every caster cannot be shadowed.
+    """
     if a.R is None:
-        return zb
+        return z_hi
     xp = d.xp
-    o = tuple(r - oc for r, oc in zip(_components_of(a.R), d.expand(origin), strict=True))
-    x, y, z = d.Fv.to_light(*o, d.expand(axes))
     half_x, half_y, cx, cy = sides
     safe_hx = d.Fe.where(half_x > 0, half_x, 1.0)
     safe_hy = d.Fe.where(half_y > 0, half_y, 1.0)
     s = d.expand((key.margins[0] / safe_hx, key.margins[1] / safe_hy, cx, cy))
-    counted = d.Fv.receiver_counted(x, y, z, s, key.directional)
-    lo, hi = d.expand(zb)
-    z_lo = d.entry(xp.min(xp.where(counted, z, lo), axis=-1))
-    z_hi = d.entry(xp.max(xp.where(counted, z, hi), axis=-1))
-    return d.Fe.where(z_lo < zb[0], z_lo, zb[0]), d.Fe.where(z_hi > zb[1], z_hi, zb[1])
+    o, ax = d.expand(origin), d.expand(axes)
+    corners = []
+    for j in range(0, a.R.shape[-1], 3):  # one point, or a triangle's three corners
+        r = (a.R[..., j] - o[0], a.R[..., j + 1] - o[1], a.R[..., j + 2] - o[2])
+        corners.extend(d.Fv.to_light(*r, ax))
+    if key.triangles:
+        z = d.Fv.triangle_far(tuple(corners), s, key.directional, d.eps)
+    else:
+        counted = d.Fv.receiver_counted(*corners, s, key.directional)
+        z = d.Fv.where(counted, corners[2], -math.inf)
+    far = d.entry(xp.max(z, axis=-1))
+    return d.Fe.where(far > z_hi, far, z_hi)
 
 
-def _components_of(v: Array) -> Components:
-    return v[..., 0], v[..., 1], v[..., 2]
+def _components_of(v: Array) -> tuple[Array, ...]:
+    return tuple(v[..., j] for j in range(v.shape[-1]))
 
 
 def _finish(

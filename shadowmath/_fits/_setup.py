@@ -45,6 +45,7 @@ from shadowmath._math._frame import LightFrame, check_aim, stack_matrix
 from shadowmath._math._frustum import Frustum
 from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
+from shadowmath.receivers import Mesh, Triangles
 
 from . import _compiled
 from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
@@ -110,13 +111,19 @@ def fit_shadow(
             ``"optimized"`` the frame and off-centre frustum of
             :func:`optimize_frustum` (needs JAX; point lights ``(x, y, z)`` without
             the scene options below).
-        receivers: ``(*batch, M, 3)`` receiver points in world coordinates. The
-            frustum's sides still fit the casters; its depth range (``near``,
-            ``far``) also encloses every receiver point inside the side planes
-            (``|x_ndc|, |y_ndc| <= 1``), so no depth comparison falls outside the
-            map's range. Receivers outside the side planes are not in the map and
-            are lit by it (clamp-to-border); receivers behind a point light
-            (``z <= 0``) are ignored for the range; casters behind it are refused.
+        receivers: what the shadow falls on, in world coordinates:
+            :class:`Triangles` ``(*batch, M, 3, 3)`` or a :class:`Mesh` (surfaces),
+            or a ``(*batch, M, 3)`` array of points. The frustum's sides still fit
+            the casters; ``far`` also holds every receiver point that the map
+            covers (inside the side planes, ``|x_ndc|, |y_ndc| <= 1``, and in front
+            of a point light): for triangles, their parts clipped exactly by the
+            side planes, so a floor whose corners all lie outside the map still
+            counts. Receivers only ever push ``far``: one nearer to the light than
+            every caster can never be shadowed, so ``near`` stays the casters'
+            (depth precision); such a receiver gets a depth before ``near``
+            (below 0 in texture depth, above 1 with ``reversed_z``), which the
+            recommended shader treats as lit, as it is. Receivers outside the
+            side planes are lit by the map (clamp-to-border).
         api: ``"opengl"`` (default), ``"vulkan"``, ``"direct3d"``, ``"metal"`` or
             ``"webgpu"``: ``blocker_to_clip = C P W B`` and
             ``world_to_texture = T C P W`` with :func:`api_convention`'s ``C`` and
@@ -142,7 +149,7 @@ def fit_shadow(
     the frustum is the box ``[lo_x, hi_x] x [lo_y, hi_y]`` of the vertices
     (centre ``c_x = (hi_x + lo_x) / 2``, half-width ``R_x = (hi_x - lo_x) / 2``),
     and the frame's origin is ``c + Z (z_lo - pad)``, ``pad = (z_hi - z_lo) +
-    max(R_x, R_y)``, behind every vertex (and counted receiver), so every ``z > 0``.
+    max(R_x, R_y)``, behind every vertex, so every ``z > 0``.
     The projection is orthographic (``frustum.orthographic``):
 
     .. math::
@@ -190,15 +197,18 @@ def fit_shadow(
         named = {"light.position": light[0], "light.direction": light[1], "light.angle": light[2]}
     else:
         named = {"light": light[0] if isinstance(light, PointLight | DirectionalLight) else light}
+    kind, r_name, r_array = _receiver_kind(receivers)
     ctx, (*parts, verts, B, n, f, R, U) = convert(
         **named,
         blocker_vertices=blocker_vertices,
         blocker_to_world=blocker_to_world,
         near=near,
         far=far,
-        receivers=receivers,
+        **{r_name: r_array},
         up=up,
     )
+    if R is not None:
+        R = _receiver_rows(ctx, kind, R, receivers)
     if spot:
         directional, L = False, _spot_array(ctx, *parts)
     else:
@@ -211,7 +221,7 @@ def fit_shadow(
     a = Inputs(L, verts, B, R, U, n, f)
     shape = _check_shapes(a)
     given = (B is not None, R is not None, U is not None, n is not None, f is not None)
-    key = _fit_key(directional, spot, aim == "bbox", spec, given)
+    key = _fit_key(directional, spot, aim == "bbox", spec, (*given, kind != "points"))
     _check_static(key, method, spec)
     if method == "optimized":
         return _optimized(ctx, a, key.margins)
@@ -357,8 +367,7 @@ def _check_shapes(a: Inputs) -> tuple[int, ...]:
     if a.B is not None:
         require_matrix("blocker_to_world", a.B)
         named.append(("blocker_to_world", a.B.shape[:-2]))
-    if a.R is not None:
-        require_vertices("receivers", a.R)
+    if a.R is not None:  # rows checked by _receiver_rows
         named.append(("receivers", a.R.shape[:-2]))
     if a.U is not None:
         require_last("up", a.U, 3, hint="an up hint is (x, y, z)")
@@ -368,7 +377,70 @@ def _check_shapes(a: Inputs) -> tuple[int, ...]:
 
 
 def _points(a: Inputs) -> int:
-    return int(a.verts.shape[-2]) + (0 if a.R is None else int(a.R.shape[-2]))
+    """Vertices plus receiver points (three per triangle)."""
+    return int(a.verts.shape[-2]) + (0 if a.R is None else a.R.shape[-2] * a.R.shape[-1] // 3)
+
+
+ReceiverKind = Literal["points", "triangles", "mesh"]
+
+
+def _receiver_kind(receivers: Any) -> tuple[ReceiverKind, str, Any]:
+    """The receivers' kind (from their type), the name and the array to convert."""
+    if isinstance(receivers, Triangles):
+        return "triangles", "receivers", receivers.corners
+    if isinstance(receivers, Mesh):
+        return "mesh", "receivers.vertices", receivers.vertices
+    return "points", "receivers", receivers
+
+
+def _receiver_rows(ctx: Context, kind: ReceiverKind, R: Array, receivers: Any) -> Array:
+    """Receivers as ``(*batch, M, 3)`` points or ``(*batch, M, 9)`` triangles (shape-checked)."""
+    if kind == "points":
+        hint = "receivers= takes points (*batch, N, 3), sm.Triangles or sm.Mesh"
+        require_last("receivers", R, 3, min_ndim=2, hint=hint)
+        if R.shape[-2] == 0:
+            raise ValueError(_NO_RECEIVERS.format("points"))
+        return R
+    if kind == "triangles":
+        if R.ndim < 3 or tuple(R.shape[-2:]) != (3, 3):
+            raise shape_error(
+                "receivers",
+                "(*batch, M, 3, 3)",
+                tuple(R.shape),
+                "sm.Triangles holds M triangles of three corners (x, y, z)",
+            )
+    else:
+        require_last(
+            "receivers.vertices", R, 3, min_ndim=2, hint="a mesh's vertices are (*batch, V, 3)"
+        )
+        R = _mesh_corners(ctx, R, receivers.faces)
+    if R.shape[-3] == 0:
+        raise ValueError(_NO_RECEIVERS.format("triangles"))
+    return R.reshape(*R.shape[:-2], 9)
+
+
+_NO_RECEIVERS = "receivers: no receiver {} (M = 0); pass receivers=None when there are none"
+
+
+def _mesh_corners(ctx: Context, vertices: Array, faces: Any) -> Array:
+    """A mesh's triangles' corners ``(*batch, F, 3, 3)``; faces checked (NaN under tracing)."""
+    xp = ctx.xp
+    F = xp.asarray(faces)
+    if F.ndim != 2 or F.shape[-1] != 3:
+        raise shape_error("receivers.faces", "(F, 3)", tuple(F.shape), "three indices per triangle")
+    if not np.issubdtype(np.dtype(F.dtype), np.integer):
+        raise TypeError(f"receivers.faces: expected integer indices, got dtype {F.dtype}")
+    count = vertices.shape[-2]
+    if not (ctx.lazy and is_tracer(F)):
+        f = np.asarray(F)
+        if f.size and (f.min() < 0 or f.max() >= count):
+            raise ValueError(
+                f"receivers.faces: indices must lie in [0, {count}) (the mesh has {count} "
+                f"vertices); got {int(f.min())} to {int(f.max())}"
+            )
+    if ctx.is_jax:  # a traced index out of range fills NaN instead of clamping silently
+        return xp.take(vertices, F, axis=-2, mode="fill", fill_value=xp.nan)
+    return xp.take(vertices, F, axis=-2)
 
 
 def _check_static(key: FitKey, method: str, spec: ShadowMapSpec) -> None:
@@ -376,8 +448,8 @@ def _check_static(key: FitKey, method: str, spec: ShadowMapSpec) -> None:
     if key.directional and (key.has_near or key.has_far):
         raise ValueError(
             "near/far: a directional light's depth range is placed by the fit (its frame's "
-            "origin moves behind every caster and counted receiver); leave near and far None "
-            "and pass receivers= to widen the range"
+            "origin moves behind every caster); leave near and far None and pass receivers= "
+            "(sm.Triangles for surfaces) to hold what the shadows fall on"
         )
     if key.stable and not key.directional and not key.has_up:
         raise ValueError(msg.STABLE_NEEDS_UP)

@@ -162,6 +162,7 @@ class FitKey(NamedTuple):
     has_up: bool
     has_near: bool
     has_far: bool
+    triangles: bool = False  # receivers given as triangles (rows of 9), not points
 
 
 @functools.lru_cache(maxsize=256)

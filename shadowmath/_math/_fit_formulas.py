@@ -25,6 +25,7 @@ Trusted inputs only: nothing here raises.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 # Backend primitives and the shared formulas, rebound by specialize().
@@ -185,22 +186,123 @@ def stable_sides(
     return half_x, half_y, cx, cy, (half_x > noise) & (half_y > noise)
 
 
+def side_values(x: Any, y: Any, z: Any, sides: tuple[Any, Any, Any, Any], directional: bool) -> Any:
+    """The map's four side planes at a point: ``(g_0, g_1, g_2, g_3)``, all ``>= 0`` inside.
+
+    ``sides = (s_x, s_y, c_x, c_y)``: NDC ``x = s_x (u - c_x)`` with ``u = x / z``
+    (perspective) or ``u = x`` (orthographic). With ``w = z`` (perspective) or
+    ``w = 1``, ``g = w -+ s_x (x - c_x w)`` and ``w -+ s_y (y - c_y w)``: affine in
+    the point, so along a segment or over a triangle they interpolate linearly
+    (which :func:`triangle_far` relies on), and for a perspective map all four
+    ``>= 0`` already implies ``z >= 0`` (the map's cone has one nappe).
+    """
+    sx, sy, cx, cy = sides
+    w = x * 0.0 + 1.0 if directional else z
+    ex, ey = sx * (x - cx * w), sy * (y - cy * w)
+    return w - ex, w + ex, w - ey, w + ey
+
+
 def receiver_counted(
     x: Any, y: Any, z: Any, sides: tuple[Any, Any, Any, Any], directional: bool
 ) -> Any:
-    """True for a receiver point inside the map's side planes (and, for a point, in front).
-
-    ``sides = (s_x, s_y, c_x, c_y)``: NDC ``x = s_x (u - c_x)`` with ``u = x / z``
-    (perspective) or ``u = x`` (orthographic).
-    """
-    sx, sy, cx, cy = sides
-    if directional:
-        u, v = x, y
-    else:
-        safe_z = where(z > 0, z, 1.0)
-        u, v = x / safe_z, y / safe_z
-    inside = (fabs(sx * (u - cx)) <= 1.0) & (fabs(sy * (v - cy)) <= 1.0)
+    """True for a receiver point inside the map's side planes (and, for a point, in front)."""
+    g = side_values(x, y, z, sides, directional)
+    inside = (g[0] >= 0) & (g[1] >= 0) & (g[2] >= 0) & (g[3] >= 0)
     return inside & ((z > 0) | directional)
+
+
+def _inside_but(g: tuple[Any, Any, Any, Any], k: int, m: int, tau: Any) -> Any:
+    """All side values ``>= -tau`` except planes ``k`` and ``m`` (those the point lies on)."""
+    ok = (k == 0) | (m == 0) | (g[0] >= -tau)
+    ok = ok & ((k == 1) | (m == 1) | (g[1] >= -tau))
+    ok = ok & ((k == 2) | (m == 2) | (g[2] >= -tau))
+    return ok & ((k == 3) | (m == 3) | (g[3] >= -tau))
+
+
+def _corner_in(g: tuple[Any, ...], z: Any, best: Any, tau: Any, directional: bool) -> Any:
+    """``best`` raised to a triangle corner's ``z`` when the corner is inside the sides."""
+    ok = _inside_but(g, -1, -1, tau) & ((z > 0) | directional)
+    return where(ok & (z > best), z, best)
+
+
+def _lerp4(a: tuple[Any, ...], b: tuple[Any, ...], t: Any) -> tuple[Any, Any, Any, Any]:
+    return (
+        a[0] + t * (b[0] - a[0]),
+        a[1] + t * (b[1] - a[1]),
+        a[2] + t * (b[2] - a[2]),
+        a[3] + t * (b[3] - a[3]),
+    )
+
+
+def _edge_far(gi: Any, gj: Any, zi: Any, zj: Any, best: Any, tau: Any) -> Any:
+    """``best`` raised to ``z`` where the edge ``i -> j`` crosses a side plane inside the others."""
+    for k in range(4):
+        den = gi[k] - gj[k]
+        t = gi[k] / where(den != 0, den, 1.0)
+        cross = (t >= 0) & (t <= 1) & (den != 0)  # the signs differ (or one is zero)
+        ok = cross & _inside_but(_lerp4(gi, gj, t), k, k, tau)
+        zc = zi + t * (zj - zi)
+        best = where(ok & (zc > best), zc, best)
+    return best
+
+
+def _corner_far(g: Any, z: tuple[Any, Any, Any], k: int, m: int, best: Any, tau: Any) -> Any:
+    """``best`` raised to ``z`` where the map's edge (planes ``k`` and ``m``) pierces the triangle.
+
+    Barycentric ``b_i = n_i / det`` (Cramer's rule on ``sum b = 1``,
+    ``sum b g_k = sum b g_m = 0``); inside the triangle when every ``n_i`` has the
+    sign of ``det``.
+    """
+    g0, g1, g2 = g
+    n0 = g1[k] * g2[m] - g2[k] * g1[m]
+    n1 = g2[k] * g0[m] - g0[k] * g2[m]
+    n2 = g0[k] * g1[m] - g1[k] * g0[m]
+    det = n0 + n1 + n2
+    inside = (n0 * det >= 0) & (n1 * det >= 0) & (n2 * det >= 0) & (det != 0)
+    inv = 1.0 / where(det != 0, det, 1.0)
+    b0, b1, b2 = n0 * inv, n1 * inv, n2 * inv
+    gp = (
+        b0 * g0[0] + b1 * g1[0] + b2 * g2[0],
+        b0 * g0[1] + b1 * g1[1] + b2 * g2[1],
+        b0 * g0[2] + b1 * g1[2] + b2 * g2[2],
+        b0 * g0[3] + b1 * g1[3] + b2 * g2[3],
+    )
+    ok = inside & _inside_but(gp, k, m, tau)
+    zc = b0 * z[0] + b1 * z[1] + b2 * z[2]
+    return where(ok & (zc > best), zc, best)
+
+
+def triangle_far(
+    p: tuple[Any, ...], sides: tuple[Any, Any, Any, Any], directional: bool, eps: float
+) -> Any:
+    """The largest light ``z`` of a triangle's part inside the map's sides (``-inf``: none).
+
+    ``p``: the three corners' light coordinates (9). The part inside is the triangle
+    clipped by the four side planes (:func:`side_values`; for a perspective map
+    their cone lies in front of the light). ``z`` is linear over it, so its maximum
+    is at a corner of the clipped polygon, one of: a triangle corner inside the
+    sides; an edge crossing a side plane inside the others; a map edge (two
+    adjacent side planes) piercing the triangle. Exact up to rounding: points
+    within ``64 eps`` of the side values' scale outside a plane count as inside
+    (a range a rounding larger, never smaller).
+    """
+    g0 = side_values(p[0], p[1], p[2], sides, directional)
+    g1 = side_values(p[3], p[4], p[5], sides, directional)
+    g2 = side_values(p[6], p[7], p[8], sides, directional)
+    scale = fabs(g0[0]) + fabs(g0[1]) + fabs(g1[0]) + fabs(g1[1]) + fabs(g2[0]) + fabs(g2[1])
+    scale = scale + fabs(g0[2]) + fabs(g0[3]) + fabs(g1[2]) + fabs(g1[3])
+    tau = 64.0 * eps * (scale + fabs(g2[2]) + fabs(g2[3]))
+    z = (p[2], p[5], p[8])
+    best = z[0] * 0.0 - math.inf  # in the corners' type
+    best = _corner_in(g0, z[0], best, tau, directional)
+    best = _corner_in(g1, z[1], best, tau, directional)
+    best = _corner_in(g2, z[2], best, tau, directional)
+    best = _edge_far(g0, g1, z[0], z[1], best, tau)
+    best = _edge_far(g1, g2, z[1], z[2], best, tau)
+    best = _edge_far(g2, g0, z[2], z[0], best, tau)
+    for k in range(4):  # the adjacent pairs (0, 2), (0, 3), (1, 2), (1, 3)
+        best = _corner_far((g0, g1, g2), z, k // 2, 2 + k % 2, best, tau)
+    return best
 
 
 def directional_origin(
@@ -345,7 +447,14 @@ FUNCTIONS = (
     "spot_angle_ok",
     "box_sides",
     "stable_sides",
+    "side_values",
     "receiver_counted",
+    "_inside_but",
+    "_corner_in",
+    "_lerp4",
+    "_edge_far",
+    "_corner_far",
+    "triangle_far",
     "directional_origin",
     "depth_range",
     "ortho_rows",

@@ -52,6 +52,7 @@ from ._fit_formulas import (
     spot_sides,
     stable_sides,
     to_light,
+    triangle_far,
 )
 from ._formulas import axes_from_z, compose_rows, normalize3, planar_entries
 
@@ -134,17 +135,31 @@ def _light_pass(V: Any, b: Any, has_b: bool, o: Any, a: Any, ratios: bool) -> An
     return (hx, lx, hy, ly, hz, lz), r2, reach
 
 
-def _receiver_range(R: Any, o: Any, a: Any, sides: Any, zb: Any, directional: bool) -> Any:
-    """The depth range widened over the receiver points inside the sides; finite flag."""
-    z_lo, z_hi = zb
+def _receiver_far(R: Any, o: Any, a: Any, sides: Any, z_hi: Any, o9: Any) -> Any:
+    """The far end widened over the receivers inside the sides; their finite flag.
+
+    ``o9 = (directional, triangles, eps)``: receiver rows are points (3) or
+    triangles (9 numbers: three corners). Receivers only ever push ``far``: one
+    nearer than every caster can never be shadowed, so ``near`` stays the casters'.
+    """
+    directional, triangles, eps = o9
     raw = 0.0
     for k in range(len(R)):
-        rx, ry, rz = float(R[k][0]), float(R[k][1]), float(R[k][2])
-        raw += rx + ry + rz
-        x, y, z = to_light(rx - o[0], ry - o[1], rz - o[2], a)
-        if receiver_counted(x, y, z, sides, directional):
-            z_lo, z_hi = min(z_lo, z), max(z_hi, z)
-    return z_lo, z_hi, math.isfinite(raw)
+        r = R[k]
+        if triangles:
+            p0 = to_light(float(r[0]) - o[0], float(r[1]) - o[1], float(r[2]) - o[2], a)
+            p1 = to_light(float(r[3]) - o[0], float(r[4]) - o[1], float(r[5]) - o[2], a)
+            p2 = to_light(float(r[6]) - o[0], float(r[7]) - o[1], float(r[8]) - o[2], a)
+            raw += p0[0] + p0[1] + p0[2] + p1[0] + p1[1] + p1[2] + p2[0] + p2[1] + p2[2]
+            p9 = (p0[0], p0[1], p0[2], p1[0], p1[1], p1[2], p2[0], p2[1], p2[2])
+            z_hi = max(z_hi, triangle_far(p9, sides, directional, eps))
+        else:
+            rx, ry, rz = float(r[0]), float(r[1]), float(r[2])
+            raw += rx + ry + rz
+            x, y, z = to_light(rx - o[0], ry - o[1], rz - o[2], a)
+            if receiver_counted(x, y, z, sides, directional):
+                z_hi = max(z_hi, z)
+    return z_hi, math.isfinite(raw)
 
 
 def _sides(hx: float, hy: float, margins: Any, cx: float, cy: float) -> Any:
@@ -201,14 +216,14 @@ def _point_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any, S: Any) -> Any:
         half_x, half_y, ok_behind, ok_sil = point_sides(hx, lx, hy, ly, zb_min, reach, eps)
         cx = cy = 0.0
     st |= _flags((ok_behind, ok_sil), 3)
-    z_lo, z_hi, ok_r = zb_min, zb_max, True
+    z_hi, ok_r = zb_max, True
     if has_r:
         sides = _sides(half_x, half_y, margins, cx, cy)
-        z_lo, z_hi, ok_r = _receiver_range(R, L, a, sides, (zb_min, zb_max), False)
+        z_hi, ok_r = _receiver_far(R, L, a, sides, zb_max, (False, o[13], eps))
     if not ok_r:
         st |= RECEIVERS
     box = (half_x, half_y, cx, cy)
-    return st, (L[0], L[1], L[2]), a, box, (z_lo, z_hi, zb_min, zb_max)
+    return st, (L[0], L[1], L[2]), a, box, (zb_min, z_hi, zb_min, zb_max)
 
 
 def _directional_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
@@ -231,14 +246,14 @@ def _directional_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
     else:
         half_x, half_y, cx, cy, ok_sil = box_sides(hx, lx, hy, ly, reach, eps)
     st |= _flags((ok_sil,), 4)
-    z_lo, z_hi, ok_r = zb_min, zb_max, True
+    z_hi, ok_r = zb_max, True
     if has_r:
         sides = _sides(half_x, half_y, margins, cx, cy)
-        z_lo, z_hi, ok_r = _receiver_range(R, c, a, sides, (zb_min, zb_max), True)
+        z_hi, ok_r = _receiver_far(R, c, a, sides, zb_max, (True, o[13], eps))
     if not ok_r:
         st |= RECEIVERS
-    ox, oy, oz, shift = directional_origin(z_lo, z_hi, half_x, half_y, c, a)
-    z = (z_lo - shift, z_hi - shift, zb_min - shift, zb_max - shift)
+    ox, oy, oz, shift = directional_origin(zb_min, z_hi, half_x, half_y, c, a)
+    z = (zb_min - shift, z_hi - shift, zb_min - shift, zb_max - shift)
     return st, (ox, oy, oz), a, (half_x, half_y, cx, cy), z
 
 
@@ -297,12 +312,12 @@ def _unpack(opts: Any) -> Any:
 
     Layout (:func:`._compiled.options`): aim_bbox, has_b, has_r, has_up, single, m_x,
     m_y, eps, stable, width, height, directional, has_near, has_far, slack, C (16), T C (16),
-    spot.
+    spot, triangles (receiver rows of three corners).
     """
     o = (
         opts[0] != 0, opts[1] != 0, opts[2] != 0, opts[3] != 0, opts[4] != 0,
         (opts[5], opts[6]), opts[7], opts[8] != 0, (opts[9], opts[10]), opts[11] != 0,
-        (opts[12] != 0, opts[13] != 0), opts[14], opts[47] != 0,
+        (opts[12] != 0, opts[13] != 0), opts[14], opts[47] != 0, opts[48] != 0,
     )  # fmt: skip
     return o, (_tuple16(opts, 15), _tuple16(opts, 31))
 
@@ -366,7 +381,7 @@ FUNCTIONS = (
     "_vertex",
     "_spread",
     "_light_pass",
-    "_receiver_range",
+    "_receiver_far",
     "_sides",
     "_flags",
     "_point_entry",

@@ -9,7 +9,7 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath import ShadowSetup, fit_shadow
+from shadowmath import ShadowSetup, Triangles, fit_shadow
 
 from ._context import program, set_matrix, set_uniform
 from ._resources import GpuScene, Prepared, PreparedLight
@@ -62,75 +62,22 @@ def fit_depth(
 ) -> ShadowSetup:
     """One setup per light: the sides fit all blockers (in world coordinates), with
     ``1 + pcf_radius`` border texels so a kernel never reads past the silhouette, and
-    the depth range encloses every body inside the sides (``fit_shadow(...,
-    receivers=)`` with the points of :func:`receiver_points`), so that receivers lie
-    in the depth range. ``light`` is a point ``(x, y, z)`` or a homogeneous
-    ``(x, y, z, w)``, ``w = 0`` a directional light (an orthographic map); ``stable``
-    as in :func:`fit_shadow`. A body outside the frustum's sides is lit by this map.
+    the depth range holds every body's triangles where the map covers them
+    (``fit_shadow(..., receivers=Triangles(...))``), as a user's renderer calls it.
+    ``light`` is a point ``(x, y, z)`` or a homogeneous ``(x, y, z, w)``, ``w = 0`` a
+    directional light (an orthographic map); ``stable`` as in :func:`fit_shadow`. A
+    body outside the frustum's sides is lit by this map.
     """
     casters = np.concatenate([b.world_vertices() for b in blockers])
-    border = 1 + pcf_radius
-    sides = fit_shadow(light, casters, map_size, border_texels=border, stable=stable)
-    points = receiver_points([*receivers, *blockers], world_to_light_clip(sides))
+    corners = np.concatenate([b.world_vertices()[b.triangles] for b in [*receivers, *blockers]])
     return fit_shadow(
-        light, casters, map_size, border_texels=border, receivers=points, stable=stable
+        light,
+        casters,
+        map_size,
+        border_texels=1 + pcf_radius,
+        receivers=Triangles(corners),
+        stable=stable,
     )
-
-
-#: Clip the receivers this far inside the map's sides, so that their points pass
-#: fit_shadow's inside test despite rounding.
-_INSET = 1.0 - 1e-7
-
-
-def receiver_points(
-    bodies: Sequence[Prepared], world_to_clip: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """World points whose depths bound every body's depth inside the map's sides.
-
-    ``fit_shadow(..., receivers=R)`` encloses the points of ``R`` that lie inside the
-    frustum's sides, but a receiver's triangle can cross the frustum with all its
-    vertices outside (a floor of two triangles under a small blocker). The part of a
-    triangle inside the sides ``|x| <= w``, ``|y| <= w`` (light clip space) is a convex
-    polygon whose depth is extreme at a corner; its corners are among: the triangle's
-    vertices, the crossings of its edges with the four side planes, and the crossings
-    of the frustum's four side edges with the triangle. All three sets are returned
-    (``fit_shadow`` keeps those inside the sides); clip space is linear in homogeneous
-    world coordinates, so each crossing is found there and mapped back exactly.
-    """
-    parts = []
-    for body in bodies:
-        v = body.world_vertices()
-        tri = body.triangles
-        clip = np.c_[v, np.ones(len(v))] @ world_to_clip.T
-        parts.append(v)
-        edges = np.unique(np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
-        a, b = edges[:, 0], edges[:, 1]
-        for axis in (0, 1):
-            for sign in (1.0, -1.0):
-                f = _INSET * clip[:, 3] - sign * clip[:, axis]  # >= 0 on the inner side
-                fa, fb = f[a], f[b]
-                cross = fa * fb < 0
-                t = fa[cross] / (fa[cross] - fb[cross])
-                parts.append(v[a[cross]] + t[:, None] * (v[b[cross]] - v[a[cross]]))
-        corners = clip[tri]  # (T, 3, 4)
-        for cx in (-_INSET, _INSET):
-            for cy in (-_INSET, _INSET):
-                # weights l of the triangle's corners with x = cx w, y = cy w, sum l = 1
-                rows = np.stack(
-                    [
-                        corners[..., 0] - cx * corners[..., 3],
-                        corners[..., 1] - cy * corners[..., 3],
-                        np.ones(corners.shape[:2]),
-                    ],
-                    axis=1,
-                )
-                det = np.linalg.det(rows)
-                ok = np.abs(det) > 1e-12 * np.abs(rows).max(axis=(1, 2)) ** 3
-                rhs = np.broadcast_to([[0.0], [0.0], [1.0]], (int(ok.sum()), 3, 1))
-                weights = np.linalg.solve(rows[ok], rhs)[..., 0]
-                hit = np.all(weights >= 0, axis=1)
-                parts.append(np.einsum("tk,tkc->tc", weights[hit], v[tri[ok][hit]]))
-    return np.concatenate(parts)
 
 
 def world_to_light_clip(setup: ShadowSetup) -> NDArray[np.float64]:

@@ -1,0 +1,52 @@
+"""Receivers as surfaces: triangles, or an indexed mesh, for ``fit_shadow(receivers=)``.
+
+A plain ``(*batch, M, 3)`` array passed as ``receivers=`` is a set of points; these
+types say that the receivers are surfaces, whose every point that the map covers
+the depth range must hold (a floor whose corners all lie outside the map still
+crosses it). Like the lights they are NamedTuples of arrays, so JAX pytrees, and
+the kind is the type: static for ``jit``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from ._boundary._validate import Array
+
+
+class Triangles(NamedTuple):
+    """Receiver triangles, each given by its three corners.
+
+    Attributes:
+        corners: ``(*batch, M, 3, 3)``: ``M`` triangles, three corners ``(x, y, z)``
+            each, in world coordinates.
+
+    Example:
+        >>> import numpy as np
+        >>> a, b, c, d = [-9, 0, -9], [9, 0, -9], [9, 0, 9], [-9, 0, 9]
+        >>> Triangles(np.array([[a, b, c], [a, c, d]])).corners.shape
+        (2, 3, 3)
+    """
+
+    corners: Array
+
+
+class Mesh(NamedTuple):
+    """An indexed receiver mesh: shared vertices and the triangles that index them.
+
+    Attributes:
+        vertices: ``(*batch, V, 3)`` in world coordinates.
+        faces: ``(F, 3)`` integer indices into ``vertices``, one row per triangle
+            (the same faces for every batch entry). Under JAX transformations an
+            index outside ``[0, V)`` cannot raise: that triangle is NaN, and so is
+            the fit.
+
+    Example:
+        >>> import numpy as np
+        >>> quad = np.array([[-9, 0, -9], [9, 0, -9], [9, 0, 9], [-9, 0, 9]])
+        >>> Mesh(quad, np.array([[0, 1, 2], [0, 2, 3]])).faces.shape
+        (2, 3)
+    """
+
+    vertices: Array
+    faces: Array
