@@ -19,6 +19,8 @@ from hypothesis.extra.numpy import arrays
 
 import shadowmath as sm
 
+from .strategies import unit_vectors
+
 APIS = ("opengl", "vulkan", "direct3d", "metal", "webgpu")
 
 # Table 8.19: face -> (s_c, t_c, m_a) as functions of (x, y, z).
@@ -121,8 +123,73 @@ def test_every_direction_lies_in_exactly_one_face_frustum() -> None:
         assert inside[i, f] and ma * (1 if f % 2 == 0 else -1) > 0 and 0 <= s <= 1 and 0 <= t <= 1
 
 
-@pytest.mark.parametrize("tied", [(0, 1), (0, 2), (1, 2), (0, 1, 2)])
-def test_ties_pick_the_first_axis_and_land_on_both_faces_edges(tied: tuple[int, ...]) -> None:
+# Vulkan, "Cube Map Face Selection": "r_z wins over r_y and r_x, and [...] r_y wins over r_x".
+TIE_PRIORITY = (2, 1, 0)
+
+
+def vulkan_face(d: np.ndarray) -> int:
+    """The face the specification's rule selects, ties included, typed in from its text."""
+    a = np.abs(d)
+    axis = next(k for k in TIE_PRIORITY if a[k] == a.max())
+    return 2 * axis + (0 if d[axis] > 0 else 1)
+
+
+TIED_AXES = [(0, 1), (0, 2), (1, 2), (0, 1, 2)]
+
+
+def exact_ties() -> tuple[np.ndarray, np.ndarray]:
+    """Every pattern of exact ties: each pair of axes and all three, every sign of each
+    component, the untied component smaller (or zero); magnitudes exact in float32.
+
+    Returns ``(directions (n, 3), expected faces (n,))``: the tied axis that comes last
+    in x, y, z wins (Vulkan's rule), where the old rule picked the first.
+    """
+    directions, faces = [], []
+    for tied in TIED_AXES:
+        for m in (0.75, 3.0, 2.0**-10):
+            for signs in np.ndindex(2, 2, 2):
+                for rest in (0.0, 0.5):
+                    d = np.array([1.0 - 2.0 * k for k in signs]) * m * rest
+                    for axis in tied:
+                        d[axis] = m * (1.0 - 2.0 * signs[axis])
+                    directions.append(d)
+                    winner = max(tied)
+                    faces.append(2 * winner + (0 if d[winner] > 0 else 1))
+    return np.array(directions), np.array(faces, dtype=np.int32)
+
+
+def test_exact_ties_follow_the_vulkan_rule_on_every_pair_and_corner(to: Any, dtype: Any) -> None:
+    d, expected = exact_ties()
+    assert np.all(f64(to(d)) == d)  # exact in the dtype under test: still ties
+    face, s, t = sm.cube_face(to(d))
+    np.testing.assert_array_equal(face, expected)
+    np.testing.assert_array_equal(expected, [vulkan_face(x) for x in d])
+    for i in range(len(d)):
+        ref_s, ref_t, _ = spec_st(int(expected[i]), d[i])
+        assert (float(s[i]), float(t[i])) == (ref_s, ref_t)
+    # cube_face_depth selects with the same rule, at D = the tied magnitude.
+    n, f = 2.0**-12, 8.0
+    r = sm.cube_face_depth(to(np.zeros(3)), to(d), to(n), to(f))
+    np.testing.assert_array_equal(r.face, expected)
+    D = np.max(np.abs(d), axis=-1)
+    np.testing.assert_allclose(f64(r.depth), f * (D - n) / ((f - n) * D), rtol=8 * eps_of(dtype))
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32], ids=["f64", "f32"])
+def test_exact_ties_follow_the_vulkan_rule_under_jit(dtype: Any) -> None:
+    d, expected = exact_ties()
+    got = jax.jit(sm.cube_face)(jnp.asarray(d, dtype=dtype))
+    assert got.s.dtype == dtype
+    np.testing.assert_array_equal(got.face, expected)
+    eager = sm.cube_face(jnp.asarray(d, dtype=dtype))
+    np.testing.assert_array_equal(got.s, eager.s)
+    np.testing.assert_array_equal(got.t, eager.t)
+    depth = jax.jit(lambda p: sm.cube_face_depth(jnp.zeros(3, dtype), p, 0.25, 8.0).face)
+    np.testing.assert_array_equal(depth(jnp.asarray(d, dtype=dtype)), expected)
+
+
+@pytest.mark.parametrize("tied", TIED_AXES)
+def test_ties_pick_the_last_axis_and_land_on_both_faces_edges(tied: tuple[int, ...]) -> None:
     rng = np.random.default_rng(len(tied) * 10 + tied[-1])
     for _ in range(50):
         m = rng.uniform(0.5, 2.0)
@@ -130,7 +197,7 @@ def test_ties_pick_the_first_axis_and_land_on_both_faces_edges(tied: tuple[int, 
         for axis in tied:
             d[axis] = m * rng.choice([-1.0, 1.0])
         face, s, t = sm.cube_face(d)
-        assert int(face) // 2 == tied[0], "x before y before z"
+        assert int(face) // 2 == tied[-1], "z before y before x"
         candidates = [2 * axis + (0 if d[axis] > 0 else 1) for axis in tied]
         for f in candidates:
             sf, tf, _ = spec_st(f, d)
@@ -141,6 +208,41 @@ def test_ties_pick_the_first_axis_and_land_on_both_faces_edges(tied: tuple[int, 
             back = sm.cube_face_direction(f, sf, tf)
             np.testing.assert_allclose(back * m, d, rtol=0, atol=4e-16 * m)
         assert (float(s), float(t)) == spec_st(int(face), d)[:2]
+
+
+@st.composite
+def directions_with_ties(draw: st.DrawFn) -> np.ndarray:
+    """Nonzero directions, often with exactly tied magnitudes (edges and corners)."""
+    if draw(st.booleans()):
+        v = draw(unit_vectors())
+        return np.asarray(v) * draw(st.sampled_from([1.0, 2.0**-20, 2.0**20]))
+    magnitudes = draw(st.lists(st.sampled_from([0.0, 0.25, 0.5, 1.0, 3.0]), min_size=3, max_size=3))
+    if not any(magnitudes):
+        magnitudes[draw(st.integers(0, 2))] = 1.0
+    signs = draw(st.lists(st.sampled_from([-1.0, 1.0]), min_size=3, max_size=3))
+    return np.array(magnitudes) * np.array(signs)
+
+
+@given(st.lists(directions_with_ties(), min_size=1, max_size=12))
+def test_every_nonzero_direction_falls_in_exactly_one_face_of_its_major_axis(
+    to: Any, dtype: Any, ds: list[np.ndarray]
+) -> None:
+    d = f64(to(np.stack(ds)))  # the directions as the dtype under test holds them
+    face, s, t = sm.cube_face(to(d))
+    face = np.asarray(face)
+    a = np.abs(d)
+    for i in range(len(d)):
+        # The faces whose closed pyramid holds d: a largest-magnitude axis, with its sign
+        # (two or three on an edge or a corner) ...
+        holding = [
+            f for f in range(6) if a[i, f // 2] == a[i].max() and (d[i, f // 2] > 0) == (f % 2 == 0)
+        ]
+        # ... of which the rule selects exactly one, the same every time.
+        assert int(face[i]) in holding
+        assert int(face[i]) == vulkan_face(d[i])
+        axis = int(face[i]) // 2
+        assert np.all(a[i, axis + 1 :] < a[i, axis]), "no later axis ties the winner"
+    assert np.all((f64(s) >= 0) & (f64(s) <= 1) & (f64(t) >= 0) & (f64(t) <= 1))
 
 
 @given(direction_arrays)

@@ -4,7 +4,8 @@ A point light that shines in every direction renders its shadow map into a cube
 map, one 90-degree view per face (seed 002). The convention that ties drawing
 and sampling together is the *face-selection table* of the OpenGL 4.6 (§8.13,
 Table 8.19) and Vulkan specifications, stated in face space: a direction
-``r = p - light`` samples the face of its largest component ``ma`` at
+``r = p - light`` samples the face of its largest component ``ma`` (ties: ``z``
+wins over ``y`` and ``x``, ``y`` over ``x``, as Vulkan's rule says) at
 
 .. math::
 
@@ -207,12 +208,17 @@ def _select_face(xp: ModuleType, face: Array, candidates: Array) -> Array:
 
 
 def _major_face(xp: ModuleType, d: Array) -> Array:
-    """The face index (int32) of ``d`` by the tie rule x before y before z."""
+    """The face index (int32) of ``d``: the major axis, ties by Vulkan's rule (z, then y, then x).
+
+    The one face selection of the package: :func:`cube_face` and
+    :func:`cube_face_depth` both call it. Vulkan's "Cube Map Face Selection":
+    "``r_z`` wins over ``r_y`` and ``r_x``, and [...] ``r_y`` wins over ``r_x``".
+    """
     ax, ay, az = xp.abs(d[..., 0]), xp.abs(d[..., 1]), xp.abs(d[..., 2])
-    use_x = (ax >= ay) & (ax >= az)
-    use_y = xp.logical_not(use_x) & (ay >= az)
-    axis = xp.where(use_x, 0, xp.where(use_y, 1, 2))
-    ma = xp.where(use_x, d[..., 0], xp.where(use_y, d[..., 1], d[..., 2]))
+    use_z = (az >= ax) & (az >= ay)
+    use_y = xp.logical_not(use_z) & (ay >= ax)
+    axis = xp.where(use_z, 2, xp.where(use_y, 1, 0))
+    ma = xp.where(use_z, d[..., 2], xp.where(use_y, d[..., 1], d[..., 0]))
     return xp.astype(2 * axis + xp.where(ma > 0, 0, 1), xp.int32)
 
 
@@ -477,14 +483,16 @@ def cube_face(directions: Any) -> CubeFaceCoords:
     | +Z   | ``+x``  | ``-y``  | ``z``   |
     | -Z   | ``-x``  | ``-y``  | ``z``   |
 
-    **Ties.** The specifications leave the face of a direction with two or
-    three equal largest magnitudes (an edge or a corner of the cube) to the
-    implementation. Here the first of the tied axes in the order ``x, y, z``
-    wins: ``|x| >= |y|, |z|`` selects ``±X``, else ``|y| >= |z|`` selects
-    ``±Y``, else ``±Z``. Both candidate faces address the same point of their
-    shared edge (``s`` or ``t`` is ``0`` or ``1`` on each), so a map whose
-    faces agree along edges gives the same value either way; GPUs may pick
-    the other face.
+    **Ties** (a direction with two or three equal largest magnitudes: an edge
+    or a corner of the cube) follow the rule of Vulkan's "Cube Map Face
+    Selection": "``r_z`` wins over ``r_y`` and ``r_x``, and [...] ``r_y`` wins
+    over ``r_x``". So ``|z| >= |x|, |y|`` selects ``±Z``, else ``|y| >= |x|``
+    selects ``±Y``, else ``±X`` (the sign of the winning component picks ``+``
+    or ``-``). Vulkan only recommends this rule and OpenGL leaves ties to the
+    implementation, so a GPU may pick another face; each candidate face
+    addresses the same point of the shared edge (``s`` or ``t`` is ``0`` or
+    ``1`` on each), so a map whose faces agree along their edges gives the
+    same value either way.
 
     Arguments:
         directions: ``(*batch, 3)`` nonzero directions (from the light to the point).
@@ -500,6 +508,10 @@ def cube_face(directions: Any) -> CubeFaceCoords:
     Example:
         >>> cube_face([1.0, 0.5, -0.25])  # +X: s = (0.25 + 1) / 2, t = (-0.5 + 1) / 2
         CubeFaceCoords(face=np.int32(0), s=np.float64(0.625), t=np.float64(0.25))
+        >>> int(cube_face([1.0, -1.0, 0.5]).face)  # |x| = |y|: y wins, -Y
+        3
+        >>> int(cube_face([-2.0, 2.0, -2.0]).face)  # a corner: z wins, -Z
+        5
     """
     ctx, (d,) = convert(directions=directions)
     xp = ctx.xp
@@ -567,7 +579,7 @@ def cube_face_depth(
     r"""The depth a receiver point compares against its light's cube shadow map.
 
     The point ``p`` is seen through the face of ``r = p - L``
-    (:func:`cube_face`) at the distance ``D = |m_a| = max(|r_x|, |r_y|, |r_z|)``
+    (:func:`cube_face`, ties included) at the distance ``D = |m_a| = max(|r_x|, |r_y|, |r_z|)``
     along that face's axis (the view's ``-z``), not at ``|r|``. A hardware
     depth cube map holds the window depth of :func:`cube_face_projection`:
 

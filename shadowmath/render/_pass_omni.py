@@ -4,6 +4,7 @@ with ``cube_face_projection @ cube_face_views[i]``) sampled with ``samplerCubeSh
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Literal
 
 import moderngl
 import numpy as np
@@ -22,6 +23,14 @@ OMNI_NEAR_FRACTION = 1e-3
 
 #: Relative slack of the far plane beyond the farthest body vertex.
 _FAR_SLACK = 1e-3
+
+#: ``GL_TEXTURE_CUBE_MAP_SEAMLESS`` (OpenGL 3.2, ARB_seamless_cube_map): a global
+#: ``glEnable`` state, which moderngl turns on when it creates a context.
+GL_TEXTURE_CUBE_MAP_SEAMLESS = 0x884F
+
+#: The comparison filters of the cube map: one texel, or the 2x2 texels around the
+#: lookup with their bilinear weights (hardware PCF).
+CUBE_FILTERS = {"nearest": moderngl.NEAREST, "linear": moderngl.LINEAR}
 
 
 def omni_depth_range(
@@ -58,6 +67,7 @@ def draw_cube_depth(
     world_to_clip: NDArray[np.float64],
     side: int,
     bias: tuple[float, float],
+    texel_filter: int = moderngl.NEAREST,
 ) -> tuple[moderngl.TextureCube, NDArray[np.float32]]:
     """Every body's depth into the six faces, with ``glPolygonOffset(*bias)``.
 
@@ -67,7 +77,8 @@ def draw_cube_depth(
     ``GL_TEXTURE_CUBE_MAP_POSITIVE_X + i``) unchanged: the face's first row in
     memory is window row 0, NDC ``y = -1``, which the cube-map table reads as
     ``t = 0``. The cube texture compares with ``<=`` (``samplerCubeShadow``),
-    nearest, and is released with the scene.
+    filtered with ``texel_filter`` (``moderngl.NEAREST`` or ``LINEAR``, for
+    magnification and minification), and is released with the scene.
 
     Returns:
         the cube texture, and ``(6, side, side)`` float32 window depths (row 0 is ``t = 0``;
@@ -100,9 +111,16 @@ def draw_cube_depth(
     cube: moderngl.TextureCube = scene.keep(gl.depth_texture_cube((side, side)))
     for i in range(6):
         cube.write(i, faces[i].tobytes(), alignment=1)
-    cube.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    cube.filter = (texel_filter, texel_filter)
     cube.compare_func = "<="
     return cube, faces
+
+
+def cube_filter_option(name: str, value: object) -> int:
+    """A pass's cube-map filter option, checked: ``"nearest"`` or ``"linear"``."""
+    if not isinstance(value, str) or value not in CUBE_FILTERS:
+        raise ValueError(f"{name}: expected 'nearest' or 'linear', got {value!r}")
+    return CUBE_FILTERS[value]
 
 
 class OmniPass:
@@ -114,10 +132,32 @@ class OmniPass:
     compares each visible point's window depth (from ``max |r_i|``, ``r = p - light``)
     with ``texture(samplerCubeShadow, vec4(r, depth))``. No :class:`ShadowSetup`
     (``setups[l]`` is empty); ``shadow_maps[l]`` are the six faces' depths.
+
+    ``filter`` is the comparison filter: ``"nearest"`` (the default) compares with one
+    texel of the selected face; ``"linear"`` compares with the 2x2 texels around the
+    lookup and blends the results (hardware PCF). ``seamless`` enables or disables
+    ``GL_TEXTURE_CUBE_MAP_SEAMLESS`` while the mask is drawn (and enables it after, as
+    moderngl leaves it when it creates a context). With ``"linear"`` near a face edge,
+    seamless filtering takes the texels beyond the edge from the neighbouring face,
+    non-seamless filtering stays on the selected face. The neighbour's texels hold
+    depths along *its* axis, which can be smaller than the receiver's depth along the
+    selected face's axis, so seamless ``"linear"`` puts acne speckles along the seams
+    unless the bias covers the difference (``docs/cube-maps.md``, "Sampling the cube
+    map"). ``"nearest"`` never leaves the selected face, seamless or not.
     """
 
-    def __init__(self, bias: tuple[float, float] | None = None) -> None:
+    def __init__(
+        self,
+        bias: tuple[float, float] | None = None,
+        *,
+        filter: Literal["nearest", "linear"] = "nearest",
+        seamless: bool = True,
+    ) -> None:
         self.bias = depth_bias_option(bias, 0)
+        self.filter = cube_filter_option("filter", filter)
+        if not isinstance(seamless, bool):
+            raise ValueError(f"seamless: expected a bool, got {seamless!r}")
+        self.seamless = seamless
 
     def check(self, receivers: Sequence[Prepared]) -> None:
         pass
@@ -144,7 +184,7 @@ class OmniPass:
         side = cube_map_side("map_size", scene.map_size)
         near, far = omni_depth_range(scene.bodies, light.position)
         cube, faces = draw_cube_depth(
-            scene, face_to_clip(light.position, near, far, side), side, self.bias
+            scene, face_to_clip(light.position, near, far, side), side, self.bias, self.filter
         )
         prog = program(scene.ctx, "surface.vert", "omni_mask.frag")
         set_matrix(prog, "world_to_clip", scene.world_to_clip)
@@ -154,8 +194,16 @@ class OmniPass:
         set_uniform(prog, "far", far)
         scene.bind_mask()
         cube.use(location=0)
-        for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
-            set_matrix(prog, "body_to_world", body.to_world)
-            scene.bind_record(prog, i)
-            mesh.render(prog)
+        gl = scene.ctx
+        if self.seamless:
+            gl.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)
+        else:
+            gl.disable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)
+        try:
+            for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
+                set_matrix(prog, "body_to_world", body.to_world)
+                scene.bind_record(prog, i)
+                mesh.render(prog)
+        finally:
+            gl.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)
         return tuple(faces)
