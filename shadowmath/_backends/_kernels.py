@@ -125,3 +125,19 @@ def loops() -> SimpleNamespace:
 def _select(c: Any, a: Any, b: Any) -> Any:
     """``where`` on scalars, for Numba (module level, so that its disk cache finds it)."""
     return a if c else b
+
+
+def sphere_support(points: Any) -> Any:
+    """The minimal enclosing sphere's support of ``(*batch, N, 3)`` points: ``(*batch, 5)``
+    int32 rows ``(i_0, i_1, i_2, i_3, k)`` (Welzl's algorithm, :mod:`._loops`), compiled
+    when Numba is available, else the same loop in Python."""
+    p = np.asarray(points, dtype=np.float64)
+    flat = np.ascontiguousarray(p.reshape(-1, *p.shape[-2:]))
+    out = np.zeros((len(flat), 5), dtype=np.int32)
+    if available():
+        loops().support_loop(flat, out)
+    else:
+        from shadowmath._math._specialize import scalar_formulas
+
+        scalar_formulas().support_loop(flat.tolist(), out)
+    return out.reshape(*p.shape[:-2], 5)

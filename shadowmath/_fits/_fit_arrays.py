@@ -17,6 +17,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._backends import _kernels
 from shadowmath._boundary._status import FIT_CHECKS, FORMULA_CHECKS
 from shadowmath._boundary._validate import Array, Checks, Context, all_finite
 from shadowmath._math._frustum import NEAR_FAR_SLACK
@@ -190,7 +191,7 @@ def _directional(
     d: Driver, key: FitKey, a: Inputs, world: Components, flags: dict[str, Array]
 ) -> FitEntries:
     """The orthographic fit of a directional light (box or stable), on whole arrays."""
-    xp, eps = d.xp, d.eps
+    eps = d.eps
     toward = tuple(-c for c in _components(d, a.light))
     coords = d.max_abs(*world)
     axes, flags["zero_light"], _, flags["up_parallel"] = d.Fe.fit_axes(
@@ -198,8 +199,9 @@ def _directional(
     )
     sums = d.sums(world)
     flags["overflow"] = _finite3(d, sums)
-    if key.stable:  # the bounding sphere about the mean turns with the blocker
-        c = tuple(s / world[0].shape[-1] for s in sums)
+    if key.stable:  # the minimal enclosing sphere: the shape's, whatever its vertices
+        cx, cy, cz, r2 = _enclosing_sphere(d, world)
+        c = (cx, cy, cz)
     else:
         c = tuple(0.5 * (hi + lo) for hi, lo in (d.bounds(p) for p in world))
     o = tuple(p - cc for p, cc in zip(world, d.expand(c), strict=True))
@@ -207,7 +209,6 @@ def _directional(
     x, y, z = d.Fv.to_light(*o, d.expand(axes))
     zb_max, zb_min = d.bounds(z)
     if key.stable:
-        r2 = d.entry(xp.max(x * x + y * y + z * z, axis=-1))
         texels = (*key.margins, *key.texels)
         *sides, flags["silhouette"] = d.Fe.stable_sides(r2, c, axes, texels, reach, eps)
     else:
@@ -216,6 +217,37 @@ def _directional(
     *origin, shift = d.Fe.directional_origin(zb_min, z_hi, sides[0], sides[1], c, axes)
     z = (zb_min - shift, z_hi - shift, zb_min - shift, zb_max - shift)
     return _finish(d, key, a, flags, tuple(origin), axes, tuple(sides), z)
+
+
+def _enclosing_sphere(d: Driver, world: Components) -> tuple[Array, Array, Array, Array]:
+    """The vertices' minimal enclosing sphere: centre (3) and ``r^2``, per entry.
+
+    Its support points (2 to 4 vertices) come from Welzl's algorithm on the host
+    (:func:`._kernels.sphere_support`; under JAX through ``pure_callback``: they are
+    piecewise constant), the sphere from :func:`sphere_through` on them, so values
+    and derivatives follow the support points.
+    """
+    xp = d.xp
+    points = xp.stack(world, axis=-1)
+    if xp is np:
+        support = _kernels.sphere_support(points)
+    else:
+        import jax
+
+        shape = jax.ShapeDtypeStruct((*points.shape[:-2], 5), np.int32)  # type: ignore[no-untyped-call]
+        support = jax.pure_callback(
+            _kernels.sphere_support, shape, jax.lax.stop_gradient(points), vmap_method="expand_dims"
+        )
+    q = tuple(
+        xp.take_along_axis(w, support[..., j : j + 1], axis=-1)[..., 0]
+        for j in range(4)
+        for w in world
+    )
+    k = support[..., 4]
+    if d.scalar:
+        q, k = tuple(float(v) for v in q), int(k)
+    cx, cy, cz, r2 = d.Fe.sphere_through(q, k)
+    return cx, cy, cz, r2
 
 
 def _receivers(

@@ -135,8 +135,9 @@ def fit_shadow(
             the frame turns smoothly with the light instead of jumping where
             Nagy's helper axis switches.
         stable: for directional lights a shadow that does not shimmer: the
-            extent comes from the blocker's bounding sphere about its vertices'
-            mean (the same as the blocker turns), enlarged by half a texel, and
+            extent comes from the blocker's minimal enclosing sphere (Welzl's
+            algorithm: a property of the shape, the same however it is
+            tessellated or turned), enlarged by half a texel, and
             the centre is snapped to whole texels of a grid anchored in world
             space, so the texels move by whole texels as the blocker or light
             moves and their size stays fixed. For point lights it means a frame

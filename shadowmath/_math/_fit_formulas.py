@@ -186,6 +186,57 @@ def stable_sides(
     return half_x, half_y, cx, cy, (half_x > noise) & (half_y > noise)
 
 
+def _dot(d: tuple[Any, ...], i: int, j: int) -> Any:
+    return d[3 * i] * d[3 * j] + d[3 * i + 1] * d[3 * j + 1] + d[3 * i + 2] * d[3 * j + 2]
+
+
+def sphere_through(q: tuple[Any, ...], k: Any) -> tuple[Any, Any, Any, Any]:
+    """The smallest sphere with the first ``k`` (1 to 4) of four points on it: centre, ``r^2``.
+
+    ``q``: the points ``p_0 .. p_3`` (12 numbers). With ``d_i = p_i - p_0`` the
+    centre is ``c = p_0 + sum l_i d_i`` over the ``k - 1`` active ``d_i``, where
+    ``d_i . (c - p_0) = |d_i|^2 / 2`` (equidistant from ``p_0`` and ``p_i``):
+    the Gram system ``G l = |d|^2 / 2``, solved by cofactors, with the identity in
+    the rows of inactive points (their ``l_i = 0``). For ``k = 2`` the diameter
+    sphere, for 3 the circumcircle's sphere, for 4 the circumsphere. The minimal
+    enclosing sphere of a point set is one of these on its support points
+    (:func:`._loops._enclosing_sphere` finds them), so it is a smooth function of
+    them: its derivative is theirs.
+    """
+    d = (
+        q[3] - q[0], q[4] - q[1], q[5] - q[2],
+        q[6] - q[0], q[7] - q[1], q[8] - q[2],
+        q[9] - q[0], q[10] - q[1], q[11] - q[2],
+    )  # fmt: skip
+    on1, on2, on3 = k > 1, k > 2, k > 3
+    zero = d[0] * 0.0
+
+    g00, g11, g22 = (
+        where(on1, _dot(d, 0, 0), 1.0),
+        where(on2, _dot(d, 1, 1), 1.0),
+        where(on3, _dot(d, 2, 2), 1.0),
+    )
+    g01 = where(on1 & on2, _dot(d, 0, 1), zero)
+    g02 = where(on1 & on3, _dot(d, 0, 2), zero)
+    g12 = where(on2 & on3, _dot(d, 1, 2), zero)
+    b0, b1, b2 = (
+        where(on1, 0.5 * _dot(d, 0, 0), zero),
+        where(on2, 0.5 * _dot(d, 1, 1), zero),
+        where(on3, 0.5 * _dot(d, 2, 2), zero),
+    )
+    c00, c01, c02 = g11 * g22 - g12 * g12, g02 * g12 - g01 * g22, g01 * g12 - g02 * g11
+    c11, c12, c22 = g00 * g22 - g02 * g02, g01 * g02 - g00 * g12, g00 * g11 - g01 * g01
+    det = g00 * c00 + g01 * c01 + g02 * c02
+    inv = 1.0 / where(det != 0, det, 1.0)
+    l0 = (c00 * b0 + c01 * b1 + c02 * b2) * inv
+    l1 = (c01 * b0 + c11 * b1 + c12 * b2) * inv
+    l2 = (c02 * b0 + c12 * b1 + c22 * b2) * inv
+    ox = l0 * d[0] + l1 * d[3] + l2 * d[6]
+    oy = l0 * d[1] + l1 * d[4] + l2 * d[7]
+    oz = l0 * d[2] + l1 * d[5] + l2 * d[8]
+    return q[0] + ox, q[1] + oy, q[2] + oz, ox * ox + oy * oy + oz * oz
+
+
 def side_values(x: Any, y: Any, z: Any, sides: tuple[Any, Any, Any, Any], directional: bool) -> Any:
     """The map's four side planes at a point: ``(g_0, g_1, g_2, g_3)``, all ``>= 0`` inside.
 
@@ -447,6 +498,8 @@ FUNCTIONS = (
     "spot_angle_ok",
     "box_sides",
     "stable_sides",
+    "_dot",
+    "sphere_through",
     "side_values",
     "receiver_counted",
     "_inside_but",

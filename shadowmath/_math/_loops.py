@@ -48,6 +48,7 @@ from ._fit_formulas import (
     point_sides,
     receiver_counted,
     safe_box,
+    sphere_through,
     spot_angle_ok,
     spot_sides,
     stable_sides,
@@ -162,6 +163,80 @@ def _receiver_far(R: Any, o: Any, a: Any, sides: Any, z_hi: Any, o9: Any) -> Any
     return z_hi, math.isfinite(raw)
 
 
+#: Welzl's algorithm visits the vertices in the order ``k * _STRIDE mod n`` (a prime
+#: stride: every vertex once), which breaks up a mesh's ordered rows; its expected
+#: time is linear for a random order. The result does not depend on the order.
+_STRIDE = 1000003
+
+
+def _nth(V: Any, b: Any, has_b: bool, k: int, stride: int) -> Any:
+    """The ``k``-th vertex in Welzl's order: its index and world coordinates."""
+    i = (k * stride) % len(V)
+    p = _vertex(V, i, b, has_b)
+    return i, (p[0], p[1], p[2])
+
+
+def _ball(V: Any, b: Any, has_b: bool, sup: Any, k: int) -> Any:
+    """:func:`sphere_through` the support vertices ``sup`` (indices), ``k`` of them."""
+    p0, p1 = _vertex(V, sup[0], b, has_b), _vertex(V, sup[1], b, has_b)
+    p2, p3 = _vertex(V, sup[2], b, has_b), _vertex(V, sup[3], b, has_b)
+    q = (p0[0], p0[1], p0[2], p1[0], p1[1], p1[2], p2[0], p2[1], p2[2], p3[0], p3[1], p3[2])
+    return sphere_through(q, k)
+
+
+def _outside(p: Any, ball: Any) -> bool:
+    dx, dy, dz = p[0] - ball[0], p[1] - ball[1], p[2] - ball[2]
+    return bool(dx * dx + dy * dy + dz * dz > ball[3] * (1.0 + 1e-14))
+
+
+def _enclosing_sphere(V: Any, b: Any, has_b: bool) -> Any:
+    """The minimal enclosing sphere's support: vertex indices (4, repeated) and their count.
+
+    Welzl's algorithm (1991) in its iterative form: a vertex outside the current
+    sphere lies on the boundary of the sphere of the vertices before it, so each
+    level fixes one more boundary point (at most 4 in 3D) and restarts over the
+    vertices before it. The sphere is unique, so it depends on the point set only:
+    not on the order, the tessellation or the orientation.
+    """
+    n = len(V)
+    stride = _STRIDE if n % _STRIDE != 0 else 1
+    sup, k = (0, 0, 0, 0), 1
+    ball = _ball(V, b, has_b, sup, k)
+    for t in range(1, n):
+        i, pi = _nth(V, b, has_b, t, stride)
+        if not _outside(pi, ball):
+            continue
+        sup, k = (i, i, i, i), 1
+        ball = (pi[0], pi[1], pi[2], 0.0)
+        for u in range(t):
+            j, pj = _nth(V, b, has_b, u, stride)
+            if not _outside(pj, ball):
+                continue
+            sup, k = (i, j, j, j), 2
+            ball = _ball(V, b, has_b, sup, k)
+            for v in range(u):
+                m, pm = _nth(V, b, has_b, v, stride)
+                if not _outside(pm, ball):
+                    continue
+                sup, k = (i, j, m, m), 3
+                ball = _ball(V, b, has_b, sup, k)
+                for w in range(v):
+                    r, pr = _nth(V, b, has_b, w, stride)
+                    if _outside(pr, ball):
+                        sup, k = (i, j, m, r), 4
+                        ball = _ball(V, b, has_b, sup, k)
+    return sup, k
+
+
+def support_loop(verts: Any, out: Any) -> None:
+    """The enclosing sphere's support of every entry of ``(count, N, 3)`` world vertices:
+    ``out[i] = (i_0, i_1, i_2, i_3, k)``."""
+    none = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    for e in range(len(out)):
+        sup, k = _enclosing_sphere(verts[e], none, False)
+        out[e, 0], out[e, 1], out[e, 2], out[e, 3], out[e, 4] = sup[0], sup[1], sup[2], sup[3], k
+
+
 def _sides(hx: float, hy: float, margins: Any, cx: float, cy: float) -> Any:
     """``(s_x, s_y, c_x, c_y)`` of :func:`receiver_counted` with safe half-widths."""
     return (margins[0] / (hx if hx > 0 else 1.0), margins[1] / (hy if hy > 0 else 1.0), cx, cy)
@@ -230,19 +305,21 @@ def _directional_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any) -> Any:
     """One directional light's fit. ``o``: the options tuple of :func:`fit_loop`."""
     has_b, has_r, has_up, stable, margins, eps, texels = o[1], o[2], o[3], o[7], o[5], o[6], o[8]
     zero3 = (0.0, 0.0, 0.0)
-    s, lo, hi, _, coords, st = _spread(V, b, has_b, zero3)
+    _, lo, hi, _, coords, st = _spread(V, b, has_b, zero3)
     a, ok_light, _, ok_up = fit_axes((-L[0], -L[1], -L[2]), U, has_up, coords, eps)
     st |= _flags((ok_light,), 0) | _flags((ok_up,), 2)
-    n = len(V)
-    if stable:
-        c = (s[0] / n, s[1] / n, s[2] / n)
+    sphere = (0.0, 0.0, 0.0, 0.0)
+    if stable:  # the minimal enclosing sphere: the shape's, whatever its vertices
+        sup, k = _enclosing_sphere(V, b, has_b)
+        sphere = _ball(V, b, has_b, sup, k)
+        c = (sphere[0], sphere[1], sphere[2])
     else:
         c = (0.5 * (hi[0] + lo[0]), 0.5 * (hi[1] + lo[1]), 0.5 * (hi[2] + lo[2]))
-    bounds, r2, reach = _light_pass(V, b, has_b, c, a, False)
+    bounds, _, reach = _light_pass(V, b, has_b, c, a, False)
     hx, lx, hy, ly, zb_max, zb_min = bounds
     if stable:
         texels4 = (margins[0], margins[1], texels[0], texels[1])
-        half_x, half_y, cx, cy, ok_sil = stable_sides(r2, c, a, texels4, reach, eps)
+        half_x, half_y, cx, cy, ok_sil = stable_sides(sphere[3], c, a, texels4, reach, eps)
     else:
         half_x, half_y, cx, cy, ok_sil = box_sides(hx, lx, hy, ly, reach, eps)
     st |= _flags((ok_sil,), 4)
@@ -382,6 +459,11 @@ FUNCTIONS = (
     "_spread",
     "_light_pass",
     "_receiver_far",
+    "_nth",
+    "_ball",
+    "_outside",
+    "_enclosing_sphere",
+    "support_loop",
     "_sides",
     "_flags",
     "_point_entry",
