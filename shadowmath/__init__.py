@@ -40,6 +40,7 @@ CONVENTIONS
 """
 
 from ._boundary._checks import check_finite as check_finite
+from ._boundary._messages import ShadowFitWarning as ShadowFitWarning
 from ._fits._fitting import FrustumFit as FrustumFit
 from ._fits._fitting import optimize_frustum as optimize_frustum
 from ._fits._setup import fit_shadow as fit_shadow
@@ -106,6 +107,7 @@ __all__ = [
     "LightFrame",
     "Mesh",
     "PointLight",
+    "ShadowFitWarning",
     "ShadowMapSpec",
     "ShadowSetup",
     "SpotLight",

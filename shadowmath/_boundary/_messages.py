@@ -4,6 +4,18 @@ A check that several functions (and both backends) perform has its message here,
 so that the same bad input gets the same ``ValueError`` whichever path ran.
 """
 
+import warnings
+
+
+class ShadowFitWarning(UserWarning):
+    """A fit that is valid but wasteful: past a documented soft limit (see :func:`fit_shadow`)."""
+
+
+def warn_wide() -> None:
+    """Warn that a point-light fit is wider than ``WIDE_FOV_DEGREES`` (NumPy input)."""
+    warnings.warn(WIDE, ShadowFitWarning, stacklevel=4)
+
+
 ZERO_DIRECTION = (
     "the light's viewing direction is zero: the light sits at the blocker's centre "
     "(zero mean direction vector, or one within rounding of zero); move the light or "
@@ -60,4 +72,33 @@ SPOT_ANGLE = (
 OUTSIDE_CONE = (
     "vertices: the blocker lies outside the spot light's cone (as seen from the light); "
     "nothing of it can shadow what the spot lights"
+)
+SINGULAR_PLACEMENT = (
+    "blocker_to_world: the placement is singular (its determinant is zero to rounding): "
+    "it flattens the blocker onto a plane, a line or a point, so no light frame or "
+    "silhouette can be fitted to it; give an invertible placement"
+)
+NEAR_ROUNDING = (
+    "light: the nearest caster is within rounding of the light (closer than 32 eps times "
+    "the coordinates' magnitude), so the near plane and the frame would be rounding noise; "
+    "move the light away from the blocker, or express the coordinates about a nearby origin"
+)
+#: The widest point-light frustum fitted (full angle, degrees); MAX_FOV_TAN is tan(85 deg).
+MAX_FOV_DEGREES = 170.0
+MAX_FOV_TAN = 11.430052302761343
+TOO_WIDE = (
+    "light: the fitted frustum would be wider than 170 degrees (the light is too close to "
+    "the blocker, or inside its hull): its texels near the edges would be useless; use a "
+    "cube map (cube_face_projection), a spot light's cone (sm.SpotLight), or move the light "
+    "away from the blocker"
+)
+#: A point-light fit wider than this (full angle, degrees) warns (:class:`ShadowFitWarning`):
+#: a texel at the map's edge then subtends a quarter of the angle of one at its centre.
+WIDE_FOV_DEGREES = 120.0
+WIDE_FOV_TAN = 1.7320508075688772
+WIDE = (
+    "light: the fitted frustum is wider than 120 degrees (up to 170 is fitted): a texel at "
+    "the map's edge sees a quarter of the angle of one at its centre or less; a cube map "
+    "(cube_face_projection), a spot light's cone or a light farther from the blocker "
+    "spends the texels better"
 )

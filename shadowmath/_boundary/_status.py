@@ -21,14 +21,17 @@ FIT_CHECKS: tuple[tuple[str, str], ...] = (
     ("receivers", non_finite("receivers")),
     ("up", non_finite("up")),
     ("projective", msg.PROJECTIVE_PLACEMENT),
+    ("singular_placement", msg.SINGULAR_PLACEMENT),
     ("zero_light", msg.ZERO_DIRECTIONAL),
     ("spot", msg.ZERO_SPOT),
     ("spot_angle", msg.SPOT_ANGLE),
     ("direction", msg.ZERO_DIRECTION),
     ("up_parallel", msg.UP_PARALLEL),
     ("behind", msg.BEHIND_LIGHT),
+    ("near_rounding", msg.NEAR_ROUNDING),
     ("outside_cone", msg.OUTSIDE_CONE),
     ("silhouette", msg.ZERO_SILHOUETTE),
+    ("too_wide", msg.TOO_WIDE),
     ("near_finite", msg.NEAR_NOT_FINITE),
     ("far_finite", msg.FAR_NOT_FINITE),
     ("near_positive", msg.NEAR_POSITIVE),
@@ -57,6 +60,11 @@ OVERFLOW = bit("overflow")
 SPOT = bit("spot")
 SPOT_ANGLE = bit("spot_angle")
 OUTSIDE_CONE = bit("outside_cone")
+SINGULAR_PLACEMENT = bit("singular_placement")
+NEAR_ROUNDING = bit("near_rounding")
+TOO_WIDE = bit("too_wide")
+#: Not an error: a point-light fit wider than ``msg.WIDE_FOV_DEGREES`` (the boundary warns).
+WIDE_WARNING = 1 << 30
 
 #: The order of the checks that the per-entry formulas return as a tuple of booleans.
 FORMULA_CHECKS = (

@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from shadowmath._backends import _kernels
-from shadowmath._boundary._status import fit_messages
+from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import Array, Context, flat_batch, raise_status
 from shadowmath._math._frame import LightFrame
 from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
@@ -55,8 +56,11 @@ def fit(
     else:
         _kernels.loops().fit_loop(*arrays, out, mats, status)
     if status[0] if one else status.any():
-        finite = bool(np.isfinite(a.verts).all())
-        raise_status(status.reshape(shape), fit_messages(finite))
+        errors = status & ~WIDE_WARNING
+        if errors[0] if one else errors.any():
+            finite = bool(np.isfinite(a.verts).all())
+            raise_status(errors.reshape(shape), fit_messages(finite))
+        msg.warn_wide()
     return _views(key, shape, out, mats)
 
 

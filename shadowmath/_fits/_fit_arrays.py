@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from shadowmath._backends import _kernels
+from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._status import FIT_CHECKS, FORMULA_CHECKS
 from shadowmath._boundary._validate import Array, Checks, Context, all_finite
 from shadowmath._math._frustum import NEAR_FAR_SLACK
@@ -104,6 +105,8 @@ def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs, d: Driver) 
     }
     if a.B is not None:
         flags["placement"] = all_finite(xp, a.B, 2)
+        b = tuple(a.B[..., i // 4, i % 4] for i in range(16))
+        flags["singular_placement"] = d.Fv.placement_ok(b, d.eps)
     if a.R is not None:
         flags["receivers"] = all_finite(xp, a.R, 2)
     if a.U is not None:
@@ -115,6 +118,9 @@ def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs, d: Driver) 
         ok = flags.get(name, True)
         if ok is not True:
             checks.require(ok, _MESSAGES[name])
+    calm = flags.get("wide_warning", True)
+    if xp is np and calm is not True and not np.all(calm):  # (JAX: no warnings)
+        msg.warn_wide()
     return entries
 
 
@@ -183,6 +189,8 @@ def _point(
         )
         zero = 0.0 * half_x
         sides = (half_x, half_y, zero, zero)
+    flags["near_rounding"] = d.Fe.near_clear(zb_min, coords, eps)
+    flags["too_wide"], flags["wide_warning"] = d.Fe.fov_ok(sides, key.margins)
     z_hi = _receivers(d, key, a, L, axes, sides, zb_max)
     return _finish(d, key, a, flags, L, axes, sides, (zb_min, z_hi, zb_min, zb_max))
 

@@ -170,12 +170,22 @@ def fit_shadow(
             raise, a non-finite or wrongly shaped ``blocker_to_world``, a zero
             directional light, receivers of the wrong shape or non-finite, an
             unknown ``api`` (the message lists the valid ones), an ``up`` zero or
-            parallel to the light's direction (value errors are NaN outputs under JAX
-            transformations); and, whatever the values: ``stable=True`` for a point
+            parallel to the light's direction, a singular ``blocker_to_world``
+            (``|det| <= 64 eps`` times its rows' norms), the nearest caster within
+            rounding of a point light (``z <= 32 eps`` times the coordinates'
+            magnitude), a point-light frustum wider than 170 degrees (the light too
+            close to the blocker: use a cube map or a spot cone) (value errors are
+            NaN outputs under JAX transformations); and, whatever the values: ``stable=True`` for a point
             light without ``up``, ``near``/``far`` for a directional light, a batch
             of homogeneous lights mixing ``w = 0`` and ``w != 0``, a homogeneous
             light under a JAX transformation, options given both in a
             :class:`ShadowMapSpec` and as keywords.
+
+    Warns:
+        ShadowFitWarning: NumPy input only (JAX gives no warnings): a point-light
+            frustum wider than 120 degrees (a texel at the edge then sees a quarter
+            of the angle of one at the centre or less), and a map whose border
+            leaves less than half of its texels per axis (from :class:`ShadowMapSpec`).
 
     Example:
         >>> import numpy as np

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import warnings
 from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._boundary._messages import ShadowFitWarning
 from shadowmath._math._bias import PcfFilter, _check_kernel
 from shadowmath._math._conventions import (
     GraphicsApi,
@@ -127,6 +129,15 @@ def _check(spec: ShadowMapSpec) -> None:
             "sets the map's border)"
         )
     mx, my = spec.margins
+    if min(mx, my) < 0.5:
+        inner = min(round(mx * spec.size[0]), round(my * spec.size[1]))
+        warnings.warn(
+            f"map_size: a border of {spec.border} texel(s) on each side leaves {inner} texels "
+            f"of {spec.size[0]}x{spec.size[1]} (less than half per axis) for the blocker's "
+            "silhouette; use a larger map or a smaller PCF kernel",
+            ShadowFitWarning,
+            stacklevel=3,
+        )
     if spec.stable:
         for axis, m, size in (("x", mx, spec.size[0]), ("y", my, spec.size[1])):
             if m * size <= 1:

@@ -28,6 +28,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from shadowmath._boundary._messages import MAX_FOV_TAN, WIDE_FOV_TAN
+
 # Backend primitives and the shared formulas, rebound by specialize().
 from ._formulas import (  # noqa: F401  (names the specialized copies look up)
     clip_rows,
@@ -97,6 +99,47 @@ def fit_axes(
         length = f[9]
         ok_up = True
     return axes, length > 0, length > 32.0 * eps * coords, ok_up
+
+
+def placement_ok(b: tuple[Any, ...], eps: float) -> Any:
+    """The placement ``b`` (16 row-major entries) is invertible beyond rounding.
+
+    ``|det B| > 64 eps prod_i |row_i|``: by Hadamard's inequality the ratio lies in
+    ``[0, 1]`` whatever the scale, so a uniformly tiny or huge placement passes and
+    one that flattens the blocker (a zero scale) fails. The determinant by the
+    Laplace expansion in the 2 x 2 minors of rows 0-1 and 2-3.
+    """
+    s0, s1, s2 = b[0] * b[5] - b[1] * b[4], b[0] * b[6] - b[2] * b[4], b[0] * b[7] - b[3] * b[4]
+    s3, s4, s5 = b[1] * b[6] - b[2] * b[5], b[1] * b[7] - b[3] * b[5], b[2] * b[7] - b[3] * b[6]
+    c0, c1 = b[8] * b[13] - b[9] * b[12], b[8] * b[14] - b[10] * b[12]
+    c2, c3 = b[8] * b[15] - b[11] * b[12], b[9] * b[14] - b[10] * b[13]
+    c4, c5 = b[9] * b[15] - b[11] * b[13], b[10] * b[15] - b[11] * b[14]
+    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+    n = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2] + b[3] * b[3]) * (
+        b[4] * b[4] + b[5] * b[5] + b[6] * b[6] + b[7] * b[7]
+    )
+    n = n * (b[8] * b[8] + b[9] * b[9] + b[10] * b[10] + b[11] * b[11])
+    n = n * (b[12] * b[12] + b[13] * b[13] + b[14] * b[14] + b[15] * b[15])
+    return fabs(det) > 64.0 * eps * sqrt(n)
+
+
+def near_clear(z_min: Any, coords: Any, eps: float) -> Any:
+    """The nearest caster clears the rounding of the coordinates (``z > 32 eps coords``)."""
+    return z_min > 32.0 * eps * coords
+
+
+def fov_ok(sides: tuple[Any, Any, Any, Any], margins: tuple[float, float]) -> tuple[Any, Any]:
+    """A perspective map's widest ratio ``|c| + h / m`` within the hard and the warning limit.
+
+    The map's edge is at ``u = c +- h / m`` (NDC ``+-1``); ``atan`` of the larger is
+    half the field of view. Limits: ``MAX_FOV_TAN`` (170 degrees, refused) and
+    ``WIDE_FOV_TAN`` (120 degrees, warned) of :mod:`._messages`.
+    """
+    half_x, half_y, cx, cy = sides
+    tx = fabs(cx) + half_x / margins[0]
+    ty = fabs(cy) + half_y / margins[1]
+    t = where(tx >= ty, tx, ty)
+    return t <= MAX_FOV_TAN, t <= WIDE_FOV_TAN
 
 
 def point_sides(
@@ -493,6 +536,9 @@ FUNCTIONS = (
     "place",
     "to_light",
     "fit_axes",
+    "placement_ok",
+    "near_clear",
+    "fov_ok",
     "point_sides",
     "spot_sides",
     "spot_angle_ok",

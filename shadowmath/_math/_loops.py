@@ -27,15 +27,19 @@ import numpy as np
 from shadowmath._boundary._status import (
     FORMULA_BITS,
     LIGHT,
+    NEAR_ROUNDING,
     OUTSIDE_CONE,
     OVERFLOW,
     PLACEMENT,
     PROJECTIVE,
     RECEIVERS,
+    SINGULAR_PLACEMENT,
     SPOT,
     SPOT_ANGLE,
+    TOO_WIDE,
     UP,
     VERTICES,
+    WIDE_WARNING,
 )
 
 from ._fit_formulas import (
@@ -44,7 +48,10 @@ from ._fit_formulas import (
     directional_origin,
     fit_axes,
     fit_rows,
+    fov_ok,
+    near_clear,
     place,
+    placement_ok,
     point_sides,
     receiver_counted,
     safe_box,
@@ -291,6 +298,13 @@ def _point_entry(L: Any, V: Any, b: Any, R: Any, U: Any, o: Any, S: Any) -> Any:
         half_x, half_y, ok_behind, ok_sil = point_sides(hx, lx, hy, ly, zb_min, reach, eps)
         cx = cy = 0.0
     st |= _flags((ok_behind, ok_sil), 3)
+    if not near_clear(zb_min, coords, eps):
+        st |= NEAR_ROUNDING
+    ok_fov, calm = fov_ok((half_x, half_y, cx, cy), margins)
+    if not ok_fov:
+        st |= TOO_WIDE
+    elif not calm:
+        st |= WIDE_WARNING
     z_hi, ok_r = zb_max, True
     if has_r:
         sides = _sides(half_x, half_y, margins, cx, cy)
@@ -374,6 +388,8 @@ def _check_finite(L: Any, U: Any, b: Any, o: Any) -> int:
         for e in b:
             if not math.isfinite(e):
                 st |= PLACEMENT
+        if not placement_ok(b, o[6]):
+            st |= SINGULAR_PLACEMENT
     return st
 
 
