@@ -153,7 +153,10 @@ def test_option_combinations(capsys, args, message):
             ["--method", "soft", "--area-light", "0", "1"],
             "argument --area-light: expected a number > 0",
         ),
-        (["--method", "soft", "--samples", "0"], "argument --samples: expected a positive integer"),
+        (
+            ["--method", "soft", "--samples", "0"],
+            "argument --samples: expected an integer from 1 to 65536",
+        ),
         (["--method", "soft", "--seed", "-2"], "argument --seed: expected an integer >= 0"),
         (
             ["--method", "omni", "--map-size", "64x32"],
@@ -399,12 +402,363 @@ def test_map_size_follows_the_library_border_rule(text):
         assert map_size_arg(text) == size
 
 
-@pytest.mark.usefixtures("gl")
-def test_map_too_small_for_the_pcf_border_is_an_option_error(capsys, tmp_path):
-    # The renderer's depth map keeps 1 + K empty texels on each side: K = 1 needs 5 texels.
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["--method", "depth", "--pcf", "50", "--map-size", "64"],
+            "--pcf 50 with --map-size 64: a PCF radius of 50 keeps 51 empty texels on each "
+            "side of the depth map (1 + K, so that no 101x101 kernel reads past the "
+            "silhouette), which leaves no texel inside a 64x64 map; use --map-size 103 or "
+            "more, or --pcf 30 or less",
+        ),
+        (
+            ["--method", "depth", "--pcf", "1", "--map-size", "4"],
+            "--pcf 1 with --map-size 4: a PCF radius of 1 keeps 2 empty texels on each side "
+            "of the depth map (1 + K, so that no 3x3 kernel reads past the silhouette), which "
+            "leaves no texel inside a 4x4 map; use --map-size 5 or more, or leave --pcf out "
+            "(no filtering)",
+        ),
+        (
+            ["--method", "soft", "--pcf", "3", "--map-size", "8x64"],
+            "--pcf 3 with --map-size 8x64: a PCF radius of 3 keeps 4 empty texels",
+        ),
+        (
+            ["--method", "depth", "--pcf", "127"],
+            "--pcf 127 with --map-size 256 (the default): a PCF radius of 127 keeps 128",
+        ),
+        (
+            ["--method", "depth", "--directional", "0", "1", "1", "--pcf", "9", "--map-size", "20"],
+            "--pcf 9 with --map-size 20:",
+        ),
+        (
+            ["--method", "depth", "--api", "webgpu", "--pcf", "9", "--map-size", "20"],
+            "--pcf 9 with --map-size 20:",
+        ),
+    ],
+)
+def test_map_too_small_for_the_pcf_border_names_both_options(capsys, tmp_path, args, message):
+    # The renderer's depth map keeps 1 + K empty texels on each side: K needs 2 K + 3 texels.
     out = tmp_path / "x.png"
-    err = _error(
-        capsys, [*SMALL, "--method", "depth", "--pcf", "1", "--map-size", "4", "--output", str(out)]
-    )
-    assert "4x4" in err
+    err = _error(capsys, [*SMALL, *args, "--output", str(out)])
+    assert err.split(": error: ")[1].startswith(message)
     assert not out.exists()
+
+
+@pytest.mark.usefixtures("gl")
+def test_the_smallest_map_for_a_pcf_radius_renders(capsys, tmp_path):
+    """The demo's PCF border rule is the renderer's, not a stricter one: 2 K + 3 texels draw."""
+    out = tmp_path / "x.png"
+    # A directional light: a point light's frustum through a 1-texel centre is very wide.
+    sun = ["--method", "depth", "--directional", "-1", "2", "1.5"]
+    assert main([*SMALL, *sun, "--pcf", "2", "--map-size", "7", "--output", str(out)]) == 0
+    assert "PCF radius 2" in capsys.readouterr().out
+
+
+def _too_far(capsys, tmp_path, args):
+    return _error(capsys, [*args, "--output", str(tmp_path / "x.png")]).split(": error: ")[1]
+
+
+@pytest.mark.parametrize("method", ["texture", "depth"])
+def test_a_point_light_too_far_for_the_blocker_silhouette(capsys, tmp_path, method):
+    err = _too_far(capsys, tmp_path, ["--method", method, "--light", "1e17", "1", "1"])
+    assert err.startswith(
+        "--light 1e+17 1 1: too far for a point light of this scene: this light is 1e+17 from "
+        "the blocker's centre (0.00, 1.60, 2.20), beyond about "
+    )
+    assert (
+        "where the blocker's silhouette (bounding radius 1.35, 1.4e-17 of the distance) falls "
+        f"below rounding and --method {method} cannot fit a shadow map to it; bring the light "
+        "within "
+    ) in err
+    assert err.endswith(
+        "of the blocker, or for a light that far use a directional one (--directional X Y Z, "
+        "the direction toward the light, with --method planar or depth)"
+    )
+    assert "among the blocker's vertices" not in err
+
+
+def test_the_silhouette_limit_is_where_the_fit_stops():
+    """The limit the message gives is the library's: a map fits just inside it, not beyond."""
+    import shadowmath as sm
+    from shadowmath.cli._build import blocker_sphere, check_light_and_mesh, farthest_fit
+    from shadowmath.cli._options import build_parser, resolve_options
+
+    options = resolve_options(build_parser().parse_args(["--light", "1e17", "1", "1"]))
+    geometry = check_light_and_mesh(options)
+    limit = farthest_fit(geometry, options.light, options.map_size)
+    assert limit is not None
+    assert 1e13 < limit < 1e14
+    centre, _ = blocker_sphere(geometry)
+    aim = (options.light - centre) / np.linalg.norm(options.light - centre)
+    vertices, placed = geometry.mesh.vertices, geometry.to_world
+    sm.fit_shadow(centre + 0.99 * limit * aim, vertices, 256, blocker_to_world=placed)
+    with pytest.raises(ValueError, match="silhouette"):
+        sm.fit_shadow(centre + 1.01 * limit * aim, vertices, 256, blocker_to_world=placed)
+
+
+def test_an_area_light_too_far_for_soft_shadows(capsys, tmp_path):
+    err = _too_far(capsys, tmp_path, ["--method", "soft", "--light", "1e17", "1", "1"])
+    assert err.startswith(
+        "--light 1e+17 1 1: too far for an area light of this scene: the light sample at "
+        "(1e+17, 0.57, 1.34) (around --light 1e+17 1 1) is 1e+17 from the blocker's centre"
+    )
+    assert "--directional X Y Z" in err
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["--method", "planar", "--light", "1e20", "1", "1"],
+            "--light 1e+20 1 1: too far for a point light of this scene: 1e+20 from the "
+            "origin, beyond 2.81e+14, where its height above the wall (z = 1) falls below the "
+            "rounding of its coordinates (3.6e-15 of the distance) and Blinn's projection onto "
+            "the wall (drawn by --method planar, printed by every method) cannot tell the "
+            "light from the wall's plane; bring the light within 2.81e+14 of the origin, or "
+            "for a light that far use a directional one (--directional X Y Z, the direction "
+            "toward the light, with --method planar or depth)",
+        ),
+        (
+            ["--method", "omni", "--light", "1e17", "3", "1"],
+            "--light 1e+17 3 1: too far for a point light of this scene: 1e+17 from the "
+            "origin, beyond 2.81e+14, where its height above the wall (z = 1)",
+        ),
+        (
+            ["--method", "texture", "--light", "1e12", "1e-3", "1"],
+            "--light 1e+12 0.001 1: too far for a point light of this scene: 1e+12 from the "
+            "origin, beyond 2.81e+11, where its height above the floor (y = 0.001)",
+        ),
+        (
+            ["--method", "planar", "--light", "1", "1e-300", "1"],
+            "--light 1 1e-300 1: y = 1e-300 puts the light within rounding of the floor (the "
+            "plane y = 0): 1.41 from the origin, its height must exceed 5.02e-15 (3.6e-15 of "
+            "the distance) for Blinn's projection onto the floor (drawn by --method planar, "
+            "printed by every method); move the light away from the floor",
+        ),
+    ],
+)
+def test_a_point_light_too_far_or_too_close_for_blinns_projection(capsys, tmp_path, args, message):
+    assert _too_far(capsys, tmp_path, args).startswith(message)
+
+
+def test_the_planar_limit_is_planar_projections():
+    """The demo's threshold is planar_projection's: a light just inside it projects."""
+    import shadowmath as sm
+    from shadowmath.cli._build import PLANAR_ROUNDING
+
+    limit = 1.0 / PLANAR_ROUNDING  # the distance at which a height of 1 is rounding
+    sm.planar_projection([0.0, 1.0, 0.0, 0.0], [0.99 * limit, 1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="light lies in the plane"):
+        sm.planar_projection([0.0, 1.0, 0.0, 0.0], [1.01 * limit, 1.0, 1.0, 1.0])
+
+
+def test_the_radiance_limit_is_pyramid_to_unit_cubes():
+    """The demo's threshold is pyramid_to_unit_cube's, for the demo's floor rectangle."""
+    import shadowmath as sm
+    from shadowmath.cli._build import PYRAMID_ROUNDING, receiver_rectangles
+
+    corner, edge_u, edge_v = receiver_rectangles()[1]  # the floor
+    edges = float(np.linalg.norm(edge_u) + np.linalg.norm(edge_v))
+    for factor, ok in ((0.99, True), (1.01, False)):
+        distance = factor * (1.0 / PYRAMID_ROUNDING - edges)
+        apex = corner + [distance, 1.0, 0.0]
+        if ok:
+            sm.pyramid_to_unit_cube(apex, corner, edge_u, edge_v)
+        else:
+            with pytest.raises(ValueError, match="apex: lies in the base plane"):
+                sm.pyramid_to_unit_cube(apex, corner, edge_u, edge_v)
+
+
+def test_radiance_light_too_far_or_too_close_to_a_receiver(capsys, tmp_path):
+    err = _too_far(capsys, tmp_path, ["--method", "radiance", "--light", "1e17", "1", "1"])
+    assert err.startswith(
+        "--light 1e+17 1 1: too far for an area light of this scene with --method radiance: "
+        "its sample at (1e+17, "
+    )
+    assert "from the floor's corner (-5.00, 0.00, 0.00), beyond 3.5" in err
+    assert "falls below the rounding of the pyramid from the sample to the floor" in err
+    assert "--directional X Y Z" in err
+    args = ["--method", "radiance", "--light", "1", "1e-13", "3", "--area-light", "1e-14", "1e-14"]
+    err = _too_far(capsys, tmp_path, args)
+    assert err.startswith(
+        "--area-light 1e-14 1e-14: the light's sample at (1.00, 0.00, 3.00) lies within "
+        "rounding of the floor (the plane y = 0): its height y = "
+    )
+    assert err.endswith("make the light smaller or move --light 1 1e-13 3 away from the floor")
+
+
+@pytest.mark.parametrize(
+    ("direction", "message"),
+    [
+        (
+            ["1", "1e-20", "1"],
+            "--directional 1 1e-20 1: the light shines parallel to the floor (the plane y = 0) "
+            "within rounding: y = 1e-20 is at most 3.6e-15 of the direction's length 1.41, so "
+            "Blinn's projection onto the floor (drawn by --method planar, printed with depth) "
+            "is undefined; tilt the light away from the floor's plane, y > 5.02e-15",
+        ),
+        (
+            ["1e300", "1e300", "1e300"],
+            "--directional 1e+300 1e+300 1e+300: the direction's length 1.73e+300 is too large "
+            "for floating point: the library normalizes it, and its square overflows (lengths "
+            "from 1.5e-154 to 1.3e+154 work); only the direction matters, e.g. --directional "
+            "0.57735 0.57735 0.57735",
+        ),
+        (
+            ["1e-200", "1e-200", "1e-200"],
+            "--directional 1e-200 1e-200 1e-200: the direction's length 1.73e-200 is too "
+            "small for floating point: the library normalizes it, and its square underflows",
+        ),
+    ],
+)
+@pytest.mark.parametrize("method", ["planar", "depth"])
+def test_directional_light_parallel_to_a_receiver_or_out_of_range(
+    capsys, tmp_path, method, direction, message
+):
+    err = _too_far(capsys, tmp_path, ["--method", method, "--directional", *direction])
+    assert err.startswith(message)
+
+
+@pytest.mark.parametrize("size", [["1e-100", "1e-100"], ["1e-300", "1"], ["1e100", "1e100"]])
+def test_area_light_sizes_beyond_floating_point(capsys, tmp_path, size):
+    err = _too_far(capsys, tmp_path, ["--method", "soft", "--area-light", *size])
+    assert err.startswith(f"--area-light {float(size[0]):g} {float(size[1]):g}: sizes and an area")
+    assert (
+        "beyond floating point's range: the library squares the edges' lengths and the area, "
+        "which must lie from 1.5e-154 to 1.3e+154 for the squares to be told from zero and "
+        "infinity; give W, H and W x H in that range"
+    ) in err
+
+
+def test_a_huge_area_light_corner_is_shown_in_three_digits(capsys, tmp_path):
+    err = _too_far(capsys, tmp_path, ["--method", "soft", "--area-light", "1e50", "1e50"])
+    assert err.startswith(
+        "--area-light 1e+50 1e+50: the light's corner (-5.37e+49, -4.55e+49, -7.12e+48) lies "
+        "on or behind the wall"
+    )
+
+
+@pytest.mark.parametrize("count", ["0", "65537", "100000000000000000000"])
+def test_samples_beyond_the_cap(capsys, tmp_path, count):
+    err = _too_far(capsys, tmp_path, ["--method", "soft", "--samples", count])
+    assert err == (
+        "argument --samples: expected an integer from 1 to 65536 (each sample draws the scene "
+        "once more: a depth map with soft, the blocker into each receiver's texture with "
+        f"radiance), got '{count}'"
+    )
+
+
+@pytest.mark.parametrize(
+    ("args", "attribute", "value"),
+    [
+        (["--light", "-1e3", "1", "1"], "light", [-1000.0, 1.0, 1.0]),
+        (["--directional", "-1E-2", "1", "1"], "directional", [-0.01, 1.0, 1.0]),
+        (["--depth-bias", "-1e300", "-.5"], "depth_bias", [-1e300, -0.5]),
+    ],
+)
+def test_negative_numbers_in_exponent_form_are_values(args, attribute, value):
+    from shadowmath.cli._options import build_parser
+
+    assert getattr(build_parser().parse_args(args), attribute) == value
+
+
+def test_negative_infinity_is_a_value_refused_as_not_finite(capsys, tmp_path):
+    err = _too_far(capsys, tmp_path, ["--light", "-inf", "1", "1"])
+    assert err == "--light -inf 1 1: coordinates must be finite"
+
+
+def test_a_huge_user_mesh_is_centred_and_scaled_without_overflow(tmp_path):
+    from shadowmath.cli._build import blocker_mesh
+
+    obj = tmp_path / "huge.obj"
+    obj.write_text("v 1e300 0 0\nv -1e300 0 0\nv 0 1e300 0\nf 1 2 3\n")
+    mesh = blocker_mesh(str(obj))
+    assert np.isclose(np.linalg.norm(mesh.vertices, axis=1).max(), 1.3)
+
+
+def test_output_paths_that_cannot_be_written(capsys, tmp_path):
+    picture = tmp_path / "x.png"
+    err = _too_far(capsys, tmp_path, ["--shadow-map-output", str(picture)])
+    assert err == (
+        f"--shadow-map-output {picture}: the same file as --output {picture}; the map "
+        "would overwrite the picture, give another name"
+    )
+    (tmp_path / "file").write_text("")
+    err = _error(capsys, ["--output", str(tmp_path / "file" / "x.png")])
+    assert err.endswith(f"{tmp_path / 'file'} is a file, not a folder")
+
+
+def test_a_failed_write_names_its_option(tmp_path):
+    from shadowmath.cli._options import OptionError
+    from shadowmath.cli._run import save_png
+
+    missing = tmp_path / "gone" / "x.png"
+    with pytest.raises(OptionError) as info:
+        save_png("--output", missing, np.zeros((2, 2)))
+    assert str(info.value) == f"--output {missing}: cannot write it (No such file or directory)"
+
+
+def test_a_renderer_refusal_names_the_option_of_its_argument():
+    from shadowmath.cli._options import build_parser, resolve_options
+    from shadowmath.cli._run import renderer_refusal
+
+    def refusal(args, text):
+        options = resolve_options(build_parser().parse_args([*args, "--output", "x.png"]))
+        return str(renderer_refusal(options, ValueError(text)))
+
+    assert refusal(["--method", "depth", "--pcf", "2", "--map-size", "64"], "map_size: no") == (
+        "--map-size 64x64 with --pcf 2: the renderer refused this scene (map_size: no)"
+    )
+    soft = ["--method", "soft", "--area-light", "2", "1"]
+    assert refusal(soft, "lights[0]: edge_u and edge_v must be non-zero").startswith(
+        "--area-light 2 1 around --light -2.2 3.6 6: the renderer refused this scene"
+    )
+    assert refusal([], "light: something").startswith("--light -2.2 3.6 6: the renderer refused")
+
+
+def test_a_fit_that_fails_for_another_reason_names_the_mesh():
+    """A flat blocker seen edge-on from outside its reach: not a distance problem."""
+    from shadowmath.cli._build import Geometry, fit_in_front, placement
+    from shadowmath.cli._options import OptionError, build_parser, resolve_options
+    from shadowmath.meshes import Mesh
+
+    flat = Mesh(
+        np.array([[-1.0, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]),
+        np.array([[0, 1, 2], [0, 2, 3]]),
+    )
+    geometry = Geometry(flat, placement(np.eye(3), (0.0, 0.0, 0.0)), None)
+    options = resolve_options(build_parser().parse_args(["--mesh", "flat.obj"]))
+    with pytest.raises(OptionError) as info:
+        fit_in_front(
+            options, geometry, np.array([5.0, 0.0, 0.0]), option="--light 5 0 0", what="this light"
+        )
+    assert str(info.value).startswith(
+        "--light 5 0 0 with --mesh flat.obj: --method texture cannot fit a shadow map to the "
+        "blocker from this light (5.00 from its centre (0.00, 0.00, 0.00), whose bounding "
+        "radius is 1.41): "
+    )
+
+
+def test_a_pcf_border_too_wide_for_the_fit_names_pcf_and_map_size(capsys, tmp_path, monkeypatch):
+    """A fit refused with the 1 + K border but made with one texel: the border is the cause."""
+    import shadowmath as sm
+
+    real = sm.fit_shadow
+
+    def fit_shadow(*args, border_texels=1, **kwargs):
+        if border_texels > 1:  # as the library refuses a frustum wider than it fits
+            raise ValueError("light: the fitted frustum would be too wide")
+        return real(*args, border_texels=border_texels, **kwargs)
+
+    monkeypatch.setattr(sm, "fit_shadow", fit_shadow)
+    for method in ("depth", "soft"):
+        err = _too_far(capsys, tmp_path, ["--method", method, "--pcf", "5", "--map-size", "64"])
+        assert err.startswith(
+            "--pcf 5 with --map-size 64x64: the 6-texel border that a PCF radius of 5 keeps on "
+            "each side of the depth map leaves 52x52 texels for the blocker's silhouette, too "
+            "few to fit one from "
+        )
+        assert err.endswith(
+            "(a map with a 1-texel border fits); use a larger --map-size or a smaller --pcf"
+        )

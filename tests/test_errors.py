@@ -341,6 +341,14 @@ def test_checkify_reports_the_specific_message(case: Case) -> None:
 
 # Conditions on shapes and static arguments: ValueError everywhere, under jit too.
 STATIC_CASES: dict[str, tuple[Callable[[], Any], tuple[str, ...]]] = {
+    "fit_shadow: empty blocker": (
+        lambda: sm.fit_shadow(LIGHT, VERTS[:0], 64),
+        ("blocker_vertices:", "the vertex set is empty (N = 0)")),
+    "fit_shadow: blocker of 2 numbers": (
+        lambda: sm.fit_shadow(LIGHT, VERTS[:, :2], 64),
+        ("blocker_vertices:", "(*batch, N, 3)", "(12, 2)")),
+    "optimize_frustum: empty vertex set": (
+        lambda: sm.optimize_frustum(LIGHT, VERTS[:0], 64), ("vertices:", "empty")),
     "fit_shadow: receivers of 2 numbers": (
         lambda: sm.fit_shadow(LIGHT, VERTS, 64, receivers=VERTS[:, :2]),
         ("receivers:", "(*batch, N, 3)")),

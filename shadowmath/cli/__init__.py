@@ -52,11 +52,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         device = open_device(options)
         check_limits(options, device)
         rendered = render(options, scene, fit, device)
+        write_outputs(options, rendered)
     except OptionError as err:
         parser.error(str(err))
     except UnavailableError as err:
         parser.exit(1, f"{parser.prog}: {err}\n")
-    write_outputs(options, rendered)
     print_matrices(options, scene, fit, rendered)
     sys.stdout.flush()
     return 0

@@ -11,6 +11,7 @@ other layers read the resulting :class:`Options`.
 from __future__ import annotations
 
 import argparse
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -47,6 +48,13 @@ DEFAULT_DEPTH_BIAS = (2.5, 4.0)
 #: The empty border of ``fit_shadow``'s map (its default ``border_texels``): a
 #: ``--map-size`` must leave room inside it, the rule of :func:`shadowmath.border_margin`.
 MAP_BORDER_TEXELS = 1
+#: The most light samples ``--samples`` takes: each one draws the scene once more.
+MAX_SAMPLES = 65536
+#: A negative number as a value, not an option: ``-2``, ``-.5``, ``-1e3``, ``-inf``, ``-nan``
+#: (Python 3.11's ``argparse`` reads ``-1e3`` as an unknown option).
+NEGATIVE_NUMBER = re.compile(
+    r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE
+)
 
 #: The built-in blockers, by the name ``--mesh`` takes.
 BUILT_IN_MESHES: dict[str, Callable[[], meshes.Mesh]] = {
@@ -113,8 +121,15 @@ def shown(values: Any) -> str:
 
 
 def point(values: Any) -> str:
-    """A computed point for messages: ``(0.50, 1.70, -0.52)``, two decimals, no ``-0.00``."""
-    return "(" + ", ".join(f"{float(c):.2f}" for c in np.round(values, 2) + 0.0) + ")"
+    """A computed point for messages: ``(0.50, 1.70, -0.52)``, two decimals, no ``-0.00``;
+    coordinates of a million or more in three digits, ``(1e+17, 0.57, 1.34)``."""
+    return "(" + ", ".join(number(c) for c in np.ravel(values)) + ")"
+
+
+def number(value: Any) -> str:
+    """A computed number for messages: two decimals, or three digits from a million on."""
+    v = float(value)
+    return f"{v:.3g}" if abs(v) >= 1e6 else f"{round(v, 2) + 0.0:.2f}"
 
 
 def map_size_arg(text: str) -> int | tuple[int, int]:
@@ -135,21 +150,44 @@ def map_size_arg(text: str) -> int | tuple[int, int]:
     if len(values) not in (1, 2):
         raise too_small
     size = values[0] if len(values) == 1 else (values[0], values[1])
-    try:
-        sm.border_margin(size, border_texels=MAP_BORDER_TEXELS)
-    except ValueError:
-        raise too_small from None
+    if not has_room(size, MAP_BORDER_TEXELS):
+        raise too_small
     return size
 
 
+def has_room(size: int | tuple[int, int], border: int) -> bool:
+    """A map of ``size`` texels has texels inside ``border`` empty ones on each side
+    (:func:`shadowmath.border_margin` accepts it)."""
+    try:
+        sm.border_margin(size, border_texels=border)
+    except ValueError:
+        return False
+    return True
+
+
 def positive_int(text: str) -> int:
-    """``--samples``, ``--size``: an integer ``>= 1``."""
+    """``--size``: an integer ``>= 1``."""
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def sample_count(text: str) -> int:
+    """``--samples``: an integer from 1 to :data:`MAX_SAMPLES`."""
+    expected = f"expected an integer from 1 to {MAX_SAMPLES}"
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{expected}, got {text!r}") from None
+    if not 1 <= value <= MAX_SAMPLES:
+        raise argparse.ArgumentTypeError(
+            f"{expected} (each sample draws the scene once more: a depth map with soft, the "
+            f"blocker into each receiver's texture with radiance), got {text!r}"
+        )
     return value
 
 
@@ -191,6 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    parser._negative_number_matcher = NEGATIVE_NUMBER  # --light -1e3 1 1 reads -1e3 as X
     _add_scene_arguments(parser)
     _add_map_arguments(parser)
     _add_area_light_arguments(parser)
@@ -287,12 +326,12 @@ def _add_area_light_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--samples",
-        type=positive_int,
+        type=sample_count,
         default=None,
         metavar="N",
         help="how many points of the area light cast hard shadows, stratified and "
-        "jittered (area_light_samples); --method soft or radiance only "
-        f"(default: {DEFAULT_SAMPLES})",
+        f"jittered (area_light_samples), at most {MAX_SAMPLES}; --method soft or radiance "
+        f"only (default: {DEFAULT_SAMPLES})",
     )
     parser.add_argument(
         "--seed",
@@ -343,14 +382,17 @@ def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def check_combinations(args: argparse.Namespace) -> None:
-    """Refuse every option that the chosen ``--method`` and ``--api`` would ignore.
+    """Refuse every option that the chosen ``--method`` and ``--api`` would ignore, and a
+    ``--pcf`` whose border leaves no texel inside ``--map-size``.
 
     Raises:
-        OptionError: naming the option, the method, and the methods it applies to.
+        OptionError: naming the option, the method, and the methods it applies to (or
+            ``--pcf`` and ``--map-size`` with their numbers).
     """
     _check_directional(args)
     _check_api_and_map(args)
     _check_method_options(args)
+    _check_pcf_border(args)
 
 
 def _check_directional(args: argparse.Namespace) -> None:
@@ -429,18 +471,52 @@ def _check_method_options(args: argparse.Namespace) -> None:
             )
 
 
+def depth_border_texels(pcf: int) -> int:
+    """The empty border on each side of the reference renderer's depth maps (depth, soft):
+    ``1 + K`` texels for PCF radius ``K``, so that no kernel reads past the silhouette."""
+    return 1 + pcf
+
+
+def _check_pcf_border(args: argparse.Namespace) -> None:
+    """``--pcf K`` (depth, soft): the depth map must have texels inside its ``1 + K`` border.
+
+    The rule of :func:`shadowmath.border_margin` with :func:`depth_border_texels`.
+    """
+    if args.pcf is None or args.method not in PCF_METHODS:
+        return
+    size = DEFAULT_MAP_SIZE if args.map_size is None else args.map_size
+    border = depth_border_texels(args.pcf)
+    if has_room(size, border):
+        return
+    w, h = (size, size) if isinstance(size, int) else size
+    given = f"{w}" if isinstance(size, int) else f"{w}x{h}"
+    fitting = (min(w, h) - 3) // 2
+    widest = f"--pcf {fitting} or less" if fitting else "leave --pcf out (no filtering)"
+    if args.map_size is None:
+        given += " (the default)"
+    raise OptionError(
+        f"--pcf {args.pcf} with --map-size {given}: a PCF radius of {args.pcf} keeps "
+        f"{border} empty texels on each side of the depth map (1 + K, so that no "
+        f"{2 * args.pcf + 1}x{2 * args.pcf + 1} kernel reads past the silhouette), which "
+        f"leaves no texel inside a {w}x{h} map; use --map-size {2 * border + 1} or more, "
+        f"or {widest}"
+    )
+
+
 def png_path(option: str, path: Path, *, create: bool) -> Path:
     """``path`` resolved, after checking that a PNG can be written there.
 
     Raises:
-        OptionError: not a ``.png`` name, a folder, or in a folder that does not
-            exist (and may not be created).
+        OptionError: not a ``.png`` name, a folder, or in a folder that is a file or
+            does not exist (and may not be created).
     """
     if path.suffix.lower() != ".png":
         raise OptionError(f"{option} {path}: expected a file name ending in .png")
     if path.is_dir():
         raise OptionError(f"{option} {path}: is a folder; give a file name ending in .png")
     folder = path.parent
+    if folder.exists() and not folder.is_dir():
+        raise OptionError(f"{option} {path}: {folder} is a file, not a folder")
     if not folder.is_dir() and not create:
         raise OptionError(
             f"{option} {path}: the folder {folder} does not exist; create it first "
@@ -508,7 +584,7 @@ def resolve_options(args: argparse.Namespace) -> Options:
     """The :class:`Options` of ``parser.parse_args``'s result, defaults filled in.
 
     Checks, in this order, the combinations (:func:`check_combinations`), then
-    ``--output`` and ``--shadow-map-output`` (:func:`png_path`).
+    ``--output`` and ``--shadow-map-output`` (:func:`png_path`), which must differ.
 
     Raises:
         OptionError: the first problem found.
@@ -528,6 +604,12 @@ def resolve_options(args: argparse.Namespace) -> Options:
         if args.shadow_map_output is None
         else png_path("--shadow-map-output", args.shadow_map_output, create=False)
     )
+    if map_output == output:
+        raise OptionError(
+            f"--shadow-map-output {args.shadow_map_output}: the same file as --output "
+            f"{args.output or DEFAULT_OUTPUT}; the map would overwrite the picture, give "
+            "another name"
+        )
     width, height = args.size
     return Options(
         method=cast(Method, args.method),

@@ -12,6 +12,7 @@ matrices the picture was drawn with.
 from __future__ import annotations
 
 import importlib
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -22,7 +23,7 @@ from numpy.typing import NDArray
 import shadowmath as sm
 
 from ._build import FLOOR_PLANE, WALL_PLANE, LightFit, Scene
-from ._options import DEPTH_BIAS_METHODS, OptionError, Options
+from ._options import DEPTH_BIAS_METHODS, OptionError, Options, shown
 
 if TYPE_CHECKING:
     import moderngl
@@ -151,8 +152,36 @@ def render(options: Options, scene: Scene, fit: LightFit, device: Device) -> Ren
         OptionError: the renderer refused the scene (the checks before should prevent it).
     """
     if options.webgpu:
-        return _render_webgpu(options, scene)
+        try:
+            return _render_webgpu(options, scene)
+        except ValueError as err:  # the checks before should leave the renderer nothing
+            raise renderer_refusal(options, err) from None
     return _render_opengl(options, scene, fit, device.ctx)
+
+
+def renderer_refusal(options: Options, err: ValueError) -> OptionError:
+    """The renderer's ``ValueError`` told as the option that sets the argument it names.
+
+    The checks before drawing should leave the renderer nothing to refuse; this is
+    the last resort, keyed on the argument at the start of the renderer's message
+    (``map_size: ...``, ``lights[0]: ...``), the light's option when it names none
+    the demo sets.
+    """
+    text = str(err)
+    argument = re.split(r"[^a-z_]", text, maxsplit=1)[0]
+    map_w, map_h = options.map_texels
+    with_pcf = f" with --pcf {options.pcf}" if options.pcf else ""
+    area = f"--area-light {shown(options.area_size)} around {options.light_option}"
+    option = {
+        "map_size": f"--map-size {map_w}x{map_h}{with_pcf}",
+        "pcf_radius": f"--pcf {options.pcf}",
+        "depth_bias": f"--depth-bias {shown(options.bias)}",
+        "samples": f"--samples {options.samples}",
+        "image_size": f"--size {shown(options.image_size)}",
+        "edge_u": area,
+        "edge_v": area,
+    }.get(argument, area if options.area and "edge" in text else options.light_option)
+    return OptionError(f"{option}: the renderer refused this scene ({text})")
 
 
 def _render_webgpu(options: Options, scene: Scene) -> Rendered:
@@ -213,9 +242,7 @@ def _render_opengl(
             f"OpenGL failed to render a {width}x{height} picture{with_map}: {err}"
         ) from None
     except ValueError as err:  # the checks before should leave the renderer nothing
-        raise OptionError(
-            f"{options.light_option}: the renderer refused this scene ({err})"
-        ) from None
+        raise renderer_refusal(options, err) from None
     return Rendered(frame.color, frame.setups[0], _gl_map_picture(options, frame), "")
 
 
@@ -269,25 +296,40 @@ def webgpu_color(
     return np.where((body >= 0)[..., None], np.nan_to_num(color), np.asarray(BACKGROUND))
 
 
-def save_png(path: Path, image: NDArray[Any]) -> None:
-    """``image`` in ``[0, 1]`` (grey or RGB) as an 8-bit PNG."""
+def save_png(option: str, path: Path, image: NDArray[Any]) -> None:
+    """``image`` in ``[0, 1]`` (grey or RGB) as an 8-bit PNG.
+
+    Raises:
+        OptionError: naming ``option`` and the system's reason (permissions, disk full).
+    """
     from PIL import Image
 
-    Image.fromarray(np.rint(np.clip(image, 0, 1) * 255).astype(np.uint8)).save(path)
+    try:
+        Image.fromarray(np.rint(np.clip(image, 0, 1) * 255).astype(np.uint8)).save(path)
+    except OSError as err:
+        raise OptionError(f"{option} {path}: cannot write it ({err.strerror or err})") from None
 
 
 def write_outputs(options: Options, rendered: Rendered) -> None:
     """Save the picture and the shadow map (when asked), printing a line for each file.
 
     The default output folder is created when missing, any other must exist.
+
+    Raises:
+        OptionError: a file (or the default folder) cannot be written, naming its option.
     """
     output = options.output
     if options.default_output:
-        output.parent.mkdir(parents=True, exist_ok=True)
-    save_png(output, rendered.color)
+        try:
+            output.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise OptionError(
+                f"--output {output}: cannot create its folder ({err.strerror or err})"
+            ) from None
+    save_png("--output", output, rendered.color)
     print(f"wrote {output}: {summary(options, rendered.adapter)}")
     if options.map_output is not None and rendered.map_picture is not None:
-        save_png(options.map_output, rendered.map_picture)
+        save_png("--shadow-map-output", options.map_output, rendered.map_picture)
         map_w, map_h = options.map_texels
         what = {
             "texture": f"the {map_w}x{map_h} shadow map, t upward",
