@@ -762,3 +762,12 @@ def test_a_pcf_border_too_wide_for_the_fit_names_pcf_and_map_size(capsys, tmp_pa
         assert err.endswith(
             "(a map with a 1-texel border fits); use a larger --map-size or a smaller --pcf"
         )
+
+
+def test_a_wide_fit_is_a_note_naming_the_light(capsys, tmp_path, gl):
+    # The library's ShadowFitWarning (wider than 120 degrees) reaches the user as a note
+    # on the option behind it, once, and the demo still runs.
+    assert main(["--light", "0", "1.6", "3.4", "--output", str(tmp_path / "x.png")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("note:") == 1
+    assert "note: --light 0 1.6 3.4: the fitted frustum is wider than 120 degrees" in err

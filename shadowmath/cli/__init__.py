@@ -18,7 +18,11 @@ The layers, each a client of the public API (``import shadowmath as sm``,
 from __future__ import annotations
 
 import sys
+import warnings
 from collections.abc import Sequence
+from typing import Any
+
+import shadowmath as sm
 
 from ._build import build_scene, check_light_and_mesh, fit_light
 from ._options import OptionError, build_parser, resolve_options
@@ -44,19 +48,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        options = resolve_options(args)
-        geometry = check_light_and_mesh(options)
-        require_renderer()
-        scene = build_scene(options, geometry)
-        fit = fit_light(options, geometry)
-        device = open_device(options)
-        check_limits(options, device)
-        rendered = render(options, scene, fit, device)
-        write_outputs(options, rendered)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", sm.ShadowFitWarning)
+            options = resolve_options(args)
+            geometry = check_light_and_mesh(options)
+            require_renderer()
+            scene = build_scene(options, geometry)
+            fit = fit_light(options, geometry)
+            device = open_device(options)
+            check_limits(options, device)
+            rendered = render(options, scene, fit, device)
+            write_outputs(options, rendered)
     except OptionError as err:
         parser.error(str(err))
     except UnavailableError as err:
         parser.exit(1, f"{parser.prog}: {err}\n")
+    _notes(parser.prog, args, caught)
     print_matrices(options, scene, fit, rendered)
     sys.stdout.flush()
     return 0
+
+
+def _notes(prog: str, args: Any, caught: list[warnings.WarningMessage]) -> None:
+    """The library's soft-limit warnings, once each, as notes naming the option behind them."""
+    seen = set()
+    for w in caught:
+        text = str(w.message)
+        if not issubclass(w.category, sm.ShadowFitWarning) or text in seen:
+            continue
+        seen.add(text)
+        if text.startswith("light: ") and args.light is not None:
+            text = f"--light {' '.join(f'{v:g}' for v in args.light)}: {text[7:]}"
+        elif text.startswith("map_size: "):
+            text = f"--map-size with --pcf: {text[10:]}"
+        print(f"{prog}: note: {text}", file=sys.stderr)
