@@ -19,6 +19,16 @@ from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
 
 BOX = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], dtype=float)
+# The messages' words (a changed message must fail here).
+TOO_WIDE = (
+    re.escape(
+        "light: the fitted frustum would be wider than 170 degrees (the light is too close to "
+        "the blocker, or inside its hull)"
+    )
+    + ".*use a cube map"
+)
+NEAR_ROUNDING = re.escape("light: the nearest caster is within rounding of the light")
+SINGULAR = re.escape("blocker_to_world: the placement is singular") + ".*flattens the blocker"
 PATHS = {
     "compiled": contextlib.nullcontext,
     "python loop": _kernels.disabled,
@@ -55,8 +65,9 @@ def test_the_field_of_view_warns_past_120_and_is_refused_past_170_degrees(path: 
             assert fov <= msg.MAX_FOV_DEGREES
             if caught:
                 assert caught == [msg.WIDE]
+                assert caught[0].startswith("light: the fitted frustum is wider than 120 degrees")
         # The issue's case: 0.001 from the face's centre, about 179.9 degrees.
-        with pytest.raises(ValueError, match=re.escape(msg.TOO_WIDE)):
+        with pytest.raises(ValueError, match=TOO_WIDE):
             sm.fit_shadow([0.0, 0.0, 3.999], BOX, 64)
     assert min(seen) < 120 < max(seen)  # both sides of the soft limit were tried
 
@@ -67,7 +78,7 @@ def test_too_wide_is_nan_under_jit() -> None:
 
     assert bool(jnp.isnan(jax.jit(clip)(jnp.asarray([0.0, 0.0, 3.999]))).all())
     assert bool(jnp.isfinite(jax.jit(clip)(jnp.asarray([0.0, 0.0, 3.0]))).all())
-    with pytest.raises(ValueError, match=re.escape(msg.TOO_WIDE)):
+    with pytest.raises(ValueError, match=TOO_WIDE):
         sm.fit_shadow(jnp.asarray([0.0, 0.0, 3.999]), jnp.asarray(BOX), 64)  # concrete: raises
 
 
@@ -77,7 +88,7 @@ def test_a_caster_within_rounding_of_the_light_is_refused(path: str) -> None:
     # of the coordinates (32 eps 1e6 = 7e-9): the near plane would be noise.
     L = np.array([1e6, 0.0, 0.0])
     offsets = np.array([[0.0, 0.0, 1e-9], [1, 1, 10], [-1, 1, 10], [0, -1, 10]])
-    with PATHS[path](), pytest.raises(ValueError, match=re.escape(msg.NEAR_ROUNDING)):
+    with PATHS[path](), pytest.raises(ValueError, match=NEAR_ROUNDING):
         sm.fit_shadow(L, L + offsets, 64)
     # The same scene about a nearby origin is fine: its coordinates are small.
     s = sm.fit_shadow(np.zeros(3), offsets, 64)
@@ -88,7 +99,7 @@ def test_a_caster_within_rounding_of_the_light_is_refused(path: str) -> None:
 def test_a_singular_placement_is_named_on_blocker_to_world(path: str) -> None:
     with PATHS[path]():
         for B in (np.diag([0.0, 0.0, 0.0, 1.0]), np.diag([1.0, 1.0, 0.0, 1.0])):
-            with pytest.raises(ValueError, match=re.escape(msg.SINGULAR_PLACEMENT)):
+            with pytest.raises(ValueError, match=SINGULAR):
                 sm.fit_shadow([0.0, 0.0, -3.0], BOX, 64, blocker_to_world=B)
         # A uniformly tiny (or huge) placement is invertible: it passes.
         for scale in (1e-6, 1e6):

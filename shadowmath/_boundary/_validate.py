@@ -216,7 +216,8 @@ def require_vertices(name: str, x: Array) -> None:
     """Shape check for a vertex set: ``(*batch, N, 3)`` with ``N >= 1``."""
     require_last(name, x, 3, min_ndim=2, hint="vertices are (*batch, N, 3)")
     if x.shape[-2] == 0:
-        raise ValueError(f"{name}: the vertex set is empty (N = 0); a blocker needs vertices")
+        need = "; a blocker needs vertices" if "blocker" in name or name == "vertices" else ""
+        raise ValueError(f"{name}: the vertex set is empty (N = 0){need}")
 
 
 def require_matrix(name: str, x: Array) -> None:

@@ -175,11 +175,11 @@ def fit_shadow(
             rounding of a point light (``z <= 32 eps`` times the coordinates'
             magnitude), a point-light frustum wider than 170 degrees (the light too
             close to the blocker: use a cube map or a spot cone) (value errors are
-            NaN outputs under JAX transformations); and, whatever the values: ``stable=True`` for a point
-            light without ``up``, ``near``/``far`` for a directional light, a batch
-            of homogeneous lights mixing ``w = 0`` and ``w != 0``, a homogeneous
-            light under a JAX transformation, options given both in a
-            :class:`ShadowMapSpec` and as keywords.
+            NaN outputs under JAX transformations); and, whatever the values:
+            ``stable=True`` for a point light without ``up``, ``near``/``far`` for a
+            directional light, a batch of homogeneous lights mixing ``w = 0`` and
+            ``w != 0``, a homogeneous light under a JAX transformation, options given
+            both in a :class:`ShadowMapSpec` and as keywords.
 
     Warns:
         ShadowFitWarning: NumPy input only (JAX gives no warnings): a point-light
