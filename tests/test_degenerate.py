@@ -44,31 +44,42 @@ def _fov_degrees(s: sm.ShadowSetup) -> float:
     return 2 * math.degrees(math.atan(max(tx, ty)))
 
 
-def _fit_quietly(light: Any, **kwargs: Any) -> tuple[sm.ShadowSetup, list[str]]:
+#: Wider along x than along y, so that (with up = y: light X is world x) the light's X
+#: axis decides the field of view.
+SLAB = BOX * [1.0, 0.4, 1.0]
+UP = np.array([0.0, 1.0, 0.0])
+
+
+def _fit_quietly(light: Any, spec: sm.ShadowMapSpec) -> tuple[sm.ShadowSetup, list[str]]:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        s = sm.fit_shadow(light, BOX, 64, **kwargs)
+        s = sm.fit_shadow(light, SLAB, spec, up=UP)
     return s, [str(w.message) for w in caught if w.category is sm.ShadowFitWarning]
 
 
+@pytest.mark.parametrize("border", [1, 15])  # margins 0.97 and 0.53: the map's edge, not h
 @pytest.mark.parametrize("path", PATHS)
-def test_the_field_of_view_warns_past_120_and_is_refused_past_170_degrees(path: str) -> None:
+def test_the_field_of_view_warns_past_120_and_is_refused_past_170_degrees(
+    path: str, border: int
+) -> None:
     # The light approaches the centre of the box's face (z = 4) along the axis: the
     # frustum widens toward 180 degrees.
     seen = []
+    spec = sm.ShadowMapSpec(64, border_texels=border)
     with PATHS[path]():
-        for z in (0.0, 2.0, 3.0, 3.4, 3.6, 3.8, 3.85, 3.9):
-            s, caught = _fit_quietly([0.0, 0.0, z])
+        for z in (0.0, 2.0, 2.5, 2.8, 3.0, 3.2, 3.4, 3.6, 3.7, 3.8):
+            s, caught = _fit_quietly([0.0, 0.0, z], spec)
             fov = _fov_degrees(s)
             seen.append(fov)
             assert (fov > msg.WIDE_FOV_DEGREES) == bool(caught), (z, fov, caught)
             assert fov <= msg.MAX_FOV_DEGREES
+            assert float(s.frustum.rx_max) > float(s.frustum.ry_max)
             if caught:
                 assert caught == [msg.WIDE]
                 assert caught[0].startswith("light: the fitted frustum is wider than 120 degrees")
         # The case: 0.001 from the face's centre, about 179.9 degrees.
         with pytest.raises(ValueError, match=TOO_WIDE):
-            sm.fit_shadow([0.0, 0.0, 3.999], BOX, 64)
+            sm.fit_shadow([0.0, 0.0, 3.999], SLAB, spec, up=UP)
     assert min(seen) < 120 < max(seen)  # both sides of the soft limit were tried
 
 

@@ -12,6 +12,7 @@ Python loop, array path and JAX.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import re
 from typing import Any
 
@@ -112,6 +113,24 @@ def test_far_holds_every_covered_receiver_point_exactly(
         rtol=1e-9,
         atol=1e-9 * far,
     )
+
+
+@LIGHTS
+@pytest.mark.parametrize("path", PATHS)
+def test_every_edge_and_corner_order_gives_the_same_far(directional: bool, path: str) -> None:
+    # One triangle reaching out of the map's side: its farthest covered point is where an
+    # edge crosses the side plane. Each of its six corner orders must give the same far.
+    verts = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], float)
+    tri = np.array([[-0.2, 0.1, 7.0], [9.0, 0.3, 30.0], [0.1, -0.3, 8.0]])
+    light: Any = sm.DirectionalLight(np.array([0.0, 0.0, -1.0])) if directional else [0.0, 0, 0]
+    fars = []
+    with PATHS[path]():
+        for order in itertools.permutations(range(3)):
+            s = sm.fit_shadow(light, verts, 64, receivers=sm.Triangles(tri[list(order)][None]))
+            fars.append(float(s.frustum.far))
+    depths = _covered_depths(s, tri[None])
+    assert depths.max() < _casters_depths(s, np.array([tri[1]]))[0]  # the far corner is out
+    np.testing.assert_allclose(fars, depths.max() * (1 + SLACK), rtol=1e-9)
 
 
 @LIGHTS
