@@ -119,3 +119,19 @@ def test_jax_value_and_gradient_follow_the_support_points() -> None:
     batch = np.stack([points, points * 2.0])
     vm = jax.vmap(half)(jnp.asarray(batch))
     np.testing.assert_allclose(vm, [value, 2 * value], rtol=1e-12)
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("seed", range(4))
+def test_four_support_points(path: str, seed: int) -> None:
+    # A regular tetrahedron's minimal sphere passes through all four corners (its
+    # circumsphere, radius a sqrt(6) / 4): every level of Welzl's algorithm is needed.
+    rng = np.random.default_rng(seed)
+    a = 2.0 * np.sqrt(2.0)  # corners (+-1, +-1, +-1) with an even number of minus signs
+    tet = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], dtype=float)
+    inside = rng.uniform(-0.3, 0.3, (40, 3))
+    points = np.r_[tet, inside][rng.permutation(44)]
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    with PATHS[path]():
+        s = sm.fit_shadow(SUN, points @ q.T + rng.normal(size=3), W, stable=True)
+    np.testing.assert_allclose(_radius(s), a * np.sqrt(6) / 4, rtol=1e-12)
