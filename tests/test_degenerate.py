@@ -127,3 +127,15 @@ def test_a_border_wider_than_half_the_map_warns() -> None:
         sm.ShadowMapSpec(64, border_texels=15)  # 34 of 64 texels inside: no warning
     with pytest.raises(ValueError, match="map_size: 64x64 texels leave no room inside a border"):
         sm.ShadowMapSpec(64, border_texels=32)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_a_placement_far_from_the_origin_is_not_singular(dtype: Any) -> None:
+    # Found by the fuzz: the translation must not enter the singularity test (a
+    # renderer's model matrix moves a unit blocker far away).
+    far = 1e6 if dtype == np.float64 else 1e3
+    B = np.eye(4)
+    B[:3, 3] = far
+    s = sm.fit_shadow(np.array([far, far, far - 3.0], dtype), BOX.astype(dtype), 64,
+                      blocker_to_world=B.astype(dtype))  # fmt: skip
+    assert np.isfinite(s.blocker_to_clip).all()

@@ -135,3 +135,28 @@ def test_four_support_points(path: str, seed: int) -> None:
     with PATHS[path]():
         s = sm.fit_shadow(SUN, points @ q.T + rng.normal(size=3), W, stable=True)
     np.testing.assert_allclose(_radius(s), a * np.sqrt(6) / 4, rtol=1e-12)
+
+
+#: Found by the fuzz (tests/test_fuzz.py): a repeated vertex, far from the origin.
+DUPLICATE = np.array([
+    [0.5988462126346276, 0.03972210748165899, -0.2924567509650886],
+    [0.5988462126346276, 0.03972210748165899, -0.2924567509650886],
+    [-0.7819084623568421, -0.2571922406188707, 0.00814218051834351],
+    [-0.2756029052993704, 1.2940638143982073, 1.0067243153057943],
+    [-2.7111624789659685, -1.8890132459676727, -0.17477209205516195],
+    [-0.42219041157635356, 0.2136429974986111, 0.21732193102256359],
+])  # fmt: skip
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("offset", [1e3, 1e4, 1e6])
+def test_a_repeated_vertex_far_from_the_origin_changes_nothing(path: str, offset: float) -> None:
+    # A vertex repeated (or within rounding of another) must not become a second
+    # support point: the sphere through two equal points is ill-posed.
+    radius = _brute_force(np.unique(DUPLICATE, axis=0))
+    light = sm.DirectionalLight(np.random.default_rng(0).normal(size=3))
+    rng = np.random.default_rng(1)
+    with PATHS[path]():
+        for v in (DUPLICATE, DUPLICATE[::-1], DUPLICATE[rng.permutation(6)]):
+            s = sm.fit_shadow(light, v + [0.0, offset, 0.0], W, stable=True)
+            np.testing.assert_allclose(_radius(s), radius, rtol=1e-6)

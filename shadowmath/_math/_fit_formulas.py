@@ -102,25 +102,22 @@ def fit_axes(
 
 
 def placement_ok(b: tuple[Any, ...], eps: float) -> Any:
-    """The placement ``b`` (16 row-major entries) is invertible beyond rounding.
+    """The placement ``b`` (16 row-major entries) does not flatten the blocker.
 
-    ``|det B| > 64 eps prod_i |row_i|``: by Hadamard's inequality the ratio lies in
-    ``[0, 1]`` whatever the scale, so a uniformly tiny or huge placement passes and
-    one that flattens the blocker (a zero scale) fails. The determinant by the
-    Laplace expansion in the 2 x 2 minors of rows 0-1 and 2-3.
+    Its linear part ``A`` (the upper-left 3 x 3) is invertible beyond rounding:
+    ``|det A| > 64 eps prod_i |A_i|`` over its rows. By Hadamard's inequality the
+    ratio lies in ``[0, 1]`` whatever the scale, and the translation does not enter,
+    so a tiny, huge or far-moved placement passes and a zero scale fails.
     """
-    s0, s1, s2 = b[0] * b[5] - b[1] * b[4], b[0] * b[6] - b[2] * b[4], b[0] * b[7] - b[3] * b[4]
-    s3, s4, s5 = b[1] * b[6] - b[2] * b[5], b[1] * b[7] - b[3] * b[5], b[2] * b[7] - b[3] * b[6]
-    c0, c1 = b[8] * b[13] - b[9] * b[12], b[8] * b[14] - b[10] * b[12]
-    c2, c3 = b[8] * b[15] - b[11] * b[12], b[9] * b[14] - b[10] * b[13]
-    c4, c5 = b[9] * b[15] - b[11] * b[13], b[10] * b[15] - b[11] * b[14]
-    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
-    n = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2] + b[3] * b[3]) * (
-        b[4] * b[4] + b[5] * b[5] + b[6] * b[6] + b[7] * b[7]
+    det = (
+        b[0] * (b[5] * b[10] - b[6] * b[9])
+        - b[1] * (b[4] * b[10] - b[6] * b[8])
+        + b[2] * (b[4] * b[9] - b[5] * b[8])
     )
-    n = n * (b[8] * b[8] + b[9] * b[9] + b[10] * b[10] + b[11] * b[11])
-    n = n * (b[12] * b[12] + b[13] * b[13] + b[14] * b[14] + b[15] * b[15])
-    return fabs(det) > 64.0 * eps * sqrt(n)
+    n0 = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
+    n1 = sqrt(b[4] * b[4] + b[5] * b[5] + b[6] * b[6])
+    n2 = sqrt(b[8] * b[8] + b[9] * b[9] + b[10] * b[10])
+    return fabs(det) > 64.0 * eps * (n0 * n1 * n2)
 
 
 def near_clear(z_min: Any, coords: Any, eps: float) -> Any:

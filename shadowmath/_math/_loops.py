@@ -192,8 +192,15 @@ def _ball(V: Any, b: Any, has_b: bool, sup: Any, k: int) -> Any:
 
 
 def _outside(p: Any, ball: Any) -> bool:
+    """``p`` outside the ball by more than the rounding of its coordinates (float64).
+
+    (A point within rounding of the sphere, such as a repeated vertex far from the
+    origin, must not become a support point: two equal support points make the
+    sphere through them ill-posed.)
+    """
     dx, dy, dz = p[0] - ball[0], p[1] - ball[1], p[2] - ball[2]
-    return bool(dx * dx + dy * dy + dz * dz > ball[3] * (1.0 + 1e-14))
+    tau = 64.0 * 2.220446049250313e-16 * (abs(p[0]) + abs(p[1]) + abs(p[2]))
+    return bool(math.sqrt(dx * dx + dy * dy + dz * dz) > math.sqrt(ball[3]) * (1.0 + 1e-14) + tau)
 
 
 def _enclosing_sphere(V: Any, b: Any, has_b: bool) -> Any:
