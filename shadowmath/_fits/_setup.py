@@ -171,7 +171,7 @@ def fit_shadow(
             directional light, receivers of the wrong shape or non-finite, an
             unknown ``api`` (the message lists the valid ones), an ``up`` zero or
             parallel to the light's direction, a singular ``blocker_to_world``
-            (``|det| <= 64 eps`` times its rows' norms), the nearest caster within
+            (its linear part's ``|det| <= 64 eps`` times its rows' norms), the nearest caster within
             rounding of a point light (``z <= 32 eps`` times the coordinates'
             magnitude), a point-light frustum wider than 170 degrees (the light too
             close to the blocker: use a cube map or a spot cone) (value errors are
