@@ -24,10 +24,11 @@ settings.register_profile(
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
-# `make fuzz`: the long run (tests/test_fuzz.py prints how many cases were tried).
+# `make fuzz`: the long run (tests/test_fuzz.py prints how many cases were tried);
+# FUZZ_EXAMPLES sets the examples per test (2000 by default).
 settings.register_profile(
     "fuzz",
-    max_examples=2000,
+    max_examples=int(os.environ.get("FUZZ_EXAMPLES", "2000")),
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 )

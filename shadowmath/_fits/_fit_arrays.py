@@ -167,7 +167,8 @@ def _point(
         aim = tuple(s / o[0].shape[-1] for s in sums)
     flags["overflow"] = _finite3(d, sums)
     reach = d.max_abs(*o)
-    coords = xp.maximum(d.max_abs(*world), d.max_abs(a.light))
+    # The position only: a spot light packs its direction and tan(angle) after it.
+    coords = xp.maximum(d.max_abs(*world), d.max_abs(a.light[..., :3]))
     axes, ok_nonzero, ok_direction, flags["up_parallel"] = d.Fe.fit_axes(
         aim, _components(d, a.U), key.has_up, coords, eps
     )

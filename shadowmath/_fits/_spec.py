@@ -113,20 +113,29 @@ class ShadowMapSpec:
         if self.border_texels is not None:
             return self.border_texels
         if self.pcf_radius is not None:
-            return _border_texels(*_check_kernel(self.pcf_radius, self.pcf_filter))
+            return _border_texels(*_check_kernel(self.pcf_radius, self.pcf_filter, _PCF_NAMES))
         return 1
+
+
+_PCF_NAMES = ("pcf_radius", "pcf_filter")
 
 
 def _check(spec: ShadowMapSpec) -> None:
     _check_api(spec.api, spec.reversed_z)
     if not isinstance(spec.stable, bool | np.bool_):
         raise ValueError(f"stable: expected True or False, got {spec.stable!r}")
-    _check_kernel(0 if spec.pcf_radius is None else spec.pcf_radius, spec.pcf_filter)
+    _check_kernel(0 if spec.pcf_radius is None else spec.pcf_radius, spec.pcf_filter, _PCF_NAMES)
     given = [n for n in ("border_texels", "pcf_radius", "margin") if getattr(spec, n) is not None]
     if len(given) > 1:
         raise ValueError(
             f"{' and '.join(given)}: give one of border_texels, pcf_radius and margin (each "
             "sets the map's border)"
+        )
+    # Before the cached margins: a spec with border_texels=True equals (and hashes as) one
+    # with border_texels=1, so the cache would answer for it.
+    if isinstance(spec.border_texels, bool | np.bool_):
+        raise ValueError(
+            f"border_texels: expected an int, not a boolean, got {spec.border_texels!r}"
         )
     mx, my = spec.margins
     if min(mx, my) < 0.5:
@@ -152,7 +161,7 @@ def _spec_margins(spec: ShadowMapSpec) -> tuple[float, float]:
     return _margins(spec.size, spec.border, spec.margin)
 
 
-@functools.lru_cache(maxsize=256)
+@functools.lru_cache(maxsize=256, typed=True)  # typed: True and 1 are different options
 def spec_from_options(size: Any, **options: Any) -> ShadowMapSpec:
     """A spec from ``fit_shadow``'s keyword options (cached: the same few recur every frame)."""
     return ShadowMapSpec(size, **options)

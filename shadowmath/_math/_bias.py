@@ -57,12 +57,15 @@ def _map_size(map_size: object) -> tuple[int, int]:
     return ints[0], ints[1]
 
 
-def _check_kernel(radius: object, filter: object) -> tuple[int, PcfFilter]:
+def _check_kernel(
+    radius: object, filter: object, names: tuple[str, str] = ("radius", "filter")
+) -> tuple[int, PcfFilter]:
+    """The kernel checked; ``names`` are the caller's argument names for the messages."""
     if not isinstance(radius, int | np.integer) or isinstance(radius, bool) or radius < 0:
-        raise ValueError(f"radius: expected an integer >= 0, got {radius!r}")
+        raise ValueError(f"{names[0]}: expected an integer >= 0, got {radius!r}")
     if filter == "box" or filter == "bilinear":
         return int(radius), filter
-    raise ValueError(f"filter: expected 'box' or 'bilinear', got {filter!r}")
+    raise ValueError(f"{names[1]}: expected 'box' or 'bilinear', got {filter!r}")
 
 
 def _reach(radius: int, filter: PcfFilter) -> float:

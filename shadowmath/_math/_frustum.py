@@ -131,6 +131,8 @@ def border_margin(
         (0.9921875, 0.984375)
     """
     w, h = _texels("map_size", map_size)
+    if isinstance(border_texels, bool | np.bool_):
+        raise ValueError(f"border_texels: expected an int, not a boolean, got {border_texels!r}")
     try:
         b = operator.index(border_texels)
     except TypeError:

@@ -155,10 +155,13 @@ def _receiver_far(R: Any, o: Any, a: Any, sides: Any, z_hi: Any, o9: Any) -> Any
     for k in range(len(R)):
         r = R[k]
         if triangles:
+            # The finite flag sums the given numbers, not their light-space images:
+            # a non-finite up= makes those NaN, and must be reported as up's.
+            for j in range(9):
+                raw += float(r[j])
             p0 = to_light(float(r[0]) - o[0], float(r[1]) - o[1], float(r[2]) - o[2], a)
             p1 = to_light(float(r[3]) - o[0], float(r[4]) - o[1], float(r[5]) - o[2], a)
             p2 = to_light(float(r[6]) - o[0], float(r[7]) - o[1], float(r[8]) - o[2], a)
-            raw += p0[0] + p0[1] + p0[2] + p1[0] + p1[1] + p1[2] + p2[0] + p2[1] + p2[2]
             p9 = (p0[0], p0[1], p0[2], p1[0], p1[1], p1[2], p2[0], p2[1], p2[2])
             z_hi = max(z_hi, triangle_far(p9, sides, directional, eps))
         else:

@@ -14,6 +14,8 @@ from __future__ import annotations
 import operator
 from typing import Any
 
+import numpy as np
+
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -79,6 +81,8 @@ def silhouette_coverage(mask: Any, *, border_texels: int = 1) -> Array:
     ctx, (m,) = convert(mask=mask)
     if m.ndim < 2:
         raise ValueError(f"mask: expected shape (*batch, height, width), got {tuple(m.shape)}")
+    if isinstance(border_texels, bool | np.bool_):
+        raise ValueError(f"border_texels: expected an int, not a boolean, got {border_texels!r}")
     try:
         b = operator.index(border_texels)
     except TypeError:
