@@ -41,6 +41,9 @@ CONVENTIONS
 
 from ._boundary._checks import check_finite as check_finite
 from ._boundary._messages import ShadowFitWarning as ShadowFitWarning
+from ._fits._cascade_splits import cascade_splits as cascade_splits
+from ._fits._cascades import Cascades as Cascades
+from ._fits._cascades import fit_cascades as fit_cascades
 from ._fits._fitting import FrustumFit as FrustumFit
 from ._fits._fitting import optimize_frustum as optimize_frustum
 from ._fits._setup import fit_shadow as fit_shadow
@@ -99,6 +102,7 @@ __all__ = [
     "GRAPHICS_APIS",
     "NEAR_FAR_SLACK",
     "ApiConvention",
+    "Cascades",
     "CubeFaceCoords",
     "CubeFaceDepth",
     "DirectionalLight",
@@ -118,6 +122,7 @@ __all__ = [
     "area_light_samples_jax",
     "blocker_projection",
     "border_margin",
+    "cascade_splits",
     "check_finite",
     "column_major_bytes",
     "cross_section_area",
@@ -126,6 +131,7 @@ __all__ = [
     "cube_face_direction",
     "cube_face_projection",
     "cube_face_views",
+    "fit_cascades",
     "fit_shadow",
     "helper_axis",
     "light_frame",

@@ -19,12 +19,13 @@ from typing import Any
 
 import numpy as np
 
-from . import _fit_formulas, _formulas, _loops
+from . import _cascade_formulas, _fit_formulas, _formulas, _loops
 
 _MODULES = (
     (_formulas, _formulas.FUNCTIONS),
     (_fit_formulas, _fit_formulas.FUNCTIONS),
     (_loops, _loops.FUNCTIONS),
+    (_cascade_formulas, _cascade_formulas.FUNCTIONS),
 )
 
 

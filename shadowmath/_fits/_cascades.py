@@ -1,0 +1,571 @@
+r"""Cascaded shadow maps fitted to a camera: :func:`fit_cascades`.
+
+A boundary and an array driver. The boundary converts and checks the arguments
+once, derives the camera's frustum edges (view space) and the splits; the driver
+runs the formulas of :mod:`shadowmath._math._cascade_formulas` on whole arrays,
+vectorized over the batch, the cascades and the 24 clipped edges (NumPy or JAX:
+values and gradients follow the same expressions).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal, NamedTuple
+
+import numpy as np
+
+from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._validate import (
+    Array,
+    Checks,
+    Context,
+    all_finite,
+    batch_shape,
+    convert,
+    non_finite,
+    require_last,
+    require_matrix,
+)
+from shadowmath._math._bias import PcfFilter
+from shadowmath._math._cascade_formulas import EDGES
+from shadowmath._math._conventions import GraphicsApi, _check_api, _clip_from_gl
+from shadowmath._math._frame import stack_matrix
+from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
+from shadowmath._math._specialize import formulas
+from shadowmath.lights import DirectionalLight
+
+from ._cascade_splits import SplitScheme, check_count, check_range, check_scheme, split_depths
+from ._spec import ShadowMapSpec, api_rows, spec_from_options
+
+__all__ = ["Cascades", "fit_cascades"]
+
+CascadeLayout = Literal["layers", "atlas"]
+
+
+class Cascades(NamedTuple):
+    """Everything a renderer needs to draw and sample a directional light's cascades.
+
+    ``n`` is the number of cascades; every matrix is in the ``api``'s conventions.
+
+    Attributes:
+        world_to_light: ``(*batch, n, 4, 4)`` world to each cascade's light
+            coordinates (one rotation for all; origins differ along ``Z`` only).
+        frustum: the orthographic :class:`Frustum` of each cascade, fields ``(*batch, n)``.
+        world_to_clip: ``(*batch, n, 4, 4)`` world to the cascade's clip coordinates:
+            draw the casters into cascade ``i`` with ``world_to_clip[i] @ model``.
+        world_to_texture: ``(*batch, n, 4, 4)`` world to ``(s, t, r, 1)``: texture
+            coordinates in the cascade's layer, or in the atlas (``layout="atlas"``),
+            and the stored depth ``r`` to compare with.
+        splits: ``(*batch, n + 1)`` the view depths that bound the cascades: cascade
+            ``i`` serves view depths ``[splits[i], splits[i + 1])``.
+        band_end: ``(*batch, n)`` cascade ``i`` is fitted out to ``band_end[i] >=
+            splits[i + 1]``; in ``[splits[i + 1], band_end[i]]`` the shader blends
+            cascades ``i`` and ``i + 1`` (weight of ``i + 1``: the fraction of the band
+            passed). The last cascade has no band (``band_end = splits[n]``).
+        texel_size: ``(*batch, n, 2)`` the world size of one texel along light ``X``
+            and ``Y`` (for normal-offset and slope bias).
+        viewports: ``(n, 4)`` integers ``(x, y, width, height)`` of each cascade's
+            tile in the atlas, in the API's own viewport convention (``(0, 0, W, H)``
+            for every cascade with ``layout="layers"``).
+    """
+
+    world_to_light: Array
+    frustum: Frustum
+    world_to_clip: Array
+    world_to_texture: Array
+    splits: Array
+    band_end: Array
+    texel_size: Array
+    viewports: Array
+
+
+def fit_cascades(
+    light: Any,
+    view: Any,
+    projection: Any,
+    scene_bounds: Any,
+    map_size: int | tuple[int, int] | ShadowMapSpec,
+    *,
+    count: int = 4,
+    splits: Any = None,
+    scheme: SplitScheme = "practical",
+    lam: Any = 0.5,
+    max_distance: Any = None,
+    overlap: Any = 0.1,
+    up: Any = None,
+    stable: bool = False,
+    border_texels: int | None = None,
+    pcf_radius: int | None = None,
+    pcf_filter: PcfFilter = "box",
+    api: GraphicsApi = "opengl",
+    reversed_z: bool = False,
+    camera_api: GraphicsApi | None = None,
+    camera_reversed_z: bool = False,
+    layout: CascadeLayout = "layers",
+) -> Cascades:
+    r"""Fit a directional light's cascaded shadow maps to what a camera sees.
+
+    The camera's view depth range ``[near, far]`` (or ``[near, max_distance]``) is
+    cut at :func:`cascade_splits`; cascade ``i`` covers the frustum slice between
+    ``splits[i]`` and ``band_end[i]`` (its split plus ``overlap`` of its length,
+    for blending). Each cascade's orthographic map is fitted in one light frame
+    (``Z`` along the light's travel, the helper axis or ``up`` for ``Y``):
+
+    * **lateral box**: the light-space bounds of the slice intersected exactly
+      with ``scene_bounds`` (the convex polyhedron's vertices are the clipped
+      ends of both solids' edges), so no texel covers empty space beside the
+      scene; with ``stable=True`` instead a square of fixed size, the slice's
+      bounding sphere (which depends on the projection and the splits only) plus
+      half a texel, its centre snapped to whole texels of a grid anchored at the
+      world origin: as the camera moves and turns, every cascade keeps its size
+      and its texel grid moves by whole texels;
+    * **depth**: from the scene box's corner nearest the light (every caster that
+      can shadow the slice lies behind it, seen or not) to the slice's deepest
+      point in the scene, widened by ``NEAR_FAR_SLACK``;
+    * **border**: each map leaves ``border_texels`` (or the PCF kernel's border)
+      on every side, so a PCF kernel never reads past its cascade (nor, in an
+      atlas, into a neighbour's tile).
+
+    Arguments:
+        light: :class:`DirectionalLight`, or ``(*batch, 3)`` a direction toward the
+            light, or ``(*batch, 4)`` with ``w = 0``.
+        view: ``(*batch, 4, 4)`` the camera's world-to-view matrix (rigid, affine).
+        projection: ``(*batch, 4, 4)`` its projection, in ``camera_api``'s clip
+            conventions (perspective or orthographic; an infinite far plane needs
+            ``max_distance``).
+        scene_bounds: ``(*batch, 2, 3)`` the scene's box, ``[min_corner, max_corner]``:
+            every caster and receiver inside it.
+        map_size: each cascade's map, ``size``, ``(width, height)`` or a
+            :class:`ShadowMapSpec` (its border; its ``api`` unless given).
+        count: the number of cascades (ignored when ``splits`` is given).
+        splits: ``(*batch, n + 1)`` custom increasing view depths within the
+            camera's range, instead of a scheme.
+        scheme, lam: :func:`cascade_splits`'s scheme and blend.
+        max_distance: ``(*batch,)`` the shadow distance: the last split (at most
+            the camera's far plane).
+        overlap: the blend band, a fraction of each cascade's length in ``[0, 1)``.
+        up: ``(*batch, 3)`` optional up hint of the light frame.
+        stable: fixed sizes and texel-snapped centres (see above).
+        border_texels, pcf_radius, pcf_filter: the map's border, as in
+            :class:`ShadowMapSpec`.
+        api, reversed_z: the shadow maps' graphics API conventions.
+        camera_api, camera_reversed_z: the conventions of ``projection``
+            (default: ``api`` and not reversed).
+        layout: ``"layers"`` (one texture layer per cascade) or ``"atlas"`` (tiles
+            in a grid of ``ceil(sqrt(n))`` columns, each ``map_size``).
+
+    Returns:
+        :class:`Cascades`.
+
+    Raises:
+        ValueError: wrong shapes, non-finite values, a non-invertible view or
+            projection, a projective view, a zero light direction, ``up`` parallel
+            to the light, an inverted ``scene_bounds``, splits outside the camera's
+            range or not increasing, bad scheme options (NaN under JAX transformations).
+
+    Example:
+        >>> import numpy as np, shadowmath as sm
+        >>> view = np.eye(4); view[2, 3] = -1.0                 # camera at z = 1, looking down -z
+        >>> f, n, far = 1.0, 0.1, 50.0                          # 90 degree OpenGL perspective
+        >>> proj = np.array([[f, 0, 0, 0], [0, f, 0, 0],
+        ...                  [0, 0, (far + n) / (n - far), 2 * far * n / (n - far)], [0, 0, -1, 0]])
+        >>> box = np.array([[-20.0, -20.0, -60.0], [20.0, 20.0, 2.0]])
+        >>> c = sm.fit_cascades(np.array([0.3, 0.2, 1.0]), view, proj, box, 1024)
+        >>> c.world_to_clip.shape, c.splits.shape
+        ((4, 4, 4), (5,))
+    """
+    spec = map_size if isinstance(map_size, ShadowMapSpec) else spec_from_options(
+        map_size, border_texels=border_texels, pcf_radius=pcf_radius, pcf_filter=pcf_filter,
+        margin=None, api=api, reversed_z=reversed_z, stable=bool(stable) if isinstance(
+            stable, bool | np.bool_) else stable,
+    )  # fmt: skip
+    cam_api = spec.api if camera_api is None else camera_api
+    _check_api(cam_api, camera_reversed_z)
+    if layout not in ("layers", "atlas"):
+        raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
+    direction = light.direction if isinstance(light, DirectionalLight) else light
+    fixed = check_scheme(scheme)
+    n_given = None if splits is not None else check_count(count)
+    ctx, (L, V, P, box, S, U, dmax, lm, ov) = convert(
+        light=direction, view=view, projection=projection, scene_bounds=scene_bounds,
+        splits=splits, up=up, max_distance=max_distance,
+        lam=lam if fixed is None else fixed, overlap=overlap,
+    )  # fmt: skip
+    checks = Checks(ctx)
+    L = _light_vector(checks, L)
+    require_matrix("view", V)
+    require_matrix("projection", P)
+    require_last("scene_bounds", box, 3, min_ndim=2, hint="[min_corner, max_corner]")
+    if box.shape[-2] != 2:
+        raise ValueError(
+            f"scene_bounds: expected shape (*batch, 2, 3) ([min_corner, max_corner]), "
+            f"got {tuple(box.shape)}"
+        )
+    if U is not None:
+        require_last("up", U, 3)
+    if S is not None:
+        require_last("splits", S, S.shape[-1] if S.ndim else 2)
+        if S.shape[-1] < 2:
+            raise ValueError(
+                f"splits: expected (*batch, n + 1) depths, n >= 1, got {tuple(S.shape)}"
+            )
+    shapes = [L.shape[:-1], V.shape[:-2], P.shape[:-2], box.shape[:-2]]
+    names = ["light", "view", "projection", "scene_bounds"]
+    for name, v, drop in (("up", U, 1), ("splits", S, 1), ("max_distance", dmax, 0)):
+        if v is not None:
+            shapes.append(v.shape[: v.ndim - drop])
+            names.append(name)
+    shape = batch_shape(*shapes, names=names)
+    cam = _camera(ctx, checks, V, P, _clip_from_gl(cam_api, camera_reversed_z))
+    depths = _splits(ctx, checks, cam, S, dmax, lm, ov, fixed, n_given)
+    _value_checks(checks, L, box, U)
+    return _fit(ctx, checks, spec, layout, shape, (L, V, box, U), cam, depths)
+
+
+def _light_vector(checks: Checks, L: Array) -> Array:
+    """A direction toward the light: ``(*batch, 3)``, or the ``xyz`` of a ``w = 0`` 4-vector."""
+    if L.ndim == 0 or L.shape[-1] not in (3, 4):
+        raise ValueError(
+            f"light: expected a direction (*batch, 3) or (x, y, z, 0), got {tuple(L.shape)}"
+        )
+    if L.shape[-1] == 4:
+        checks.require(
+            L[..., 3] == 0, "light: cascades need a directional light (w = 0 in (x, y, z, w))"
+        )
+        L = L[..., :3]
+    return L
+
+
+def _value_checks(checks: Checks, L: Array, box: Array, U: Array | None) -> None:
+    xp = checks.ctx.xp
+    checks.require(all_finite(xp, L, 1), non_finite("light"))
+    checks.require(all_finite(xp, box, 2), non_finite("scene_bounds"))
+    checks.require(
+        xp.all(box[..., 1, :] >= box[..., 0, :], axis=-1),
+        "scene_bounds: the max corner must be >= the min corner on every axis",
+    )
+    checks.require(
+        xp.max(xp.abs(L), axis=-1) > 0,
+        "light: zero direction (x = y = z = 0): a directional light points toward the light",
+    )
+    if U is not None:
+        checks.require(all_finite(xp, U, 1), non_finite("up"))
+
+
+class Camera(NamedTuple):
+    """A camera's frustum edges in view space and its depth conventions (per batch entry)."""
+
+    near_corners: Array  # (*b, 4, 3): the near plane's corners, i + 2 j
+    far_corners: Array  # (*b, 4, 4): the far plane's, homogeneous (w >= 0)
+    sign: Array  # (*b,): view depth = sign * z_view
+    near: Array  # (*b,) view depth of the near plane
+    far: Array  # (*b,) view depth of the far plane (inf for an infinite far plane)
+    view_to_world: Array  # (*b, 4, 4)
+    clip_rows: Array  # (*b, 4, 4): projection @ view (its rows x, y and w are used)
+
+
+def _camera(ctx: Context, checks: Checks, V: Array, P: Array, C: Any) -> Camera:
+    """The camera's frustum from ``view`` and ``projection`` (``C``: OpenGL clip to theirs)."""
+    xp = ctx.xp
+    checks.require(all_finite(xp, V, 2), non_finite("view"))
+    checks.require(all_finite(xp, P, 2), non_finite("projection"))
+    last = xp.asarray([0.0, 0.0, 0.0, 1.0], dtype=ctx.dtype)
+    checks.require(
+        xp.all(V[..., 3, :] == last, axis=-1),
+        "view: expected an affine world-to-view matrix (last row 0, 0, 0, 1)",
+    )
+    eps = ctx.eps
+    dv = _det3(V)
+    scale = xp.prod(xp.sqrt(xp.sum(V[..., :3, :3] ** 2, axis=-1)), axis=-1)
+    checks.require(xp.abs(dv) > 64 * eps * scale, "view: singular (its 3x3 part has no inverse)")
+    dp = xp.linalg.det(P)
+    pscale = xp.prod(xp.sqrt(xp.sum(P**2, axis=-1)), axis=-1)
+    checks.require(xp.abs(dp) > 64 * eps * pscale, "projection: singular (no inverse)")
+    safe = ~((xp.abs(dp) > 64 * eps * pscale) & (xp.abs(dv) > 64 * eps * scale))
+    eye = xp.eye(4, dtype=ctx.dtype)
+    Vs = xp.where(safe[..., None, None], eye, V)
+    Ps = xp.where(safe[..., None, None], eye, P)
+    inv_v, inv_p = xp.linalg.inv(Vs), xp.linalg.inv(Ps)
+    # The eight NDC corners of OpenGL's cube, in the camera API's clip space.
+    corners = (
+        np.array([[x, y, z, 1.0] for z in (-1.0, 1.0) for y in (-1.0, 1.0) for x in (-1.0, 1.0)])
+        @ np.asarray(C, dtype=float).T
+    )
+    hom = xp.matmul(xp.asarray(corners, dtype=ctx.dtype), xp.swapaxes(inv_p, -1, -2))
+    near_h, far_h = hom[..., :4, :], hom[..., 4:, :]
+    near = near_h[..., :3] / near_h[..., 3:]
+    far = far_h * xp.where(far_h[..., 3:] < 0, -1.0, 1.0)
+    far = far / xp.max(xp.abs(far), axis=-1, keepdims=True)
+    nz = xp.mean(near[..., 2], axis=-1)
+    fw = xp.mean(far[..., 3], axis=-1)
+    fz = xp.mean(far[..., 2], axis=-1)
+    finite_far = fw > 32 * eps
+    safe_fw = xp.where(finite_far, fw, xp.ones_like(fw))
+    sign = xp.where(finite_far, xp.sign(fz / safe_fw - nz), xp.sign(nz))
+    sign = xp.where(sign == 0, xp.ones_like(sign), sign)
+    far_depth = xp.where(finite_far, sign * fz / safe_fw, xp.asarray(np.inf, dtype=ctx.dtype))
+    checks.require(
+        finite_far | (sign * nz > 0),
+        "projection: an infinite far plane needs a perspective camera (near > 0)",
+    )
+    return Camera(near, far, sign, sign * nz, far_depth, inv_v, xp.matmul(P, V))
+
+
+def _det3(M: Array) -> Array:
+    a = M[..., :3, :3]
+    return (
+        a[..., 0, 0] * (a[..., 1, 1] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 1])
+        - a[..., 0, 1] * (a[..., 1, 0] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 0])
+        + a[..., 0, 2] * (a[..., 1, 0] * a[..., 2, 1] - a[..., 1, 1] * a[..., 2, 0])
+    )
+
+
+class Depths(NamedTuple):
+    splits: Array  # (*b, n + 1)
+    start: Array  # (*b, n) each cascade's first view depth
+    end: Array  # (*b, n) its last (band_end)
+
+
+def _splits(
+    ctx: Context,
+    checks: Checks,
+    cam: Camera,
+    S: Array | None,
+    dmax: Array | None,
+    lm: Array,
+    ov: Array,
+    fixed: float | None,
+    count: int | None,
+) -> Depths:
+    xp = ctx.xp
+    checks.require(all_finite(xp, ov, 0), non_finite("overlap"))
+    checks.require((ov >= 0) & (ov < 1), "overlap: the blend band must be a fraction in [0, 1)")
+    if S is not None:
+        checks.require(all_finite(xp, S, 1), non_finite("splits"))
+        checks.require(
+            xp.all(S[..., 1:] > S[..., :-1], axis=-1), "splits: the depths must increase"
+        )
+        checks.require(
+            (S[..., 0] >= cam.near * (1 - 8 * ctx.eps)) & (S[..., -1] <= cam.far),
+            "splits: the depths must lie within the camera's [near, far] view depths",
+        )
+        s = S
+    else:
+        far = cam.far
+        if dmax is not None:
+            checks.require(all_finite(xp, dmax, 0), non_finite("max_distance"))
+            checks.require(
+                (dmax > cam.near) & (dmax <= cam.far),
+                "max_distance: the shadow distance must lie beyond the camera's near plane "
+                "and no farther than its far plane",
+            )
+            far = xp.where(dmax > cam.near, xp.minimum(dmax, cam.far), cam.near + 1)
+        else:
+            checks.require(
+                xp.isfinite(cam.far),
+                "max_distance: the projection's far plane is at infinity; give the "
+                "shadow distance as max_distance",
+            )
+        check_range(checks, cam.near, far, lm, fixed)
+        assert count is not None
+        safe_far = xp.where(far > cam.near, far, cam.near + 1)
+        safe_far = xp.where(xp.isfinite(safe_far), safe_far, cam.near + 1)
+        s = split_depths(xp, cam.near, safe_far, lm, count)
+    a, b = s[..., :-1], s[..., 1:]
+    ov = xp.asarray(ov)[..., None]
+    end = xp.minimum(b + ov * (b - a), s[..., -1:])
+    return Depths(s, a, end)
+
+
+_E0 = np.array([e[0] for e in EDGES])
+_E1 = np.array([e[1] for e in EDGES])
+
+
+def _fit(
+    ctx: Context,
+    checks: Checks,
+    spec: ShadowMapSpec,
+    layout: str,
+    shape: tuple[int, ...],
+    arrays: tuple[Array, Array, Array, Array | None],
+    cam: Camera,
+    depths: Depths,
+) -> Cascades:
+    """Every cascade of every batch entry on whole arrays (trusted inputs)."""
+    xp, F = ctx.xp, formulas(ctx.xp)
+    L, V, box, U = arrays
+    coords = xp.max(xp.abs(box), axis=(-2, -1))
+    up = (0.0, 0.0, 0.0) if U is None else (U[..., 0], U[..., 1], U[..., 2])
+    a, ok_light, _, ok_up = F.fit_axes((-L[..., 0], -L[..., 1], -L[..., 2]), up, U is not None,
+                                       coords, ctx.eps)  # fmt: skip
+    checks.require(ok_light, "light: zero direction (x = y = z = 0): a directional light "
+                   "points toward the light")  # fmt: skip
+    checks.require(ok_up, msg.UP_PARALLEL)
+    a_n = tuple(v[..., None] for v in a)  # per cascade
+    view, world = _slice_corners(xp, F, cam, depths)
+    bounds, zb = _clipped_bounds(
+        xp, F, cam, V, box, depths, world, tuple(v[..., None] for v in a_n)
+    )
+    mx, my = spec.margins
+    if spec.stable:
+        hx, hy, cx, cy, z_lo, z_hi = _stable_box(xp, F, cam, view, a_n, (mx, my), spec, zb, ctx)
+        pad = (z_hi - z_lo) + xp.maximum(hx, hy)
+        near, far = pad, pad + (z_hi - z_lo)
+    else:
+        hx, hy, cx, cy, near, far = F.cascade_box(bounds)
+        z_lo = bounds[4]
+    shift = z_lo - near  # the origin, on Z through the world origin: x, y stay anchored
+    origin = (shift * a_n[6], shift * a_n[7], shift * a_n[8])
+    near, far = near * (1 - NEAR_FAR_SLACK), far * (1 + NEAR_FAR_SLACK)
+    w, clip, tex = F.fit_rows(origin, a_n, F.safe_box(hx, hy, cx, cy, near, far), (mx, my),
+                              True, api_rows(spec.api, spec.reversed_z))  # fmt: skip
+    n = depths.start.shape[-1]
+    ports, tile = _tiles(n, spec.size, layout)
+    tex = _in_tile(xp, tex, tile)
+    full = (*shape, n)
+
+    def out(entries: tuple[Array, ...]) -> Array:
+        m = stack_matrix(xp, tuple(xp.broadcast_to(e, full) for e in entries))
+        return checks.poison(m, 3)
+
+    size = xp.stack([2 * hx / (mx * spec.size[0]), 2 * hy / (my * spec.size[1])], axis=-1)
+    mxs, mys = (xp.full(full, m, dtype=ctx.dtype) for m in (mx, my))
+    fields = [checks.poison(xp.broadcast_to(v, full), 1)
+              for v in (hx, hy, near, far, mxs, mys, cx, cy)]  # fmt: skip
+    rx, ry, nr, fa, m_x, m_y, ox, oy = fields
+    fr = Frustum(rx, ry, nr, fa, m_x, m_y, ox, oy, orthographic=True)
+    return Cascades(
+        world_to_light=out(w),
+        frustum=fr,
+        world_to_clip=out(clip),
+        world_to_texture=out(tex),
+        splits=checks.poison(xp.broadcast_to(depths.splits, (*shape, n + 1)), 1),
+        band_end=checks.poison(xp.broadcast_to(depths.end, full), 1),
+        texel_size=checks.poison(xp.broadcast_to(size, (*full, 2)), 2),
+        viewports=ports,
+    )
+
+
+def _slice_corners(xp: Any, F: Any, cam: Camera, depths: Depths) -> tuple[Array, Array]:
+    """The slices' corners ``i + 2 j + 4 l``: view and world, each ``(3, *b, n, 8)``."""
+    nc = cam.near_corners[..., None, :, :]  # (*b, 1, 4, 3)
+    fc = cam.far_corners[..., None, :, :]  # (*b, 1, 4, 4)
+    s = cam.sign[..., None, None]
+    n = tuple(nc[..., c] for c in range(3))
+    f = tuple(fc[..., c] for c in range(4))
+    near = F.edge_point(n, f, s, depths.start[..., None])
+    far = F.edge_point(n, f, s, depths.end[..., None])
+    view = xp.stack([xp.concat([p, q], axis=-1) for p, q in zip(near, far, strict=True)])
+    m = tuple(cam.view_to_world[..., i // 4, i % 4][..., None, None] for i in range(12))
+    world = xp.stack(F.affine(m, view[0], view[1], view[2]))
+    return view, world
+
+
+def _box_corners(xp: Any, box: Array) -> tuple[Array, Array, Array]:
+    """The scene box's corners ``i + 2 j + 4 l``, three ``(*b, 1, 8)`` arrays."""
+    lo, hi = box[..., 0, :], box[..., 1, :]
+    bits = np.array([[(k >> c) & 1 for k in range(8)] for c in range(3)], dtype=bool)
+    return tuple(
+        xp.where(xp.asarray(bits[c]), hi[..., c, None], lo[..., c, None])[..., None, :]
+        for c in range(3)
+    )
+
+
+def _clipped_bounds(
+    xp: Any, F: Any, cam: Camera, V: Array, box: Array, depths: Depths, world: Array, a: Any
+) -> tuple[tuple[Array, ...], tuple[Array, Array]]:
+    """Light-space bounds of slice intersected with box; the box's own ``z`` range."""
+    bx, by, bz = _box_corners(xp, box)
+    lo = tuple(box[..., 0, c][..., None, None] for c in range(3))
+    hi = tuple(box[..., 1, c][..., None, None] for c in range(3))
+    # The slice's corners in the box's half-spaces, the box's corners in the slice's.
+    g_slice = F.box_values(world[0], world[1], world[2], lo, hi)
+    pv = tuple(cam.clip_rows[..., i // 4, i % 4][..., None, None] for i in range(16))
+    sides = F.camera_values(pv, bx, by, bz)
+    vz = tuple(V[..., 2, i][..., None, None] for i in range(4))
+    depth = cam.sign[..., None, None] * (vz[0] * bx + vz[1] * by + vz[2] * bz + vz[3])
+    g_box = F.slice_values(sides, depth, depths.start[..., None], depths.end[..., None])
+    g0 = [xp.concat([gs[..., _E0], xp.broadcast_to(gb, gs.shape)[..., _E0]], axis=-1)
+          for gs, gb in zip(g_slice, g_box, strict=True)]  # fmt: skip
+    g1 = [xp.concat([gs[..., _E1], xp.broadcast_to(gb, gs.shape)[..., _E1]], axis=-1)
+          for gs, gb in zip(g_slice, g_box, strict=True)]  # fmt: skip
+    t0, t1, ok = F.clip_segment(tuple(g0), tuple(g1))
+    sl = F.to_light(world[0], world[1], world[2], a)  # (*b, n, 8) each
+    bl = F.to_light(bx, by, bz, a)
+    ends = []
+    for p_s, p_b in zip(sl, bl, strict=True):
+        p_b = xp.broadcast_to(p_b, p_s.shape)
+        p0 = xp.concat([p_s[..., _E0], p_b[..., _E0]], axis=-1)
+        p1 = xp.concat([p_s[..., _E1], p_b[..., _E1]], axis=-1)
+        ends.append(xp.concat([p0 + t0 * (p1 - p0), p0 + t1 * (p1 - p0)], axis=-1))
+    ok2 = xp.concat([ok, ok], axis=-1)
+    seen = xp.any(ok2, axis=-1)
+    inf = xp.asarray(np.inf, dtype=world.dtype)
+
+    def low(v: Array, fallback: Array) -> Array:
+        return xp.where(seen, xp.min(xp.where(ok2, v, inf), axis=-1), xp.min(fallback, axis=-1))
+
+    def high(v: Array, fallback: Array) -> Array:
+        return xp.where(seen, xp.max(xp.where(ok2, v, -inf), axis=-1), xp.max(fallback, axis=-1))
+
+    zb_lo, zb_hi = xp.min(bl[2], axis=-1), xp.max(bl[2], axis=-1)  # (*b, 1)
+    z_hi = high(ends[2], sl[2])
+    z_lo = xp.minimum(xp.minimum(zb_lo, low(ends[2], sl[2])), z_hi)
+    bounds = (low(ends[0], sl[0]), high(ends[0], sl[0]), low(ends[1], sl[1]),
+              high(ends[1], sl[1]), z_lo, z_hi)  # fmt: skip
+    return bounds, (zb_lo, zb_hi)
+
+
+def _stable_box(
+    xp: Any,
+    F: Any,
+    cam: Camera,
+    view: Array,
+    a: Any,
+    margins: tuple[float, float],
+    spec: ShadowMapSpec,
+    zb: tuple[Array, Array],
+    ctx: Context,
+) -> tuple[Array, ...]:
+    """The stable box: the slice's sphere plus half a texel, centre snapped; its depth range."""
+    corners = tuple(view[c][..., k] for k in range(8) for c in range(3))
+    vx, vy, vz, r2 = F.slice_sphere(corners)
+    m = tuple(cam.view_to_world[..., i // 4, i % 4][..., None] for i in range(12))
+    c = F.affine(m, vx, vy, vz)
+    texels = (margins[0], margins[1], float(spec.size[0]), float(spec.size[1]))
+    r = xp.sqrt(r2)
+    hx, hy, ox, oy, _ = F.stable_sides(r2, c, a, texels, r, ctx.eps)
+    cx = c[0] * a[0] + c[1] * a[1] + c[2] * a[2] + ox
+    cy = c[0] * a[3] + c[1] * a[4] + c[2] * a[5] + oy
+    cz = c[0] * a[6] + c[1] * a[7] + c[2] * a[8]
+    z_hi = xp.minimum(cz + r, zb[1])
+    z_lo = xp.minimum(zb[0], z_hi - r)
+    return hx, hy, cx, cy, z_lo, z_hi
+
+
+def _tiles(n: int, size: tuple[int, int], layout: str) -> tuple[Array, tuple[int, int, Array]]:
+    """Each cascade's viewport ``(x, y, w, h)`` and its tile: columns, rows, ``(n, 2)`` cells."""
+    w, h = size
+    if layout == "layers":
+        return np.tile(np.array([0, 0, w, h]), (n, 1)), (1, 1, np.zeros((n, 2), dtype=int))
+    cols = int(np.ceil(np.sqrt(n)))
+    rows = int(np.ceil(n / cols))
+    cells = np.array([(i % cols, i // cols) for i in range(n)])
+    ports = np.column_stack([cells[:, 0] * w, cells[:, 1] * h, np.full(n, w), np.full(n, h)])
+    return ports, (cols, rows, cells)
+
+
+def _in_tile(xp: Any, tex: tuple[Array, ...], tile: tuple[int, int, Array]) -> tuple[Array, ...]:
+    """Texture rows moved into the tile: ``s' = (s + col) / cols``, ``t' = (t + row) / rows``.
+
+    Rows count from the texture's first row in memory, where ``t = 0`` lies and where
+    every API's viewport ``y = 0`` lies (OpenGL's bottom row is both).
+    """
+    cols, rows, cells = tile
+    if cols == 1 and rows == 1:
+        return tex
+    col = xp.asarray(cells[:, 0].astype(float))
+    row = xp.asarray(cells[:, 1].astype(float))
+    q = tex[12:16]
+    s = tuple((tex[i] + col * q[i]) / cols for i in range(4))
+    t = tuple((tex[4 + i] + row * q[i]) / rows for i in range(4))
+    return (*s, *t, *tex[8:16])

@@ -1,0 +1,211 @@
+r"""Cascaded shadow maps: the per-point and per-cascade formulas, one source for every backend.
+
+A cascade is a directional light's orthographic map fitted to one slice of a
+camera's view frustum, between two view depths ``a < b``. The drivers
+(:mod:`shadowmath._fits._cascades` on whole arrays, :func:`cascade_loop` per
+camera and cascade, compiled by Numba) run the same steps:
+
+1. the slice's eight corners, on the camera frustum's four edge lines at the
+   depths ``a`` and ``b`` (:func:`edge_point`), then in world space;
+2. the six half-spaces of the slice (:func:`slice_values`: the camera's four
+   side planes ``w +- x >= 0``, ``w +- y >= 0`` of its clip coordinates, and
+   ``a <= depth <= b``) and of the scene's box (:func:`box_values`), each an
+   affine function of the point, so along a segment they interpolate linearly;
+3. the vertices of the slice intersected with the scene's box: every such vertex
+   is an end of an edge of one solid clipped to the other (Liang–Barsky,
+   :func:`clip_segment`), so clipping the slice's 12 edges to the box and the
+   box's 12 edges to the slice finds all of them;
+4. the map's box in light coordinates (:func:`cascade_box`): the lateral bounds
+   of those vertices, the far end at their deepest, the near end at the scene's
+   box corner nearest the light (every caster that can shadow the slice lies
+   between); or, stable, the slice's bounding sphere snapped to whole texels.
+
+Corners are indexed ``k = i + 2 j + 4 l`` (``i``: ``x`` side, ``j``: ``y`` side,
+``l``: near/far or low/high ``z``); :data:`EDGES` lists the 12 edges.
+
+Trusted inputs only: nothing here raises.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+# Backend primitives and shared formulas, rebound by specialize().
+from ._fit_formulas import stable_sides  # noqa: F401  (looked up by the specialized copies)
+from ._formulas import fabs, sqrt, where  # noqa: F401
+
+#: The 12 edges of a box or slice as pairs of corner indices ``i + 2 j + 4 l``.
+EDGES = (
+    (0, 1), (2, 3), (4, 5), (6, 7),
+    (0, 2), (1, 3), (4, 6), (5, 7),
+    (0, 4), (1, 5), (2, 6), (3, 7),
+)  # fmt: skip
+
+
+def edge_point(n: tuple[Any, ...], f: tuple[Any, ...], s: Any, d: Any) -> tuple[Any, Any, Any]:
+    r"""The point at view depth ``d`` on the camera frustum's edge from ``n`` toward ``f``.
+
+    ``n = (x, y, z)``: the edge's near corner in view space; ``f = (x, y, z, w)``:
+    its far corner, homogeneous (``w = 0`` for a projection with an infinite far
+    plane). On the line ``H(u) = (1 - u) (n, 1) + u f``, the view depth
+    ``s z / w = d`` (``s = +-1``, the sign that makes depth grow away from the
+    camera) gives
+
+    .. math:: u = \frac{d - s n_z}{s (f_z - n_z) + d (1 - f_w)}
+
+    and the point ``H_{xyz}(u) / H_w(u)``: perspective and orthographic cameras,
+    finite or infinite far planes, one formula.
+    """
+    u = (d - s * n[2]) / (s * (f[2] - n[2]) + d * (1.0 - f[3]))
+    w = 1.0 - u + u * f[3]
+    return (
+        ((1.0 - u) * n[0] + u * f[0]) / w,
+        ((1.0 - u) * n[1] + u * f[1]) / w,
+        ((1.0 - u) * n[2] + u * f[2]) / w,
+    )
+
+
+def affine(m: tuple[Any, ...], x: Any, y: Any, z: Any) -> tuple[Any, Any, Any]:
+    """``m[:3] @ (x, y, z, 1)`` for a 4x4 affine matrix given as 12 row-major entries."""
+    return (
+        m[0] * x + m[1] * y + m[2] * z + m[3],
+        m[4] * x + m[5] * y + m[6] * z + m[7],
+        m[8] * x + m[9] * y + m[10] * z + m[11],
+    )
+
+
+def camera_values(pv: tuple[Any, ...], x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any, Any]:
+    """The camera's four side values ``w - x, w + x, w - y, w + y`` (clip) and ``w``'s row ``z``.
+
+    ``pv``: the 16 row-major entries of ``projection @ view``; the fifth value is
+    the view-space ``z`` row's value, filled in by the caller (see :func:`slice_values`).
+    """
+    cx = pv[0] * x + pv[1] * y + pv[2] * z + pv[3]
+    cy = pv[4] * x + pv[5] * y + pv[6] * z + pv[7]
+    cw = pv[12] * x + pv[13] * y + pv[14] * z + pv[15]
+    return cw - cx, cw + cx, cw - cy, cw + cy, cw
+
+
+def slice_values(sides: tuple[Any, ...], depth: Any, a: Any, b: Any) -> tuple[Any, ...]:
+    """The slice's six half-space values at a point, all ``>= 0`` inside.
+
+    ``sides``: :func:`camera_values` (its first four); ``depth``: the point's view
+    depth; ``[a, b]``: the slice. The camera's side planes in clip space hold
+    for every graphics API (each clips ``-w <= x, y <= w``), and together they
+    imply ``w >= 0``: only the half of the pyramid in front of the eye.
+    """
+    return sides[0], sides[1], sides[2], sides[3], depth - a, b - depth
+
+
+def box_values(x: Any, y: Any, z: Any, lo: tuple[Any, ...], hi: tuple[Any, ...]) -> tuple[Any, ...]:
+    """The scene box's six half-space values at a point, all ``>= 0`` inside."""
+    return x - lo[0], hi[0] - x, y - lo[1], hi[1] - y, z - lo[2], hi[2] - z
+
+
+def clip_segment(g0: tuple[Any, ...], g1: tuple[Any, ...]) -> tuple[Any, Any, Any]:
+    r"""Liang–Barsky: the part ``[t_0, t_1]`` of a segment inside six half-spaces, and whether any.
+
+    ``g0``, ``g1``: the six affine half-space values at the segment's ends, so
+    ``g(t) = g_0 + t (g_1 - g_0)``; a plane crossed from outside to inside raises
+    ``t_0`` to ``g_0 / (g_0 - g_1)``, one crossed the other way lowers ``t_1``
+    to it, and a segment outside one plane at both ends is empty.
+    """
+    t0 = g0[0] * 0.0
+    t1 = t0 + 1.0
+    ok = t0 == t0
+    for j in range(6):
+        a, b = g0[j], g1[j]
+        d = a - b
+        t = a / where(d != 0, d, 1.0)
+        entering = (a < 0) & (b >= 0)
+        leaving = (a >= 0) & (b < 0)
+        t0 = where(entering & (t > t0), t, t0)
+        t1 = where(leaving & (t < t1), t, t1)
+        ok = ok & ((a >= 0) | (b >= 0))
+    return t0, t1, ok & (t0 <= t1)
+
+
+def slice_sphere(
+    corners: tuple[Any, ...],
+) -> tuple[Any, Any, Any, Any]:
+    r"""A sphere around a slice's eight corners (24 numbers, view space): centre and ``r^2``.
+
+    With ``m_n``, ``m_f`` the centres of the near and far rectangles and ``r_n``,
+    ``r_f`` their half-diagonals, the centre is ``m_n + t (m_f - m_n)`` with
+
+    .. math:: t = \mathrm{clamp}\left(\tfrac12 + \frac{r_f^2 - r_n^2}{2 |m_f - m_n|^2}, 0, 1\right)
+
+    (equal distances to both rectangles' corners, the minimal enclosing sphere of
+    a slice whose rectangles are centred on one axis, as for every symmetric
+    projection) and ``r`` the largest distance to a corner. Computed in view
+    space, it depends on the projection and the two depths only: the camera's
+    pose moves the sphere without changing its size.
+    """
+    mn = [0.25 * (corners[c] + corners[c + 3] + corners[c + 6] + corners[c + 9]) for c in range(3)]
+    mf = [
+        0.25 * (corners[c + 12] + corners[c + 15] + corners[c + 18] + corners[c + 21])
+        for c in range(3)
+    ]
+    dx, dy, dz = mf[0] - mn[0], mf[1] - mn[1], mf[2] - mn[2]
+    length2 = dx * dx + dy * dy + dz * dz
+    rn2 = _far2(corners, 0, mn)
+    rf2 = _far2(corners, 4, mf)
+    t = 0.5 + (rf2 - rn2) / (2.0 * where(length2 > 0, length2, 1.0))
+    t = where(t < 0, 0.0 * t, where(t > 1, 0.0 * t + 1.0, t))
+    c = (mn[0] + t * dx, mn[1] + t * dy, mn[2] + t * dz)
+    return c[0], c[1], c[2], where(_far2(corners, 0, c) >= _far2(corners, 4, c),
+                                   _far2(corners, 0, c), _far2(corners, 4, c))  # fmt: skip
+
+
+def _mean4(corners: tuple[Any, ...], first: int) -> tuple[Any, Any, Any]:
+    """The mean of the four corners from ``first``."""
+    k = 3 * first
+    return (
+        0.25 * (corners[k] + corners[k + 3] + corners[k + 6] + corners[k + 9]),
+        0.25 * (corners[k + 1] + corners[k + 4] + corners[k + 7] + corners[k + 10]),
+        0.25 * (corners[k + 2] + corners[k + 5] + corners[k + 8] + corners[k + 11]),
+    )
+
+
+def _far2(corners: tuple[Any, ...], first: int, c: Any) -> Any:
+    """The largest squared distance from ``c`` to the four corners from ``first``."""
+    best = c[0] * 0.0
+    for k in range(first, first + 4):
+        dx = corners[3 * k] - c[0]
+        dy = corners[3 * k + 1] - c[1]
+        dz = corners[3 * k + 2] - c[2]
+        r2 = dx * dx + dy * dy + dz * dz
+        best = where(r2 > best, r2, best)
+    return best
+
+
+def cascade_box(
+    bounds: tuple[Any, Any, Any, Any, Any, Any],
+) -> tuple[Any, Any, Any, Any, Any, Any]:
+    """The map's box ``(h_x, h_y, c_x, c_y, near, far)`` from light-space bounds, origin-free.
+
+    ``bounds = (lo_x, hi_x, lo_y, hi_y, z_lo, z_hi)`` in light coordinates about
+    the world origin. The frame's origin is then moved back along ``Z`` by
+    ``shift = z_lo - pad`` with ``pad = (z_hi - z_lo) + max(h_x, h_y)``, so that
+    ``near > 0`` with room to spare; moving along ``Z`` keeps ``x`` and ``y``, so a
+    texel grid anchored at the world origin stays anchored. ``near`` and ``far``
+    are relative to that origin.
+    """
+    lo_x, hi_x, lo_y, hi_y, z_lo, z_hi = bounds
+    hx, hy = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
+    pad = (z_hi - z_lo) + where(hx >= hy, hx, hy)
+    return hx, hy, 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y), pad, pad + (z_hi - z_lo)
+
+
+FUNCTIONS = (
+    "edge_point",
+    "affine",
+    "camera_values",
+    "slice_values",
+    "box_values",
+    "clip_segment",
+    "slice_sphere",
+    "_mean4",
+    "_far2",
+    "cascade_box",
+)
