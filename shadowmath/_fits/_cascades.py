@@ -470,10 +470,17 @@ def _box_corners(xp: Any, box: Array) -> tuple[Array, Array, Array]:
     )
 
 
-def _clipped_bounds(
+def _body(
     xp: Any, F: Any, cam: Camera, V: Array, box: Array, depths: Depths, world: Array, a: Any
-) -> tuple[tuple[Array, ...], tuple[Array, Array]]:
-    """Light-space bounds of slice intersected with box; the box's own ``z`` range."""
+) -> tuple[list[Array], Array, tuple[Array, ...], tuple[Array, ...]]:
+    """The vertices of each slice intersected with the scene box, in the frame ``a``.
+
+    Returns ``(ends, ok, slice_corners, box_corners)``: ``ends`` three ``(*b, n, 48)``
+    arrays (both clipped ends of the 24 edges; a vertex of the intersection is one of
+    them), ``ok`` ``(*b, n, 48)`` True where the edge kept a part; the slices' corners
+    ``(*b, n, 8)`` and the box's ``(*b, 1, 8)`` in the same frame. With identity axes
+    ``a`` the coordinates are world coordinates.
+    """
     bx, by, bz = _box_corners(xp, box)
     lo = tuple(box[..., 0, c][..., None, None] for c in range(3))
     hi = tuple(box[..., 1, c][..., None, None] for c in range(3))
@@ -497,7 +504,14 @@ def _clipped_bounds(
         p0 = xp.concat([p_s[..., _E0], p_b[..., _E0]], axis=-1)
         p1 = xp.concat([p_s[..., _E1], p_b[..., _E1]], axis=-1)
         ends.append(xp.concat([p0 + t0 * (p1 - p0), p0 + t1 * (p1 - p0)], axis=-1))
-    ok2 = xp.concat([ok, ok], axis=-1)
+    return ends, xp.concat([ok, ok], axis=-1), sl, bl
+
+
+def _clipped_bounds(
+    xp: Any, F: Any, cam: Camera, V: Array, box: Array, depths: Depths, world: Array, a: Any
+) -> tuple[tuple[Array, ...], tuple[Array, Array]]:
+    """Light-space bounds of slice intersected with box; the box's own ``z`` range."""
+    ends, ok2, sl, bl = _body(xp, F, cam, V, box, depths, world, a)
     seen = xp.any(ok2, axis=-1)
     inf = xp.asarray(np.inf, dtype=world.dtype)
 
