@@ -339,13 +339,15 @@ def _splits(
     xp = ctx.xp
     checks.require(all_finite(xp, ov, 0), non_finite("overlap"))
     checks.require((ov >= 0) & (ov < 1), "overlap: the blend band must be a fraction in [0, 1)")
+    tol = float(np.sqrt(ctx.eps))
     if S is not None:
         checks.require(all_finite(xp, S, 1), non_finite("splits"))
         checks.require(
             xp.all(S[..., 1:] > S[..., :-1], axis=-1), "splits: the depths must increase"
         )
         checks.require(
-            (S[..., 0] >= cam.near * (1 - 8 * ctx.eps)) & (S[..., -1] <= cam.far),
+            # Within sqrt(eps) relative: the camera's own near/far, rounded by its inverse.
+            (S[..., 0] >= cam.near - tol * xp.abs(cam.near)) & (S[..., -1] <= cam.far * (1 + tol)),
             "splits: the depths must lie within the camera's [near, far] view depths",
         )
         s = S

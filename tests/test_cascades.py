@@ -1,0 +1,401 @@
+"""Cascaded shadow maps: splits, containment against an independent intersection, stability.
+
+The oracle of the fit is SciPy's half-space intersection (Qhull): the vertices of each
+camera slice intersected with the scene's box, computed from the slice's definition
+(the camera's clip-space side planes and two view depths) without shadowmath's code.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+from scipy.spatial import HalfspaceIntersection
+
+import shadowmath as sm
+
+RNG = np.random.default_rng(17)
+
+
+def look_at(eye: Any, target: Any, up: Any = (0.0, 1.0, 0.0)) -> np.ndarray:
+    """A right-handed OpenGL view matrix (the camera looks down its -z)."""
+    eye, target, up = (np.asarray(v, float) for v in (eye, target, up))
+    f = target - eye
+    f /= np.linalg.norm(f)
+    s = np.cross(f, up)
+    s /= np.linalg.norm(s)
+    u = np.cross(s, f)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
+    m[:3, 3] = -m[:3, :3] @ eye
+    return m
+
+
+def perspective(fovy: float, aspect: float, near: float, far: float) -> np.ndarray:
+    """OpenGL's perspective projection (gluPerspective)."""
+    f = 1 / np.tan(fovy / 2)
+    return np.array([
+        [f / aspect, 0, 0, 0], [0, f, 0, 0],
+        [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0],
+    ])  # fmt: skip
+
+
+def orthographic(half_w: float, half_h: float, near: float, far: float) -> np.ndarray:
+    return np.array([
+        [1 / half_w, 0, 0, 0], [0, 1 / half_h, 0, 0],
+        [0, 0, -2 / (far - near), -(far + near) / (far - near)], [0, 0, 0, 1],
+    ])  # fmt: skip
+
+
+def scene(seed: int) -> tuple[np.ndarray, ...]:
+    """A random camera near a large scene box, and a sun."""
+    rng = np.random.default_rng(seed)
+    eye = rng.uniform([-30, 1, -30], [30, 8, 30])
+    yaw = rng.uniform(0, 2 * np.pi)
+    target = eye + [np.cos(yaw), rng.uniform(-0.15, 0.05), np.sin(yaw)]
+    view = look_at(eye, target)
+    proj = perspective(rng.uniform(0.6, 1.4), rng.uniform(0.8, 2.0), rng.uniform(0.05, 1), 120)
+    box = np.array([[-150.0, -0.5, -150.0], [150.0, rng.uniform(10, 20), 150.0]])
+    sun = rng.normal(size=3)
+    sun[1] = abs(sun[1]) + 0.2
+    return sun, view, proj, box
+
+
+def body(view: np.ndarray, proj: np.ndarray, box: np.ndarray, a: float, b: float) -> np.ndarray:
+    """Vertices of {camera slice a <= depth <= b} intersected with the box (Qhull)."""
+    pv = proj @ view
+    rows = []  # halfspaces as A x + c <= 0
+    for r in (pv[3] - pv[0], pv[3] + pv[0], pv[3] - pv[1], pv[3] + pv[1]):
+        rows.append(-r)  # w -+ x >= 0
+    depth = -view[2]  # a right-handed camera's view depth is -z
+    rows.append(np.r_[-depth[:3], a - depth[3]])
+    rows.append(np.r_[depth[:3], depth[3] - b])
+    for i in range(3):
+        e = np.eye(3)[i]
+        rows.append(np.r_[-e, box[0, i]])
+        rows.append(np.r_[e, -box[1, i]])
+    hs = np.array(rows)
+    norms = np.linalg.norm(hs[:, :3], axis=1)
+    res = linprog(
+        np.r_[0, 0, 0, -1],
+        A_ub=np.c_[hs[:, :3], norms],
+        b_ub=-hs[:, 3],
+        bounds=[(None, None)] * 3 + [(0, None)],
+    )
+    assert res.status == 0 and res.x[3] > 1e-6, "the slice misses the box"
+    return HalfspaceIntersection(hs, res.x[:3]).intersections
+
+
+def ndc(m: np.ndarray, p: np.ndarray) -> np.ndarray:
+    h = np.c_[p, np.ones(len(p))] @ m.T
+    return h[:, :3] / h[:, 3:]
+
+
+# --- splits ---------------------------------------------------------------------------------
+
+
+def test_uniform_splits_are_equally_spaced() -> None:
+    s = sm.cascade_splits(0.5, 80.5, 4, scheme="uniform")
+    np.testing.assert_allclose(np.diff(s), 20.0, rtol=1e-14)
+    assert s[0] == 0.5 and s[-1] == 80.5
+
+
+def test_log_splits_keep_a_constant_ratio() -> None:
+    s = sm.cascade_splits(0.1, 1000.0, 4, scheme="log")
+    np.testing.assert_allclose(s[1:] / s[:-1], 10.0, rtol=1e-12)
+
+
+@pytest.mark.parametrize("lam", [0.0, 0.25, 0.5, 1.0])
+def test_practical_splits_blend_the_two(lam: float) -> None:
+    n, f = 0.3, 200.0
+    s = sm.cascade_splits(n, f, 5, lam=lam)
+    i = np.arange(6) / 5
+    np.testing.assert_allclose(
+        s, lam * n * (f / n) ** i + (1 - lam) * (n + (f - n) * i), rtol=1e-13
+    )
+    assert s[0] == n and s[-1] == f and np.all(np.diff(s) > 0)
+
+
+def test_splits_broadcast_over_a_batch() -> None:
+    s = sm.cascade_splits(np.array([0.1, 1.0]), np.array([[50.0], [60.0]]), 3)
+    assert s.shape == (2, 2, 4)
+    np.testing.assert_allclose(s[1, 0], sm.cascade_splits(0.1, 60.0, 3), rtol=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"count": 0}, "count: expected an integer >= 1"),
+        ({"count": True}, "count: expected an integer >= 1"),
+        ({"scheme": "linear"}, "scheme: expected 'uniform', 'log' or 'practical'"),
+        ({"lam": 1.5}, r"lam: the practical scheme's blend must lie in \[0, 1\]"),
+        ({"near": 0.0}, "near: logarithmic splits need near > 0"),
+        ({"far": 0.5}, "far: the split range must end beyond near"),
+        ({"near": np.nan}, "near: contains non-finite values"),
+    ],
+)
+def test_split_errors_name_the_argument(kwargs: dict[str, Any], message: str) -> None:
+    args = {"near": 1.0, "far": 10.0, "count": 3} | kwargs
+    with pytest.raises(ValueError, match=message):
+        sm.cascade_splits(args.pop("near"), args.pop("far"), args.pop("count"), **args)
+
+
+def test_uniform_splits_may_start_at_the_camera() -> None:
+    np.testing.assert_allclose(sm.cascade_splits(0.0, 9.0, 3, scheme="uniform"), [0, 3, 6, 9])
+
+
+# --- the fit against the exact intersection -------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_each_cascade_holds_its_slice_of_the_scene_and_touches_its_margins(seed: int) -> None:
+    sun, view, proj, box = scene(seed)
+    c = sm.fit_cascades(sun, view, proj, box, 512, pcf_radius=2)
+    m = c.frustum.margin_x[0]
+    assert m == pytest.approx(1 - 2 * 2 / 512)
+    corners = np.array([[box[i & 1, 0], box[i >> 1 & 1, 1], box[i >> 2, 2]] for i in range(8)])
+    for i in range(4):
+        v = body(view, proj, box, c.splits[i], c.band_end[i])
+        p = ndc(c.world_to_clip[i], v)
+        # Inside the margins, and the bounds are tight: a vertex on each side.
+        assert np.all(np.abs(p[:, :2]) <= m * (1 + 1e-9))
+        np.testing.assert_allclose(p[:, :2].max(0), [m, m], rtol=1e-9)
+        np.testing.assert_allclose(p[:, :2].min(0), [-m, -m], rtol=1e-9)
+        assert np.all((p[:, 2] > -1) & (p[:, 2] < 1))
+        # Every caster of the scene lies beyond the near plane (seen or not).
+        assert np.all(ndc(c.world_to_clip[i], corners)[:, 2] > -1)
+
+
+def test_a_scene_smaller_than_the_slice_sets_the_box() -> None:
+    sun, view, proj, _ = scene(3)
+    eye = np.linalg.inv(view)[:3, 3]
+    ahead = eye - 30 * np.linalg.inv(view)[:3, 2]
+    box = np.array([ahead - 1.0, ahead + 1.0])
+    near = proj[2, 3] / (proj[2, 2] - 1)
+    c = sm.fit_cascades(sun, view, proj, box, 256, splits=[near, 120.0])
+    # The whole box is in view: the box's silhouette, not the slice's, fills the map.
+    corners = np.array([[box[i & 1, 0], box[i >> 1 & 1, 1], box[i >> 2, 2]] for i in range(8)])
+    p = ndc(c.world_to_clip[0], corners)
+    np.testing.assert_allclose(np.abs(p[:, :2]).max(0), c.frustum.margin_x[0], rtol=1e-9)
+
+
+def test_orthographic_camera() -> None:
+    sun, _, _, _ = scene(1)
+    box = np.array([[-150.0, -0.5, -150.0], [150.0, 25.0, 150.0]])
+    view = look_at([0, 30, 0.1], [0, 0, 0])
+    proj = orthographic(20, 15, 1, 30)
+    c = sm.fit_cascades(sun, view, proj, box, 256, count=3, scheme="uniform")
+    np.testing.assert_allclose(c.splits, [1, 1 + 29 / 3, 1 + 58 / 3, 30], rtol=1e-14)
+    for i in range(3):
+        p = ndc(c.world_to_clip[i], body(view, proj, box, c.splits[i], c.band_end[i]))
+        assert np.all(np.abs(p[:, :2]) <= c.frustum.margin_x[i] * (1 + 1e-9))
+        np.testing.assert_allclose(np.abs(p[:, :2]).max(), c.frustum.margin_x[i], rtol=1e-9)
+
+
+def test_an_infinite_far_plane_with_a_shadow_distance() -> None:
+    sun, view, proj, box = scene(2)
+    near = proj[2, 3] / (proj[2, 2] - 1)
+    infinite = proj.copy()
+    infinite[2, 2], infinite[2, 3] = -1.0, -2 * near
+    a = sm.fit_cascades(sun, view, proj, box, 256, max_distance=80.0)
+    b = sm.fit_cascades(sun, view, infinite, box, 256, max_distance=80.0)
+    np.testing.assert_allclose(b.splits, a.splits, rtol=1e-12)
+    np.testing.assert_allclose(b.world_to_clip, a.world_to_clip, rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="max_distance: the projection's far plane is at infinity"):
+        sm.fit_cascades(sun, view, infinite, box, 256)
+
+
+def test_overlap_bands() -> None:
+    sun, view, proj, box = scene(0)
+    c = sm.fit_cascades(sun, view, proj, box, 256, overlap=0.25)
+    s = c.splits
+    np.testing.assert_allclose(c.band_end[:-1], s[1:-1] + 0.25 * np.diff(s)[:-1], rtol=1e-14)
+    assert c.band_end[-1] == s[-1]
+
+
+# --- conventions ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("api", sm.GRAPHICS_APIS)
+@pytest.mark.parametrize("reversed_z", [False, True])
+def test_each_api_is_opengl_times_its_conventions(api: str, reversed_z: bool) -> None:
+    sun, view, proj, box = scene(4)
+    gl = sm.fit_cascades(sun, view, proj, box, 256)
+    c = sm.fit_cascades(sun, view, proj, box, 256, api=api, reversed_z=reversed_z,
+                        camera_api="opengl")  # fmt: skip
+    conv = sm.api_convention(api=api, reversed_z=reversed_z)
+    np.testing.assert_allclose(c.world_to_clip, conv.gl_clip_to_clip @ gl.world_to_clip,
+                               rtol=1e-12, atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(c.world_to_texture, conv.gl_clip_to_texture @ gl.world_to_clip,
+                               rtol=1e-12, atol=1e-12)  # fmt: skip
+
+
+@pytest.mark.parametrize("api", sm.GRAPHICS_APIS)
+@pytest.mark.parametrize("reversed_z", [False, True])
+def test_a_camera_in_any_api_gives_the_same_cascades(api: str, reversed_z: bool) -> None:
+    sun, view, proj, box = scene(5)
+    gl = sm.fit_cascades(sun, view, proj, box, 256)
+    C = sm.api_convention(api=api, reversed_z=reversed_z).gl_clip_to_clip
+    c = sm.fit_cascades(sun, view, C @ proj, box, 256, camera_api=api,
+                        camera_reversed_z=reversed_z, api="opengl")  # fmt: skip
+    np.testing.assert_allclose(c.splits, gl.splits, rtol=1e-12)
+    np.testing.assert_allclose(c.world_to_clip, gl.world_to_clip, rtol=1e-9, atol=1e-12)
+
+
+def test_atlas_tiles() -> None:
+    sun, view, proj, box = scene(0)
+    layers = sm.fit_cascades(sun, view, proj, box, 256, count=3)
+    atlas = sm.fit_cascades(sun, view, proj, box, 256, count=3, layout="atlas")
+    np.testing.assert_array_equal(atlas.viewports, [[0, 0, 256, 256], [256, 0, 256, 256],
+                                                    [0, 256, 256, 256]])  # fmt: skip
+    for i, (col, row) in enumerate([(0, 0), (1, 0), (0, 1)]):
+        v = body(view, proj, box, atlas.splits[i], atlas.band_end[i])
+        st = ndc(atlas.world_to_texture[i], v)
+        st_layer = ndc(layers.world_to_texture[i], v)
+        np.testing.assert_allclose(st[:, 0], (st_layer[:, 0] + col) / 2, rtol=1e-12)
+        np.testing.assert_allclose(st[:, 1], (st_layer[:, 1] + row) / 2, rtol=1e-12)
+        # Inside its own tile, a border of texels from its edges.
+        border = 1 / 512
+        assert np.all(
+            (st[:, 0] >= col / 2 + border * 0.999) & (st[:, 0] <= (col + 1) / 2 - border * 0.999)
+        )
+        assert np.all(
+            (st[:, 1] >= row / 2 + border * 0.999) & (st[:, 1] <= (row + 1) / 2 - border * 0.999)
+        )
+
+
+# --- stable cascades ------------------------------------------------------------------------
+
+
+def test_stable_cascades_keep_their_size_and_move_by_whole_texels() -> None:
+    sun, _, proj, box = scene(6)
+    sizes, first = None, None
+    for k in range(12):
+        eye = np.array([0.37 * k, 2 + 0.05 * k, -0.61 * k])
+        yaw = 0.13 * k
+        view = look_at(eye, eye + [np.sin(yaw), -0.1, np.cos(yaw)])
+        c = sm.fit_cascades(sun, view, proj, box, 512, stable=True)
+        if sizes is None:
+            sizes, first = (c.frustum.rx_max, c.frustum.ry_max), c
+        np.testing.assert_array_equal(c.frustum.rx_max, sizes[0])  # exactly
+        np.testing.assert_array_equal(c.frustum.ry_max, sizes[1])
+        # The frame's rotation is the light's alone.
+        np.testing.assert_array_equal(c.world_to_light[:, :3, :3], first.world_to_light[:, :3, :3])
+        texel = c.texel_size
+        for axis, offset in ((0, c.frustum.x_offset), (1, c.frustum.y_offset)):
+            steps = offset / texel[:, axis]
+            np.testing.assert_allclose(steps, np.round(steps), atol=1e-6)
+
+
+def test_stable_cascades_still_hold_their_slices() -> None:
+    sun, view, proj, box = scene(7)
+    c = sm.fit_cascades(sun, view, proj, box, 512, stable=True)
+    for i in range(4):
+        p = ndc(c.world_to_clip[i], body(view, proj, box, c.splits[i], c.band_end[i]))
+        assert np.all(np.abs(p[:, :2]) <= c.frustum.margin_x[i])
+        assert np.all((p[:, 2] > -1) & (p[:, 2] < 1))
+
+
+def test_stable_size_is_the_slice_sphere() -> None:
+    """For a symmetric camera, the minimal sphere of the slice: brute force over centres on the axis."""
+    sun, view, proj, box = scene(8)
+    c = sm.fit_cascades(sun, view, proj, box, 512, stable=True, count=2)
+    inv = np.linalg.inv(proj)
+    for i in range(2):
+        a, b = c.splits[i], c.band_end[i]
+        pts = []
+        for z_ndc, d in ((-1, a), (1, b)):
+            for x in (-1, 1):
+                for y in (-1, 1):
+                    h = inv @ [x, y, z_ndc, 1]
+                    p = h[:3] / h[3]
+                    pts.append(p * d / -p[2])
+        pts = np.array(pts)
+        zs = np.linspace(-b, -a, 200001)
+        r = np.min([np.max(np.linalg.norm(pts - [0, 0, z], axis=1)) for z in zs])
+        m, w = c.frustum.margin_x[i], 512
+        half = r / (1 - 1 / (m * w))
+        assert c.frustum.rx_max[i] == pytest.approx(half, rel=1e-6)
+
+
+# --- batches and JAX ------------------------------------------------------------------------
+
+
+def test_a_batch_of_cameras_equals_one_by_one() -> None:
+    scenes = [scene(s) for s in range(3)]
+    sun, view, proj, box = (np.stack(v) for v in zip(*scenes, strict=True))
+    c = sm.fit_cascades(sun, view, proj, box, 256, stable=True)
+    for k in range(3):
+        one = sm.fit_cascades(*scenes[k], 256, stable=True)
+        np.testing.assert_allclose(c.world_to_clip[k], one.world_to_clip, rtol=1e-12)
+
+
+def test_jax_values_jit_and_gradients() -> None:
+    jax = pytest.importorskip("jax")
+    jnp = jax.numpy
+    sun, view, proj, box = scene(9)
+    want = sm.fit_cascades(sun, view, proj, box, 256)
+    got = sm.fit_cascades(jnp.asarray(sun), jnp.asarray(view), jnp.asarray(proj),
+                          jnp.asarray(box), 256)  # fmt: skip
+    np.testing.assert_allclose(np.asarray(got.world_to_clip), want.world_to_clip, rtol=1e-10)
+
+    def area(d: Any, lam: Any) -> Any:
+        c = sm.fit_cascades(d, view, proj, box, 256, lam=lam)
+        return jnp.sum(c.frustum.rx_max * c.frustum.ry_max)
+
+    g = jax.jit(jax.grad(area, argnums=(0, 1)))(jnp.asarray(sun), 0.5)
+    h = 1e-6
+    for k in range(3):
+        e = np.eye(3)[k] * h
+        fd = (area(jnp.asarray(sun + e), 0.5) - area(jnp.asarray(sun - e), 0.5)) / (2 * h)
+        assert float(g[0][k]) == pytest.approx(float(fd), rel=1e-5, abs=1e-8)
+    fd = (area(jnp.asarray(sun), 0.5 + h) - area(jnp.asarray(sun), 0.5 - h)) / (2 * h)
+    assert float(g[1]) == pytest.approx(float(fd), rel=1e-5)
+
+
+def test_jax_invalid_inputs_are_nan_under_jit() -> None:
+    jax = pytest.importorskip("jax")
+    sun, view, proj, box = scene(9)
+    fit = jax.jit(lambda d: sm.fit_cascades(d, view, proj, box, 256).world_to_clip)
+    assert np.all(np.isnan(np.asarray(fit(jax.numpy.zeros(3)))))
+    assert np.all(np.isfinite(np.asarray(fit(jax.numpy.asarray(sun)))))
+
+
+# --- errors ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"light": np.zeros(3)}, "light: zero direction"),
+        ({"light": np.array([0.0, 1.0, 0.0, 1.0])}, "light: cascades need a directional light"),
+        ({"light": np.ones(2)}, r"light: expected a direction \(\*batch, 3\)"),
+        ({"view": np.diag([1.0, 1.0, 0.0, 1.0])}, "view: singular"),
+        ({"view": np.ones((4, 4))}, "view: expected an affine world-to-view matrix"),
+        ({"projection": np.zeros((4, 4))}, "projection: singular"),
+        ({"scene_bounds": np.array([[1.0, 0, 0], [0, 1, 1]])}, "scene_bounds: the max corner"),
+        ({"scene_bounds": np.zeros((3, 3))}, r"scene_bounds: expected shape \(\*batch, 2, 3\)"),
+        ({"splits": [3.0, 2.0, 5.0]}, "splits: the depths must increase"),
+        ({"splits": [0.01, 2.0]}, r"splits: the depths must lie within the camera's \[near, far\]"),
+        ({"max_distance": 500.0}, "max_distance: the shadow distance must lie beyond"),
+        ({"overlap": 1.0}, r"overlap: the blend band must be a fraction in \[0, 1\)"),
+        ({"up": np.array([0.3, 1.0, 0.5])}, "up: the up hint is zero or parallel"),
+        ({"layout": "grid"}, "layout: expected 'layers' or 'atlas'"),
+        ({"camera_api": "glide"}, "api: unknown graphics API 'glide'"),
+        ({"count": 0}, "count: expected an integer >= 1"),
+    ],
+)
+def test_errors_name_the_argument(change: dict[str, Any], message: str) -> None:
+    view = look_at([0, 2, 0], [0, 1, -10])
+    args: dict[str, Any] = {
+        "light": np.array([0.3, 1.0, 0.5]),
+        "view": view,
+        "projection": perspective(1.0, 1.5, 0.1, 100),
+        "scene_bounds": np.array([[-50.0, 0, -50], [50, 5, 50]]),
+        "map_size": 256,
+    } | change
+    positional = [args.pop(k) for k in ("light", "view", "projection", "scene_bounds", "map_size")]
+    with pytest.raises(ValueError, match=message):
+        sm.fit_cascades(*positional, **args)
