@@ -299,7 +299,7 @@ def test_stable_cascades_still_hold_their_slices() -> None:
 
 
 def test_stable_size_is_the_slice_sphere() -> None:
-    """For a symmetric camera, the minimal sphere of the slice: brute force over centres on the axis."""
+    """A symmetric camera: the minimal sphere of the slice, by brute force over axis centres."""
     sun, view, proj, box = scene(8)
     c = sm.fit_cascades(sun, view, proj, box, 512, stable=True, count=2)
     inv = np.linalg.inv(proj)

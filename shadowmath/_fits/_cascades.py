@@ -28,7 +28,6 @@ from shadowmath._boundary._validate import (
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._cascade_formulas import EDGES
 from shadowmath._math._conventions import GraphicsApi, _check_api, _clip_from_gl
-from shadowmath._math._frame import stack_matrix
 from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
 from shadowmath._math._specialize import formulas
 from shadowmath.lights import DirectionalLight
@@ -426,7 +425,13 @@ def _fit(
     full = (*shape, n)
 
     def out(entries: tuple[Array, ...]) -> Array:
-        m = stack_matrix(xp, tuple(xp.broadcast_to(e, full) for e in entries))
+        if len(entries) == 12:
+            zero = xp.zeros_like(entries[0])
+            entries = (*entries, zero, zero, zero, zero + 1)
+        same = [e if getattr(e, "shape", None) == full else xp.broadcast_to(e, full)
+                for e in entries]  # fmt: skip
+        flat = xp.stack(same, axis=-1)
+        m = xp.reshape(xp.broadcast_to(flat, (*full, 16)), (*full, 4, 4))
         return checks.poison(m, 3)
 
     size = xp.stack([2 * hx / (mx * spec.size[0]), 2 * hy / (my * spec.size[1])], axis=-1)
