@@ -7,6 +7,7 @@ camera slice intersected with the scene's box, computed from the slice's definit
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any
 
 import numpy as np
@@ -387,7 +388,10 @@ def test_jax_invalid_inputs_are_nan_under_jit() -> None:
         ({"count": 0}, "count: expected an integer >= 1"),
     ],
 )
-def test_errors_name_the_argument(change: dict[str, Any], message: str) -> None:
+@pytest.mark.parametrize("compiled", [True, False])
+def test_errors_name_the_argument(change: dict[str, Any], message: str, compiled: bool) -> None:
+    from shadowmath._backends import _kernels
+
     view = look_at([0, 2, 0], [0, 1, -10])
     args: dict[str, Any] = {
         "light": np.array([0.3, 1.0, 0.5]),
@@ -397,5 +401,54 @@ def test_errors_name_the_argument(change: dict[str, Any], message: str) -> None:
         "map_size": 256,
     } | change
     positional = [args.pop(k) for k in ("light", "view", "projection", "scene_bounds", "map_size")]
-    with pytest.raises(ValueError, match=message):
+    path = _kernels.disabled() if not compiled else contextlib.nullcontext()
+    with path, pytest.raises(ValueError, match=message):
         sm.fit_cascades(*positional, **args)
+
+
+# --- the compiled loop (fast extra) and the array path agree --------------------------------
+
+
+@pytest.mark.parametrize(
+    "options",
+    [{}, {"stable": True}, {"layout": "atlas", "count": 3}, {"splits": [0.5, 3.0, 20.0, 90.0]},
+     {"max_distance": 60.0, "scheme": "log"}, {"up": np.array([0.0, 0.0, 1.0]), "api": "vulkan"},
+     {"overlap": 0.0, "pcf_radius": 3}],
+)  # fmt: skip
+def test_compiled_loop_equals_array_path(options: dict[str, Any]) -> None:
+    pytest.importorskip("numba")
+    from shadowmath._backends import _kernels
+
+    scenes = [scene(s) for s in range(10, 13)]
+    sun, view, proj, box = (np.stack(v) for v in zip(*scenes, strict=True))
+    proj[:, 2, 2:] = perspective(1.0, 1.0, 0.5, 120)[2, 2:]  # near 0.5 for the custom splits
+    fast = sm.fit_cascades(sun, view, proj, box, 256, **options)
+    with _kernels.disabled():
+        slow = sm.fit_cascades(sun, view, proj, box, 256, **options)
+    for a, b in zip(fast, slow, strict=True):
+        for x, y in zip(a if isinstance(a, tuple) else [a], b if isinstance(b, tuple) else [b],
+                        strict=True):  # fmt: skip
+            np.testing.assert_allclose(np.asarray(x, float), np.asarray(y, float), rtol=1e-9,
+                                       atol=1e-12)  # fmt: skip
+
+
+def test_inverse4_is_the_inverse() -> None:
+    from shadowmath._math._specialize import scalar_formulas
+
+    for seed in range(5):
+        m = np.random.default_rng(seed).normal(size=(4, 4))
+        inv, det = scalar_formulas().inverse4(tuple(m.ravel()))
+        np.testing.assert_allclose(np.reshape(inv, (4, 4)) @ m, np.eye(4), atol=1e-12)
+        assert det == pytest.approx(np.linalg.det(m), rel=1e-12)
+
+
+def test_the_specialized_namespace_has_no_collisions() -> None:
+    """Every formula module shares one namespace: a name defined twice would replace one."""
+    from shadowmath._math import _specialize
+
+    seen: dict[str, Any] = {}
+    for module, _ in _specialize._MODULES:
+        for name, value in vars(module).items():
+            if name.startswith("__") or name == "FUNCTIONS":
+                continue
+            assert seen.setdefault(name, value) is value, (name, module.__name__)

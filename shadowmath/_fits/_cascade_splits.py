@@ -21,6 +21,7 @@ from typing import Any, Literal
 import numpy as np
 
 from shadowmath._boundary._validate import Array, Checks, all_finite, convert, non_finite
+from shadowmath._math._specialize import formulas
 
 SplitScheme = Literal["uniform", "log", "practical"]
 
@@ -109,10 +110,6 @@ def split_depths(xp: Any, n: Array, f: Array, lm: Array, count: int) -> Array:
     shape = xp.broadcast_shapes(n.shape, f.shape, lm.shape)
     n, f, lm = (xp.broadcast_to(v, shape)[..., None] for v in (n, f, lm))
     i = xp.asarray(np.arange(count + 1) / count, dtype=n.dtype)
-    uniform = n + (f - n) * i
-    # The log part only where it is used (lam > 0 needs n > 0): no NaN from a zero near.
-    safe_n = xp.where(n > 0, n, xp.ones_like(n))
-    log = safe_n * (f / safe_n) ** i
-    s = lm * log + (1 - lm) * uniform
+    s = formulas(xp).split_depth(n, f, lm, i)
     # Exact ends: s_0 = n and s_N = f whatever the rounding of the power.
     return xp.concat([n, s[..., 1:-1], f], axis=-1)

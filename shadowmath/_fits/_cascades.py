@@ -9,10 +9,13 @@ values and gradients follow the same expressions).
 
 from __future__ import annotations
 
+import functools
+import math
 from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
+from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._validate import (
     Array,
@@ -21,18 +24,22 @@ from shadowmath._boundary._validate import (
     all_finite,
     batch_shape,
     convert,
+    flat_batch,
     non_finite,
+    raise_status,
     require_last,
     require_matrix,
 )
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._cascade_formulas import EDGES
+from shadowmath._math._cascade_loop import ROW
 from shadowmath._math._conventions import GraphicsApi, _check_api, _clip_from_gl
 from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
 from shadowmath._math._specialize import formulas
 from shadowmath.lights import DirectionalLight
 
 from ._cascade_splits import SplitScheme, check_count, check_range, check_scheme, split_depths
+from ._lispsm import check_warp, warp_cascades
 from ._spec import ShadowMapSpec, api_rows, spec_from_options
 
 __all__ = ["Cascades", "fit_cascades"]
@@ -100,6 +107,7 @@ def fit_cascades(
     camera_api: GraphicsApi | None = None,
     camera_reversed_z: bool = False,
     layout: CascadeLayout = "layers",
+    warp: Literal[None, "lispsm"] = None,
 ) -> Cascades:
     r"""Fit a directional light's cascaded shadow maps to what a camera sees.
 
@@ -151,6 +159,13 @@ def fit_cascades(
             (default: ``api`` and not reversed).
         layout: ``"layers"`` (one texture layer per cascade) or ``"atlas"`` (tiles
             in a grid of ``ceil(sqrt(n))`` columns, each ``map_size``).
+        warp: ``"lispsm"``: light-space perspective warping of each cascade (Wimmer
+            et al. 2004, ``docs/lispsm.md``): more texels near the eye; the matrices
+            then have ``q = w != 1`` (divide by it) and ``texel_size`` is the largest
+            texel, along the map's axes; ``frustum`` stays the unwarped box. Falls
+            back to the orthographic cascade where the view is within ~1.15 degrees
+            of the light (``sin < 0.02``) or the camera is orthographic. Not with
+            ``stable=True`` (``ValueError``).
 
     Returns:
         :class:`Cascades`.
@@ -177,6 +192,7 @@ def fit_cascades(
         margin=None, api=api, reversed_z=reversed_z, stable=bool(stable) if isinstance(
             stable, bool | np.bool_) else stable,
     )  # fmt: skip
+    check_warp(warp, spec.stable)
     cam_api = spec.api if camera_api is None else camera_api
     _check_api(cam_api, camera_reversed_z)
     if layout not in ("layers", "atlas"):
@@ -184,11 +200,16 @@ def fit_cascades(
     direction = light.direction if isinstance(light, DirectionalLight) else light
     fixed = check_scheme(scheme)
     n_given = None if splits is not None else check_count(count)
+    lam_v = lam if fixed is None else fixed
+    # Python numbers stay Python numbers (the common case): no array conversion per frame.
+    plain = type(lam_v) in (float, int) and type(overlap) in (float, int)
     ctx, (L, V, P, box, S, U, dmax, lm, ov) = convert(
         light=direction, view=view, projection=projection, scene_bounds=scene_bounds,
         splits=splits, up=up, max_distance=max_distance,
-        lam=lam if fixed is None else fixed, overlap=overlap,
+        lam=None if plain else lam_v, overlap=None if plain else overlap,
     )  # fmt: skip
+    if plain:
+        lm, ov = float(lam_v), float(overlap)
     checks = Checks(ctx)
     L = _light_vector(checks, L)
     require_matrix("view", V)
@@ -214,10 +235,15 @@ def fit_cascades(
             shapes.append(v.shape[: v.ndim - drop])
             names.append(name)
     shape = batch_shape(*shapes, names=names)
-    cam = _camera(ctx, checks, V, P, _clip_from_gl(cam_api, camera_reversed_z))
+    C = _clip_from_gl(cam_api, camera_reversed_z)
+    if ctx.xp is np and _kernels.available() and warp is None:
+        return _compiled(ctx, spec, layout, shape, (L, V, P, box, U, S, dmax, lm, ov), C, n_given)
+    if plain:
+        lm, ov = ctx.constant(lm), ctx.constant(ov)
+    cam = _camera(ctx, checks, V, P, C)
     depths = _splits(ctx, checks, cam, S, dmax, lm, ov, fixed, n_given)
     _value_checks(checks, L, box, U)
-    return _fit(ctx, checks, spec, layout, shape, (L, V, box, U), cam, depths)
+    return _fit(ctx, checks, spec, layout, shape, (L, V, box, U), cam, depths, warp)
 
 
 def _light_vector(checks: Checks, L: Array) -> Array:
@@ -337,7 +363,7 @@ def _splits(
 ) -> Depths:
     xp = ctx.xp
     checks.require(all_finite(xp, ov, 0), non_finite("overlap"))
-    checks.require((ov >= 0) & (ov < 1), "overlap: the blend band must be a fraction in [0, 1)")
+    checks.require((ov >= 0) & (ov < 1), _OVERLAP_RANGE)
     tol = float(np.sqrt(ctx.eps))
     if S is not None:
         checks.require(all_finite(xp, S, 1), non_finite("splits"))
@@ -390,6 +416,7 @@ def _fit(
     arrays: tuple[Array, Array, Array, Array | None],
     cam: Camera,
     depths: Depths,
+    warp: str | None = None,
 ) -> Cascades:
     """Every cascade of every batch entry on whole arrays (trusted inputs)."""
     xp, F = ctx.xp, formulas(ctx.xp)
@@ -435,6 +462,13 @@ def _fit(
         return checks.poison(m, 3)
 
     size = xp.stack([2 * hx / (mx * spec.size[0]), 2 * hy / (my * spec.size[1])], axis=-1)
+    # >>> LiSPSM hook (shadowmath/_fits/_lispsm.py): the warp replaces clip, tex and size.
+    if warp is not None:
+        a_l = tuple(v[..., None] for v in a_n)
+        body = _body(xp, F, cam, V, box, depths, world, a_l)
+        tiled = lambda rows: _in_tile(xp, rows, tile)  # noqa: E731
+        clip, tex, size = warp_cascades(xp, F, body, cam, V, a_n, spec, (clip, tex, size), tiled)
+    # <<< end of the LiSPSM hook
     mxs, mys = (xp.full(full, m, dtype=ctx.dtype) for m in (mx, my))
     fields = [checks.poison(xp.broadcast_to(v, full), 1)
               for v in (hx, hy, near, far, mxs, mys, cx, cy)]  # fmt: skip
@@ -563,15 +597,19 @@ def _stable_box(
     return hx, hy, cx, cy, z_lo, z_hi
 
 
+@functools.lru_cache(maxsize=64)
 def _tiles(n: int, size: tuple[int, int], layout: str) -> tuple[Array, tuple[int, int, Array]]:
     """Each cascade's viewport ``(x, y, w, h)`` and its tile: columns, rows, ``(n, 2)`` cells."""
     w, h = size
     if layout == "layers":
-        return np.tile(np.array([0, 0, w, h]), (n, 1)), (1, 1, np.zeros((n, 2), dtype=int))
+        ports = np.tile(np.array([0, 0, w, h]), (n, 1))
+        ports.setflags(write=False)  # cached: shared by every call
+        return ports, (1, 1, np.zeros((n, 2), dtype=int))
     cols = int(np.ceil(np.sqrt(n)))
     rows = int(np.ceil(n / cols))
     cells = np.array([(i % cols, i // cols) for i in range(n)])
     ports = np.column_stack([cells[:, 0] * w, cells[:, 1] * h, np.full(n, w), np.full(n, h)])
+    ports.setflags(write=False)  # cached: shared by every call
     return ports, (cols, rows, cells)
 
 
@@ -590,3 +628,130 @@ def _in_tile(xp: Any, tex: tuple[Array, ...], tile: tuple[int, int, Array]) -> t
     s = tuple((tex[i] + col * q[i]) / cols for i in range(4))
     t = tuple((tex[4 + i] + row * q[i]) / rows for i in range(4))
     return (*s, *t, *tex[8:16])
+
+
+#: The compiled loop's checks (:data:`._cascade_loop.CHECKS`, same order) and their messages.
+LOOP_MESSAGES = (
+    non_finite("light"),
+    non_finite("view"),
+    non_finite("projection"),
+    non_finite("scene_bounds"),
+    non_finite("up"),
+    "view: expected an affine world-to-view matrix (last row 0, 0, 0, 1)",
+    "view: singular (its 3x3 part has no inverse)",
+    "projection: singular (no inverse)",
+    "projection: an infinite far plane needs a perspective camera (near > 0)",
+    "scene_bounds: the max corner must be >= the min corner on every axis",
+    "light: zero direction (x = y = z = 0): a directional light points toward the light",
+    msg.UP_PARALLEL,
+    "max_distance: the projection's far plane is at infinity; give the shadow distance as "
+    "max_distance",
+    "max_distance: the shadow distance must lie beyond the camera's near plane and no "
+    "farther than its far plane",
+    "near: logarithmic splits need near > 0 (use scheme='uniform' for a range that starts "
+    "at the camera)",
+    "splits: the depths must increase",
+    "splits: the depths must lie within the camera's [near, far] view depths",
+)
+
+
+def _compiled(
+    ctx: Context,
+    spec: ShadowMapSpec,
+    layout: str,
+    shape: tuple[int, ...],
+    arrays: tuple[Any, ...],
+    C: Any,
+    count: int | None,
+) -> Cascades:
+    """:func:`fit_cascades` for NumPy input through the compiled loop (``fast`` extra)."""
+    L, V, P, box, U, S, dmax, lm, ov = arrays
+    _scalar_checks(lm, ov)
+    n = S.shape[-1] - 1 if S is not None else count
+    assert n is not None
+    total = math.prod(shape)
+    if type(lm) is float and type(ov) is float and dmax is None:
+        scal = np.array([[lm, np.nan, ov]])
+    else:
+        scal = np.stack(np.broadcast_arrays(lm, np.nan if dmax is None else dmax, ov), axis=-1)
+    given = (U is not None, S is not None, dmax is not None)
+    opts = _options(spec, layout, n, given, ctx.eps, tuple(v for row in C for v in row))
+    out = np.empty((total, n, ROW), dtype=ctx.dtype)
+    splits = np.empty((total, n + 1), dtype=ctx.dtype)
+    status = np.zeros(total, dtype=np.int32)
+    _kernels.loops().cascade_loop(
+        flat_batch(L, shape, (3,)), flat_batch(V, shape, (4, 4)), flat_batch(P, shape, (4, 4)),
+        flat_batch(box, shape, (2, 3)), _NO_UP if U is None else flat_batch(U, shape, (3,)),
+        flat_batch(scal, shape, (3,)), _NO_SPLITS if S is None else flat_batch(S, shape, (n + 1,)),
+        opts, out, splits, status,
+    )  # fmt: skip
+    if status[0] if total == 1 else status.any():
+        raise_status(status.reshape(shape), [(1 << i, m) for i, m in enumerate(LOOP_MESSAGES)])
+    o = out.reshape(*shape, n, ROW)
+    m = o[..., :48].reshape(*shape, n, 3, 4, 4)
+    rx, ry, near, far, m_x, m_y, cx, cy = (o[..., 48 + k] for k in range(8))
+    return Cascades(
+        world_to_light=m[..., 0, :, :],
+        frustum=Frustum(rx, ry, near, far, m_x, m_y, cx, cy, orthographic=True),
+        world_to_clip=m[..., 1, :, :],
+        world_to_texture=m[..., 2, :, :],
+        splits=splits.reshape(*shape, n + 1),
+        band_end=o[..., 56],
+        texel_size=o[..., 57:59],
+        viewports=_tiles(n, spec.size, layout)[0],
+    )
+
+
+_NO_UP = np.zeros((1, 3))
+_NO_SPLITS = np.zeros((1, 2))
+
+
+def _scalar_checks(lm: Any, ov: Any) -> None:
+    """lam and overlap, checked on NumPy values or Python floats (the loop trusts them)."""
+    if type(lm) is float and type(ov) is float:
+        if not 0 <= lm <= 1:  # NaN fails both
+            raise ValueError(non_finite("lam") if lm != lm else _LAM_RANGE)
+        if not 0 <= ov < 1:
+            raise ValueError(non_finite("overlap") if ov != ov else _OVERLAP_RANGE)
+        return
+    if not np.all(np.isfinite(lm)):
+        raise ValueError(non_finite("lam"))
+    if not np.all((lm >= 0) & (lm <= 1)):
+        raise ValueError(_LAM_RANGE)
+    if not np.all(np.isfinite(ov)):
+        raise ValueError(non_finite("overlap"))
+    if not np.all((ov >= 0) & (ov < 1)):
+        raise ValueError(_OVERLAP_RANGE)
+
+
+@functools.lru_cache(maxsize=256)
+def _options(
+    spec: ShadowMapSpec,
+    layout: str,
+    n: int,
+    given: tuple[bool, bool, bool],
+    eps: float,
+    C: tuple[float, ...],
+) -> Array:
+    """The loop's options as one float64 array (cached: the same few recur every frame)."""
+    cols, rows = _grid(n, layout)
+    mx, my = spec.margins
+    C_api, TC_api = api_rows(spec.api, spec.reversed_z)
+    has_up, has_splits, has_dmax = given
+    opts = np.array([
+        has_up, spec.stable, has_splits, has_dmax, mx, my, *spec.size, eps, NEAR_FAR_SLACK,
+        cols, rows, *C, *C_api, *TC_api,
+    ], dtype=np.float64)  # fmt: skip
+    opts.setflags(write=False)
+    return opts
+
+
+_LAM_RANGE = "lam: the practical scheme's blend must lie in [0, 1]"
+_OVERLAP_RANGE = "overlap: the blend band must be a fraction in [0, 1)"
+
+
+def _grid(n: int, layout: str) -> tuple[int, int]:
+    if layout == "layers":
+        return 0, 0  # the loop's mark: no tiles
+    cols = math.ceil(math.sqrt(n))
+    return cols, math.ceil(n / cols)

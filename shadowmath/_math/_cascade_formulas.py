@@ -42,6 +42,18 @@ EDGES = (
 )  # fmt: skip
 
 
+def split_depth(near: Any, far: Any, lam: Any, frac: Any) -> Any:
+    r"""The practical split at the fraction ``frac = i / N``: ``lam`` log plus ``1 - lam`` uniform.
+
+    .. math:: s = \lambda\, n (f / n)^{i/N} + (1 - \lambda) (n + (f - n)\, i / N)
+
+    The logarithmic part uses ``n = 1`` where ``n <= 0`` (only valid with ``lam = 0``,
+    which the boundary checks), so a uniform range from the camera has no NaN.
+    """
+    safe = where(near > 0, near, 1.0 + 0.0 * near)
+    return lam * (safe * (far / safe) ** frac) + (1.0 - lam) * (near + (far - near) * frac)
+
+
 def edge_point(n: tuple[Any, ...], f: tuple[Any, ...], s: Any, d: Any) -> tuple[Any, Any, Any]:
     r"""The point at view depth ``d`` on the camera frustum's edge from ``n`` toward ``f``.
 
@@ -198,6 +210,7 @@ def cascade_box(
 
 
 FUNCTIONS = (
+    "split_depth",
     "edge_point",
     "affine",
     "camera_values",

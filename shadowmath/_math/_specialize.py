@@ -19,13 +19,14 @@ from typing import Any
 
 import numpy as np
 
-from . import _cascade_formulas, _fit_formulas, _formulas, _loops
+from . import _cascade_formulas, _cascade_loop, _fit_formulas, _formulas, _loops
 
 _MODULES = (
     (_formulas, _formulas.FUNCTIONS),
     (_fit_formulas, _fit_formulas.FUNCTIONS),
     (_loops, _loops.FUNCTIONS),
     (_cascade_formulas, _cascade_formulas.FUNCTIONS),
+    (_cascade_loop, _cascade_loop.FUNCTIONS),
 )
 
 
@@ -42,6 +43,10 @@ def specialize(
         namespace.update(vars(module))
     namespace.update(primitives)
     names = [name for _, functions in _MODULES for name in functions]
+    if len(set(names)) != len(names):  # one namespace: a repeated name would replace a formula
+        raise RuntimeError(
+            f"formulas defined twice: {sorted(n for n in set(names) if names.count(n) > 1)}"
+        )
     for name in names:
         func = namespace[name]
         copy = types.FunctionType(func.__code__, namespace, name, func.__defaults__)

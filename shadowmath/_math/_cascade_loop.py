@@ -1,0 +1,437 @@
+"""The cascades' compiled loop: every camera and cascade of :func:`fit_cascades`, one pass.
+
+The same formulas as the array driver (:mod:`._cascade_formulas`, :mod:`._fit_formulas`)
+on scalars, compiled by Numba (``fast`` extra) through :func:`._specialize.specialize`.
+Value checks set bits of a status word in the order of :data:`CHECKS`; the boundary
+raises the first failing one's message. Trusted shapes only: nothing here raises.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+# Shared formulas and primitives, rebound by specialize().
+from ._cascade_formulas import (  # noqa: F401
+    EDGES,
+    affine,
+    box_values,
+    camera_values,
+    cascade_box,
+    clip_segment,
+    edge_point,
+    slice_sphere,
+    slice_values,
+    split_depth,
+)
+from ._fit_formulas import fit_axes, fit_rows, safe_box, stable_sides, to_light
+from ._formulas import fabs, sqrt, where  # noqa: F401
+from ._loops import _tuple16
+
+#: The loop's checks in report order (bit ``1 << index``); the boundary maps them to messages.
+CHECKS = (
+    "light_finite",
+    "view_finite",
+    "projection_finite",
+    "bounds_finite",
+    "up_finite",
+    "view_affine",
+    "view_singular",
+    "projection_singular",
+    "infinite_far",
+    "bounds_order",
+    "light_zero",
+    "up_parallel",
+    "far_infinite",
+    "max_distance",
+    "log_near",
+    "splits_increase",
+    "splits_range",
+)
+
+_E0 = (0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3)
+_E1 = (1, 3, 5, 7, 2, 3, 6, 7, 4, 5, 6, 7)
+
+#: One output row per cascade: world_to_light, world_to_clip, world_to_texture (16 each),
+#: the frustum's eight numbers, the band's end, the texel's size along X and Y.
+ROW = 48 + 8 + 3
+
+
+def inverse4(m: tuple[Any, ...]) -> tuple[tuple[Any, ...], Any]:
+    """The inverse of a 4x4 matrix (16 row-major entries) by 2x2 minors, and its determinant."""
+    s0 = m[0] * m[5] - m[4] * m[1]
+    s1 = m[0] * m[6] - m[4] * m[2]
+    s2 = m[0] * m[7] - m[4] * m[3]
+    s3 = m[1] * m[6] - m[5] * m[2]
+    s4 = m[1] * m[7] - m[5] * m[3]
+    s5 = m[2] * m[7] - m[6] * m[3]
+    c5 = m[10] * m[15] - m[14] * m[11]
+    c4 = m[9] * m[15] - m[13] * m[11]
+    c3 = m[9] * m[14] - m[13] * m[10]
+    c2 = m[8] * m[15] - m[12] * m[11]
+    c1 = m[8] * m[14] - m[12] * m[10]
+    c0 = m[8] * m[13] - m[12] * m[9]
+    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+    k = 1.0 / where(det != 0, det, 1.0)
+    inv = (
+        (m[5] * c5 - m[6] * c4 + m[7] * c3) * k,
+        (-m[1] * c5 + m[2] * c4 - m[3] * c3) * k,
+        (m[13] * s5 - m[14] * s4 + m[15] * s3) * k,
+        (-m[9] * s5 + m[10] * s4 - m[11] * s3) * k,
+        (-m[4] * c5 + m[6] * c2 - m[7] * c1) * k,
+        (m[0] * c5 - m[2] * c2 + m[3] * c1) * k,
+        (-m[12] * s5 + m[14] * s2 - m[15] * s1) * k,
+        (m[8] * s5 - m[10] * s2 + m[11] * s1) * k,
+        (m[4] * c4 - m[5] * c2 + m[7] * c0) * k,
+        (-m[0] * c4 + m[1] * c2 - m[3] * c0) * k,
+        (m[12] * s4 - m[13] * s2 + m[15] * s0) * k,
+        (-m[8] * s4 + m[9] * s2 - m[11] * s0) * k,
+        (-m[4] * c3 + m[5] * c1 - m[6] * c0) * k,
+        (m[0] * c3 - m[1] * c1 + m[2] * c0) * k,
+        (-m[12] * s3 + m[13] * s1 - m[14] * s0) * k,
+        (m[8] * s3 - m[9] * s1 + m[10] * s0) * k,
+    )
+    return inv, det
+
+
+def _m16(M: Any) -> Any:
+    return (
+        float(M[0, 0]), float(M[0, 1]), float(M[0, 2]), float(M[0, 3]),
+        float(M[1, 0]), float(M[1, 1]), float(M[1, 2]), float(M[1, 3]),
+        float(M[2, 0]), float(M[2, 1]), float(M[2, 2]), float(M[2, 3]),
+        float(M[3, 0]), float(M[3, 1]), float(M[3, 2]), float(M[3, 3]),
+    )  # fmt: skip
+
+
+def _mul16(a: Any, b: Any) -> Any:
+    """``a @ b`` for 16 row-major entries each."""
+    return (
+        a[0] * b[0] + a[1] * b[4] + a[2] * b[8] + a[3] * b[12],
+        a[0] * b[1] + a[1] * b[5] + a[2] * b[9] + a[3] * b[13],
+        a[0] * b[2] + a[1] * b[6] + a[2] * b[10] + a[3] * b[14],
+        a[0] * b[3] + a[1] * b[7] + a[2] * b[11] + a[3] * b[15],
+        a[4] * b[0] + a[5] * b[4] + a[6] * b[8] + a[7] * b[12],
+        a[4] * b[1] + a[5] * b[5] + a[6] * b[9] + a[7] * b[13],
+        a[4] * b[2] + a[5] * b[6] + a[6] * b[10] + a[7] * b[14],
+        a[4] * b[3] + a[5] * b[7] + a[6] * b[11] + a[7] * b[15],
+        a[8] * b[0] + a[9] * b[4] + a[10] * b[8] + a[11] * b[12],
+        a[8] * b[1] + a[9] * b[5] + a[10] * b[9] + a[11] * b[13],
+        a[8] * b[2] + a[9] * b[6] + a[10] * b[10] + a[11] * b[14],
+        a[8] * b[3] + a[9] * b[7] + a[10] * b[11] + a[11] * b[15],
+        a[12] * b[0] + a[13] * b[4] + a[14] * b[8] + a[15] * b[12],
+        a[12] * b[1] + a[13] * b[5] + a[14] * b[9] + a[15] * b[13],
+        a[12] * b[2] + a[13] * b[6] + a[14] * b[10] + a[15] * b[14],
+        a[12] * b[3] + a[13] * b[7] + a[14] * b[11] + a[15] * b[15],
+    )
+
+
+def _camera(V: Any, P: Any, C: Any, nc: Any, fc: Any, eps: float) -> Any:
+    """Fill the near corners ``nc`` (4, 3) and far corners ``fc`` (4, 4); sign, near, far, bits."""
+    iP, dp = inverse4(P)
+    st = 0
+    pn = 1.0
+    for r in range(4):
+        pn *= math.sqrt(P[4 * r] ** 2 + P[4 * r + 1] ** 2 + P[4 * r + 2] ** 2 + P[4 * r + 3] ** 2)
+    if not abs(dp) > 64.0 * eps * pn:
+        st |= 1 << 7
+    nz = fz = fw = 0.0
+    for k in range(4):
+        x, y = 2.0 * (k & 1) - 1.0, 2.0 * ((k >> 1) & 1) - 1.0
+        for z in (-1.0, 1.0):
+            c = (
+                C[0] * x + C[1] * y + C[2] * z + C[3],
+                C[4] * x + C[5] * y + C[6] * z + C[7],
+                C[8] * x + C[9] * y + C[10] * z + C[11],
+                C[12] * x + C[13] * y + C[14] * z + C[15],
+            )
+            h = [iP[4 * r] * c[0] + iP[4 * r + 1] * c[1] + iP[4 * r + 2] * c[2]
+                 + iP[4 * r + 3] * c[3] for r in range(4)]  # fmt: skip
+            if z < 0:
+                nc[k, 0], nc[k, 1], nc[k, 2] = h[0] / h[3], h[1] / h[3], h[2] / h[3]
+                nz += 0.25 * nc[k, 2]
+            else:
+                sg = -1.0 if h[3] < 0 else 1.0
+                big = max(abs(h[0]), abs(h[1]), abs(h[2]), abs(h[3]))
+                for r in range(4):
+                    fc[k, r] = sg * h[r] / big
+                fz += 0.25 * fc[k, 2]
+                fw += 0.25 * fc[k, 3]
+    finite_far = fw > 32.0 * eps
+    sign = np.sign(fz / fw - nz) if finite_far else np.sign(nz)
+    if sign == 0:
+        sign = 1.0
+    if not (finite_far or sign * nz > 0):
+        st |= 1 << 8
+    far = sign * fz / fw if finite_far else np.inf
+    return sign, sign * nz, far, st
+
+
+def _splits(near: float, far: float, lam: float, n: int, out: Any) -> None:
+    """``out[0..n]``: the splits of :func:`._cascade_formulas.split_depth`, exact ends."""
+    out[0] = near
+    for i in range(1, n):
+        out[i] = split_depth(near, far, lam, i / n)
+    out[n] = far
+
+
+def cascade_loop(
+    light: Any, views: Any, projs: Any, boxes: Any, ups: Any, scalars: Any, given: Any,
+    opts: Any, out: Any, splits: Any, status: Any,
+) -> None:  # fmt: skip
+    """Every camera's cascades. Operands ``(count or 1, ...)`` are read at ``i % len``.
+
+    ``scalars``: ``(count or 1, 3)`` rows ``(lam, max_distance, overlap)``; ``given``:
+    ``(count or 1, n + 1)`` custom splits (read when ``opts[2]``); ``opts``: has_up,
+    stable, has_splits, has_dmax, m_x, m_y, width, height, eps, slack, cols, rows,
+    then the camera's C, the maps' C and T C (16 each). ``out``: ``(count, n, ROW)``;
+    ``splits``: ``(count, n + 1)``; ``status``: ``(count,)``.
+    """
+    n = splits.shape[1] - 1
+    eps = opts[8]
+    C, api = _tuple16(opts, 12), (_tuple16(opts, 28), _tuple16(opts, 44))
+    nc, fc = np.empty((4, 3)), np.empty((4, 4))
+    bw, bl, bg = np.empty((8, 3)), np.empty((8, 3)), np.empty((8, 5))
+    for i in range(len(out)):
+        V, P = _m16(views[i % len(views)]), _m16(projs[i % len(projs)])
+        sign, near, far, st = _camera(V, P, C, nc, fc, eps)
+        st |= _entry_checks(light[i % len(light)], (V, P), boxes[i % len(boxes)],
+                            ups[i % len(ups)], opts, eps)  # fmt: skip
+        sc = scalars[i % len(scalars)]
+        st |= _split_range(near, far, sc, given[i % len(given)], opts, splits[i])
+        Lr, Ur = light[i % len(light)], ups[i % len(ups)]
+        box = boxes[i % len(boxes)]
+        coords = max(abs(box[0, 0]), abs(box[0, 1]), abs(box[0, 2]),
+                     abs(box[1, 0]), abs(box[1, 1]), abs(box[1, 2]))  # fmt: skip
+        a, ok_light, _, ok_up = fit_axes(
+            (-float(Lr[0]), -float(Lr[1]), -float(Lr[2])),
+            (float(Ur[0]), float(Ur[1]), float(Ur[2])), opts[0] != 0, coords, eps,
+        )  # fmt: skip
+        if not ok_light:
+            st |= 1 << 10
+        if not ok_up:
+            st |= 1 << 11
+        status[i] = st
+        _box_pass(V, P, box, a, sign, bw, bl, bg)
+        iV = inverse4(V)[0]
+        for j in range(n):
+            s0, s1 = splits[i, j], splits[i, j + 1]
+            end = min(s1 + sc[2] * (s1 - s0), splits[i, n])
+            _cascade(iV, a, (sign, s0, end), (nc, fc), (bw, bl, bg), box, opts, api, out[i, j], j)
+            out[i, j, 56] = end
+
+
+def _entry_checks(L: Any, VP: Any, box: Any, U: Any, opts: Any, eps: float) -> int:
+    """The finiteness, affinity and order checks of one entry's inputs."""
+    V, P = VP
+    st = 0
+    ptotal = 0.0
+    for v in P:
+        ptotal += v
+    if not math.isfinite(ptotal):
+        st |= 4
+    if not math.isfinite(float(L[0]) + float(L[1]) + float(L[2])):
+        st |= 1
+    total = 0.0
+    for v in V:
+        total += v
+    if not math.isfinite(total):
+        st |= 2
+    bsum = 0.0
+    for r in range(2):
+        for c in range(3):
+            bsum += box[r, c]
+            if box[1, c] < box[0, c]:
+                st |= 1 << 9
+    if not math.isfinite(bsum):
+        st |= 8
+    if opts[0] != 0 and not math.isfinite(float(U[0]) + float(U[1]) + float(U[2])):
+        st |= 16
+    if not (V[12] == 0 and V[13] == 0 and V[14] == 0 and V[15] == 1):
+        st |= 1 << 5
+    det = V[0] * (V[5] * V[10] - V[6] * V[9]) - V[1] * (V[4] * V[10] - V[6] * V[8]) + V[2] * (
+        V[4] * V[9] - V[5] * V[8])  # fmt: skip
+    scale = 1.0
+    for r in range(3):
+        scale *= math.sqrt(V[4 * r] ** 2 + V[4 * r + 1] ** 2 + V[4 * r + 2] ** 2)
+    if not abs(det) > 64.0 * eps * scale:
+        st |= 1 << 6
+    return st
+
+
+def _split_range(near: float, far: float, sc: Any, given: Any, opts: Any, out: Any) -> int:
+    """The splits into ``out`` (given, or from the scheme over [near, far or max_distance])."""
+    n = len(out) - 1
+    st = 0
+    if opts[2] != 0:
+        tol = math.sqrt(opts[8])
+        for k in range(n + 1):
+            out[k] = given[k]
+            if k > 0 and not given[k] > given[k - 1]:
+                st |= 1 << 15
+        if not (given[0] >= near - tol * abs(near) and given[n] <= far * (1 + tol)):
+            st |= 1 << 16
+        return st
+    end = far
+    if opts[3] != 0:
+        if not (sc[1] > near and sc[1] <= far):
+            st |= 1 << 13
+        end = min(sc[1], far) if sc[1] > near else near + 1.0
+    elif not math.isfinite(far):
+        st |= 1 << 12
+    if not math.isfinite(end):
+        end = near + 1.0
+    if sc[0] != 0 and not near > 0:
+        st |= 1 << 14
+    _splits(near, end, sc[0], n, out)
+    return st
+
+
+def _box_pass(V: Any, P: Any, box: Any, a: Any, sign: float, bw: Any, bl: Any, bg: Any) -> None:
+    """The scene box's corners: world (``bw``), light (``bl``), camera side values and depth."""
+    PV = _mul16(P, V)
+    for k in range(8):
+        x, y, z = box[k & 1, 0], box[(k >> 1) & 1, 1], box[k >> 2, 2]
+        bw[k, 0], bw[k, 1], bw[k, 2] = x, y, z
+        p = to_light(x, y, z, a)
+        bl[k, 0], bl[k, 1], bl[k, 2] = p[0], p[1], p[2]
+        sides = camera_values(PV, x, y, z)
+        bg[k, 0], bg[k, 1], bg[k, 2], bg[k, 3] = sides[0], sides[1], sides[2], sides[3]
+        bg[k, 4] = sign * (V[8] * x + V[9] * y + V[10] * z + V[11])
+
+
+def _cascade(
+    iV: Any, a: Any, d: Any, cam: Any, boxp: Any, box: Any, opts: Any, api: Any, row: Any, j: int
+) -> None:
+    """One cascade's fit into ``row`` (:data:`ROW` numbers)."""
+    sign, s0, s1 = d
+    nc, fc = cam
+    _, bl, bg = boxp
+    vc, wc, lc, gs = np.empty((8, 3)), np.empty((8, 3)), np.empty((8, 3)), np.empty((8, 6))
+    lo = (box[0, 0], box[0, 1], box[0, 2])
+    hi = (box[1, 0], box[1, 1], box[1, 2])
+    m12 = (iV[0], iV[1], iV[2], iV[3], iV[4], iV[5], iV[6], iV[7], iV[8], iV[9], iV[10], iV[11])
+    for k in range(8):
+        depth = s0 if k < 4 else s1
+        e = k % 4
+        p = edge_point((nc[e, 0], nc[e, 1], nc[e, 2]), (fc[e, 0], fc[e, 1], fc[e, 2], fc[e, 3]),
+                       sign, depth)  # fmt: skip
+        vc[k, 0], vc[k, 1], vc[k, 2] = p[0], p[1], p[2]
+        w = affine(m12, p[0], p[1], p[2])
+        wc[k, 0], wc[k, 1], wc[k, 2] = w[0], w[1], w[2]
+        q = to_light(w[0], w[1], w[2], a)
+        lc[k, 0], lc[k, 1], lc[k, 2] = q[0], q[1], q[2]
+        g = box_values(w[0], w[1], w[2], lo, hi)
+        for c in range(6):
+            gs[k, c] = g[c]
+    b = _bounds(lc, gs, bl, bg, s0, s1)
+    if opts[1] != 0:
+        hx, hy, cx, cy, z_lo, z_hi = _stable(vc, m12, a, b, opts)
+        pad = (z_hi - z_lo) + max(hx, hy)
+        near, far = pad, pad + (z_hi - z_lo)
+    else:
+        hx, hy, cx, cy, near, far = cascade_box((b[0], b[1], b[2], b[3], b[4], b[5]))
+        z_lo = b[4]
+    _store_cascade(a, (hx, hy, cx, cy, near, far), z_lo, opts, api, row, j)
+
+
+def _bounds(lc: Any, gs: Any, bl: Any, bg: Any, s0: float, s1: float) -> Any:
+    """Light-space bounds of the slice intersected with the box (with the slice's fallback)."""
+    inf = math.inf
+    lx, hx_, ly, hy_, lz, hz = inf, -inf, inf, -inf, inf, -inf
+    seen = False
+    for e in range(24):
+        k0, k1 = _E0[e % 12], _E1[e % 12]
+        if e < 12:
+            g0 = (gs[k0, 0], gs[k0, 1], gs[k0, 2], gs[k0, 3], gs[k0, 4], gs[k0, 5])
+            g1 = (gs[k1, 0], gs[k1, 1], gs[k1, 2], gs[k1, 3], gs[k1, 4], gs[k1, 5])
+            p0, p1 = lc[k0], lc[k1]
+        else:
+            g0 = slice_values((bg[k0, 0], bg[k0, 1], bg[k0, 2], bg[k0, 3]), bg[k0, 4], s0, s1)
+            g1 = slice_values((bg[k1, 0], bg[k1, 1], bg[k1, 2], bg[k1, 3]), bg[k1, 4], s0, s1)
+            p0, p1 = bl[k0], bl[k1]
+        t0, t1, ok = clip_segment(g0, g1)
+        if ok:
+            seen = True
+            for t in (t0, t1):
+                x = p0[0] + t * (p1[0] - p0[0])
+                y = p0[1] + t * (p1[1] - p0[1])
+                z = p0[2] + t * (p1[2] - p0[2])
+                lx, hx_, ly, hy_ = min(lx, x), max(hx_, x), min(ly, y), max(hy_, y)
+                lz, hz = min(lz, z), max(hz, z)
+    if not seen:
+        for k in range(8):
+            lx, hx_, ly, hy_ = min(lx, lc[k, 0]), max(hx_, lc[k, 0]), min(ly, lc[k, 1]), max(
+                hy_, lc[k, 1])  # fmt: skip
+            lz, hz = min(lz, lc[k, 2]), max(hz, lc[k, 2])
+    zb = bl[0, 2]
+    for k in range(8):
+        zb = min(zb, bl[k, 2])
+    zt = bl[0, 2]
+    for k in range(8):
+        zt = max(zt, bl[k, 2])
+    return lx, hx_, ly, hy_, min(min(zb, lz), hz), hz, zb, zt
+
+
+def _stable(vc: Any, m12: Any, a: Any, b: Any, opts: Any) -> Any:
+    """The stable box of one cascade: sphere, snapped centre, depth range."""
+    corners = (
+        vc[0, 0], vc[0, 1], vc[0, 2], vc[1, 0], vc[1, 1], vc[1, 2],
+        vc[2, 0], vc[2, 1], vc[2, 2], vc[3, 0], vc[3, 1], vc[3, 2],
+        vc[4, 0], vc[4, 1], vc[4, 2], vc[5, 0], vc[5, 1], vc[5, 2],
+        vc[6, 0], vc[6, 1], vc[6, 2], vc[7, 0], vc[7, 1], vc[7, 2],
+    )  # fmt: skip
+    vx, vy, vz, r2 = slice_sphere(corners)
+    c = affine(m12, vx, vy, vz)
+    r = math.sqrt(r2)
+    hx, hy, ox, oy, _ = stable_sides(r2, c, a, (opts[4], opts[5], opts[6], opts[7]), r, opts[8])
+    cx = c[0] * a[0] + c[1] * a[1] + c[2] * a[2] + ox
+    cy = c[0] * a[3] + c[1] * a[4] + c[2] * a[5] + oy
+    cz = c[0] * a[6] + c[1] * a[7] + c[2] * a[8]
+    z_hi = min(cz + r, b[7])
+    z_lo = min(b[6], z_hi - r)
+    return hx, hy, cx, cy, z_lo, z_hi
+
+
+def _store_cascade(a: Any, box6: Any, z_lo: float, opts: Any, api: Any, row: Any, j: int) -> None:
+    """The cascade's matrices, frustum and texel size into ``row``."""
+    hx, hy, cx, cy, near, far = box6
+    shift = z_lo - near
+    origin = (shift * a[6], shift * a[7], shift * a[8])
+    slack = opts[9]
+    near, far = near * (1 - slack), far * (1 + slack)
+    mx, my = opts[4], opts[5]
+    w, clip, tex = fit_rows(origin, a, safe_box(hx, hy, cx, cy, near, far), (mx, my), True, api)
+    cols, rows = max(int(opts[10]), 1), max(int(opts[11]), 1)  # 0: texture layers, no tiles
+    col, rw = float(j % cols), float(j // cols) if opts[10] > 0 else 0.0
+    for k in range(12):
+        row[k] = w[k]
+    row[12], row[13], row[14], row[15] = 0.0, 0.0, 0.0, 1.0
+    for k in range(16):
+        row[16 + k] = clip[k]
+        row[32 + k] = tex[k]
+    for k in range(4):
+        row[32 + k] = (tex[k] + col * tex[12 + k]) / cols
+        row[36 + k] = (tex[4 + k] + rw * tex[12 + k]) / rows
+    row[48], row[49], row[50], row[51] = hx, hy, near, far
+    row[52], row[53], row[54], row[55] = mx, my, cx, cy
+    row[57] = 2.0 * hx / (mx * opts[6])
+    row[58] = 2.0 * hy / (my * opts[7])
+
+
+FUNCTIONS = (
+    "inverse4",
+    "_m16",
+    "_mul16",
+    "_camera",
+    "_splits",
+    "cascade_loop",
+    "_entry_checks",
+    "_split_range",
+    "_box_pass",
+    "_cascade",
+    "_bounds",
+    "_stable",
+    "_store_cascade",
+)
