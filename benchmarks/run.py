@@ -19,6 +19,9 @@ Sections (``--only NAME``, repeatable or comma-separated):
   ``optimize_frustum`` on 1,000 and 500,000 vertices and on a batch of 100 blockers.
 * ``gpu``: the batch and large-blocker figures on a GPU (skipped without one).
 * ``coverage``: ``benchmarks/bench_fit.py``, the optimized fit's coverage (needs OpenGL).
+* ``cascades``: ``benchmarks/bench_cascades.py``, ``fit_cascades``: the shadow-map texel's area
+  per pixel on the receivers of three scenes against three.js's and bevy's schemes, and the
+  time of four cascades for one camera and for a batch of 100.
 
 Each prints a Markdown table: median (with its repeat count), the baseline measured in the
 same process, ratio = median / baseline median, the issue's target and an informational
@@ -39,12 +42,16 @@ import sys
 import time
 import traceback
 from importlib import metadata
+from types import ModuleType
 from typing import Any
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from speed import SECTIONS
+import bench_cascades
+from speed import SECTIONS as SPEED_SECTIONS
 from speed._timing import Config, Section, table, target_line, targets
+
+SECTIONS: dict[str, ModuleType] = {**SPEED_SECTIONS, bench_cascades.NAME: bench_cascades}
 
 
 def _version(dist: str) -> str:

@@ -17,7 +17,7 @@ from pathlib import Path
 import jax
 
 ROOT = Path(__file__).resolve().parent.parent
-EXPECTED = ["single", "options", "batch", "large", "derivatives", "gpu", "coverage"]
+EXPECTED = ["single", "options", "batch", "large", "derivatives", "gpu", "coverage", "cascades"]
 
 
 def _has_gpu() -> bool:

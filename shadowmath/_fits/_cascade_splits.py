@@ -35,14 +35,15 @@ def cascade_splits(
     count: int,
     *,
     scheme: SplitScheme = "practical",
-    lam: Any = 0.5,
+    lam: Any = 0.75,
 ) -> Array:
     r"""The ``count + 1`` view depths that cut ``[near, far]`` into ``count`` cascades.
 
     .. math:: s_i = \lambda\, n (f / n)^{i/N} + (1 - \lambda) (n + (f - n)\, i / N)
 
     ``scheme="uniform"`` is ``lam = 0``, ``"log"`` is ``lam = 1``, ``"practical"``
-    takes ``lam`` (0.5 by default, as three.js and Babylon.js). Differentiable in
+    takes ``lam`` (0.75 by default; three.js and Babylon.js use 0.5: see
+    ``docs/cascades.md`` for why). Differentiable in
     ``near``, ``far`` and ``lam`` (JAX).
 
     Arguments:

@@ -94,7 +94,7 @@ def fit_cascades(
     count: int = 4,
     splits: Any = None,
     scheme: SplitScheme = "practical",
-    lam: Any = 0.5,
+    lam: Any = 0.75,
     max_distance: Any = None,
     overlap: Any = 0.1,
     up: Any = None,
