@@ -17,37 +17,9 @@ from scipy.spatial import HalfspaceIntersection
 
 import shadowmath as sm
 
+from .cameras import look_at, orthographic, perspective
+
 RNG = np.random.default_rng(17)
-
-
-def look_at(eye: Any, target: Any, up: Any = (0.0, 1.0, 0.0)) -> np.ndarray:
-    """A right-handed OpenGL view matrix (the camera looks down its -z)."""
-    eye, target, up = (np.asarray(v, float) for v in (eye, target, up))
-    f = target - eye
-    f /= np.linalg.norm(f)
-    s = np.cross(f, up)
-    s /= np.linalg.norm(s)
-    u = np.cross(s, f)
-    m = np.eye(4)
-    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
-    m[:3, 3] = -m[:3, :3] @ eye
-    return m
-
-
-def perspective(fovy: float, aspect: float, near: float, far: float) -> np.ndarray:
-    """OpenGL's perspective projection (gluPerspective)."""
-    f = 1 / np.tan(fovy / 2)
-    return np.array([
-        [f / aspect, 0, 0, 0], [0, f, 0, 0],
-        [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0],
-    ])  # fmt: skip
-
-
-def orthographic(half_w: float, half_h: float, near: float, far: float) -> np.ndarray:
-    return np.array([
-        [1 / half_w, 0, 0, 0], [0, 1 / half_h, 0, 0],
-        [0, 0, -2 / (far - near), -(far + near) / (far - near)], [0, 0, 0, 1],
-    ])  # fmt: skip
 
 
 def scene(seed: int) -> tuple[np.ndarray, ...]:
@@ -452,3 +424,19 @@ def test_the_specialized_namespace_has_no_collisions() -> None:
             if name.startswith("__") or name == "FUNCTIONS":
                 continue
             assert seen.setdefault(name, value) is value, (name, module.__name__)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("options", [{}, {"stable": True}, {"layout": "atlas"}])
+def test_float32_in_float32_out(compiled: bool, options: dict[str, Any]) -> None:
+    from shadowmath._backends import _kernels
+
+    sun, view, proj, box = (a.astype(np.float32) for a in scene(0))
+    with _kernels.disabled() if not compiled else contextlib.nullcontext():
+        c = sm.fit_cascades(sun, view, proj, box, 256, **options)
+    for name in ("world_to_light", "world_to_clip", "world_to_texture", "splits", "band_end",
+                 "texel_size"):  # fmt: skip
+        assert getattr(c, name).dtype == np.float32, name
+    assert all(np.asarray(f).dtype == np.float32 for f in c.frustum[:8])
+    want = sm.fit_cascades(*scene(0), 256, **options)
+    np.testing.assert_allclose(c.world_to_clip, want.world_to_clip, rtol=2e-3, atol=2e-4)

@@ -318,7 +318,7 @@ def _camera(ctx: Context, checks: Checks, V: Array, P: Array, C: Any) -> Camera:
     hom = xp.matmul(xp.asarray(corners, dtype=ctx.dtype), xp.swapaxes(inv_p, -1, -2))
     near_h, far_h = hom[..., :4, :], hom[..., 4:, :]
     near = near_h[..., :3] / near_h[..., 3:]
-    far = far_h * xp.where(far_h[..., 3:] < 0, -1.0, 1.0)
+    far = xp.where(far_h[..., 3:] < 0, -far_h, far_h)
     far = far / xp.max(xp.abs(far), axis=-1, keepdims=True)
     nz = xp.mean(near[..., 2], axis=-1)
     fw = xp.mean(far[..., 3], axis=-1)
@@ -622,8 +622,9 @@ def _in_tile(xp: Any, tex: tuple[Array, ...], tile: tuple[int, int, Array]) -> t
     cols, rows, cells = tile
     if cols == 1 and rows == 1:
         return tex
-    col = xp.asarray(cells[:, 0].astype(float))
-    row = xp.asarray(cells[:, 1].astype(float))
+    dtype = tex[0].dtype
+    col = xp.asarray(cells[:, 0], dtype=dtype)
+    row = xp.asarray(cells[:, 1], dtype=dtype)
     q = tex[12:16]
     s = tuple((tex[i] + col * q[i]) / cols for i in range(4))
     t = tuple((tex[4 + i] + row * q[i]) / rows for i in range(4))

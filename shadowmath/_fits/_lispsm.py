@@ -156,14 +156,13 @@ def _rows(
     t = F.where(valid, t, 1.0 + 0.0 * t)
     s = -uy * ends[0] + ux * ends[1] - view.eye_s[..., None]
     x, dz = s / t, (ends[2] - wp.z0[..., None]) / t
+    one = 1.0 + 0.0 * wp.n
     lo = xp.min(xp.where(valid, x, inf), axis=-1)
     hi = xp.max(xp.where(valid, x, -inf), axis=-1)
     top = xp.max(xp.where(valid, dz, -inf), axis=-1)
     ok = wp.ok & (hi > lo) & (top > 0)
-    one = 1.0 + 0.0 * wp.n
-    h = F.where(ok, 0.5 * (hi - lo), one)
-    c = F.where(ok, 0.5 * (hi + lo), 0.0 * one)
-    top = F.where(ok, top, one)
+    lo, hi, top = F.where(ok, lo, -one), F.where(ok, hi, one), F.where(ok, top, one)
+    h, c = 0.5 * (hi - lo), 0.5 * (hi + lo)
     a, b = -NEAR_FAR_SLACK * top, (1.0 + NEAR_FAR_SLACK) * top
     zero = 0.0 * one
     t_row = (ux[..., 0] + zero, uy[..., 0] + zero, zero, -wp.t0)
