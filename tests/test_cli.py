@@ -61,6 +61,7 @@ def test_help_is_plain_text_with_every_default(capsys):
         ("--seed", "(default: 0)"),
         ("--api", "(default: opengl)"),
         ("--directional", "(default: the point light)"),
+        ("--cascade-colors", "(default: not written)"),
     ]:
         assert default in " ".join(entries[option].split()), option
 
@@ -771,3 +772,58 @@ def test_a_wide_fit_is_a_note_naming_the_light(capsys, tmp_path, gl):
     err = capsys.readouterr().err
     assert err.count("note:") == 1
     assert "note: --light 0 1.6 3.4: the fitted frustum is wider than 120 degrees" in err
+
+
+# ---- --method cascades: a sun over a large scene, seen toward the horizon ------------------
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--cascade-colors", "c.png"], "--cascade-colors c.png: --method texture has no cascades"),
+        (["--method", "cascades", "--light", "1", "2", "3"], "--light 1 2 3: --method cascades"),
+        (["--method", "cascades", "--api", "webgpu"], "--api webgpu"),
+        (["--method", "cascades", "--shadow-map-output", "m.png"], "--method cascades draws"),
+        (["--method", "cascades", "--samples", "4"], "--samples 4: --method cascades"),
+        (["--method", "cascades", "--directional", "1", "-1", "1"], "y = -1 puts it"),
+    ],
+)
+def test_cascades_options_that_do_not_apply_are_refused(capsys, tmp_path, args, message):
+    err = _error(capsys, [*args, "--output", str(tmp_path / "x.png")])
+    assert message in err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_cascade_colors_must_differ_from_the_output(capsys, tmp_path):
+    out = str(tmp_path / "x.png")
+    err = _error(capsys, ["--method", "cascades", "--output", out, "--cascade-colors", out])
+    assert "the same file as --output" in err
+
+
+@pytest.mark.usefixtures("gl")
+def test_cascades_demo_writes_the_picture_and_its_cascades(capsys, tmp_path):
+    from PIL import Image
+
+    out, colored = tmp_path / "c.png", tmp_path / "cc.png"
+    args = ["--method", "cascades", "--size", "96", "64", "--map-size", "128", "--pcf", "1"]
+    assert main([*args, "--output", str(out), "--cascade-colors", str(colored)]) == 0
+    printed = capsys.readouterr().out
+    first, second = printed.splitlines()[:2]
+    assert "cascaded shadow maps (4 cascades of 128x128, PCF radius 1" in first
+    assert str(colored) in second
+    picture = np.asarray(Image.open(out)).astype(float)
+    tinted = np.asarray(Image.open(colored)).astype(float)
+    assert picture.shape == tinted.shape == (64, 96, 3)
+    # the tint only multiplies: never brighter, and it changes the picture
+    assert np.all(tinted <= picture + 1)
+    assert np.abs(tinted - picture).max() > 20
+    # the splits are printed, increasing from the camera's near plane to its far one
+    block = printed.split("splits (view depths bounding the cascades) =\n")[1].splitlines()[0]
+    splits = np.array(block.strip(" []").split(), dtype=float)
+    assert len(splits) == 5 and np.all(np.diff(splits) > 0)
+    assert splits[0] == pytest.approx(0.5) and splits[-1] == pytest.approx(250.0)
+    # each cascade's clip matrix is orthographic: its last printed row is 0 0 0 1
+    for i in range(4):
+        part = printed.split(f"world_to_clip[{i}] (cascade {i}'s depth map) =\n")[1]
+        last = part.splitlines()[3]
+        assert np.allclose(np.array(last.strip(" []").split(), dtype=float), [0, 0, 0, 1])

@@ -13,19 +13,22 @@ The layers, each a client of the public API (``import shadowmath as sm``,
 * ``_options``: the parser, the option checks and their messages, :class:`Options`.
 * ``_build``: the scene from the options: light checks, blocker mesh, bodies, fits.
 * ``_run``: the device and its limits, the render, the files and the printout.
+* ``_cascades``: ``--method cascades``, its own large scene under a sun, drawn with
+  cascaded shadow maps (``render_cascades``).
 """
 
 from __future__ import annotations
 
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import shadowmath as sm
 
 from ._build import build_scene, check_light_and_mesh, fit_light
-from ._options import OptionError, build_parser, resolve_options
+from ._cascades import draw_cascades
+from ._options import OptionError, Options, build_parser, resolve_options
 from ._run import (
     UnavailableError,
     check_limits,
@@ -51,22 +54,32 @@ def main(argv: Sequence[str] | None = None) -> int:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", sm.ShadowFitWarning)
             options = resolve_options(args)
-            geometry = check_light_and_mesh(options)
-            require_renderer()
-            scene = build_scene(options, geometry)
-            fit = fit_light(options, geometry)
-            device = open_device(options)
-            check_limits(options, device)
-            rendered = render(options, scene, fit, device)
-            write_outputs(options, rendered)
+            if options.method == "cascades":
+                require_renderer()
+                printout = draw_cascades(options)
+            else:
+                printout = _draw(options)
     except OptionError as err:
         parser.error(str(err))
     except UnavailableError as err:
         parser.exit(1, f"{parser.prog}: {err}\n")
     _notes(parser.prog, args, caught)
-    print_matrices(options, scene, fit, rendered)
+    printout()
     sys.stdout.flush()
     return 0
+
+
+def _draw(options: Options) -> Callable[[], None]:
+    """The article's scene: checked, fitted, drawn and written; returns the printout."""
+    geometry = check_light_and_mesh(options)
+    require_renderer()
+    scene = build_scene(options, geometry)
+    fit = fit_light(options, geometry)
+    device = open_device(options)
+    check_limits(options, device)
+    rendered = render(options, scene, fit, device)
+    write_outputs(options, rendered)
+    return lambda: print_matrices(options, scene, fit, rendered)
 
 
 def _notes(prog: str, args: Any, caught: list[warnings.WarningMessage]) -> None:

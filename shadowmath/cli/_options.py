@@ -24,19 +24,25 @@ import shadowmath as sm
 from shadowmath import meshes
 
 #: A shadow system of ``--method`` (the ``method`` of ``render_scene``).
-Method = Literal["texture", "planar", "depth", "omni", "soft", "radiance"]
+Method = Literal["texture", "planar", "depth", "omni", "soft", "radiance", "cascades"]
 
 #: ``--method``'s shadow systems, and the options that apply to each.
-METHODS: tuple[Method, ...] = ("texture", "planar", "depth", "omni", "soft", "radiance")
-DEPTH_BIAS_METHODS = ("depth", "omni", "soft")
-PCF_METHODS = ("depth", "soft")
+METHODS: tuple[Method, ...] = (
+    "texture", "planar", "depth", "omni", "soft", "radiance", "cascades",
+)  # fmt: skip
+DEPTH_BIAS_METHODS = ("depth", "omni", "soft", "cascades")
+PCF_METHODS = ("depth", "soft", "cascades")
 AREA_LIGHT_METHODS = ("soft", "radiance")
-DIRECTIONAL_METHODS = ("planar", "depth")
+DIRECTIONAL_METHODS = ("planar", "depth", "cascades")
 MAP_OUTPUT_METHODS = ("texture", "depth", "omni")
 APIS = ("opengl", "webgpu")
 
 DEFAULT_LIGHT = (-2.2, 3.6, 6.0)
+#: The sun of ``--method cascades`` (toward the light; the scene's ground is ``y = 0``).
+DEFAULT_SUN = (1.0, 0.4, 0.5)
 DEFAULT_MAP_SIZE = 256
+#: ``--method cascades``'s default map size, per cascade.
+DEFAULT_CASCADE_MAP_SIZE = 1024
 DEFAULT_IMAGE_SIZE = (640, 400)
 #: The default picture; its folder is the only one the demo creates when missing.
 DEFAULT_OUTPUT = Path("out/shadow.png")
@@ -88,6 +94,11 @@ shadow systems (--method):
             the depth-map shadows of its samples (--pcf, --depth-bias)
   radiance  an area light: Heckbert and Herf's radiance texture per receiver
             (pyramid_to_unit_cube), accumulated over the samples
+  cascades  a sun over a large scene (a 200 x 200 ground, towers, the
+            blocker) seen from near the ground toward the horizon: four
+            cascaded depth maps fitted to the camera (fit_cascades; --pcf,
+            --depth-bias, --directional for the sun, --map-size per cascade,
+            --cascade-colors FILE.png for the cascades coloured)
   --directional X Y Z replaces the point light with a directional one
   (parallel rays, an orthographic depth map) for planar and depth.
   An option that does not apply to the chosen system is refused.
@@ -105,7 +116,8 @@ examples:
   python -m shadowmath --method depth --pcf 1 --map-size 512
   python -m shadowmath --method depth --api webgpu
   python -m shadowmath --method depth --directional -1 2 1.5
-  python -m shadowmath --method soft --area-light 1.5 1 --samples 64"""
+  python -m shadowmath --method soft --area-light 1.5 1 --samples 64
+  python -m shadowmath --method cascades --cascade-colors out/cascades.png"""
 
 
 class OptionError(ValueError):
@@ -264,14 +276,16 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
         metavar=("X", "Y", "Z"),
         default=None,
         help="a directional light instead of --light (parallel rays, like sunlight): the "
-        "direction toward the light, with y > 0 and z > 0; --method planar or depth only "
+        "direction toward the light, with y > 0 and z > 0; --method planar, depth or "
+        "cascades only (the sun of cascades: y > 0 only; default for cascades: "
+        f"{shown(DEFAULT_SUN)}) "
         "(default: the point light)",
     )
     parser.add_argument(
         "--method",
         choices=METHODS,
         default="texture",
-        help="the shadow system, one of texture, planar, depth, omni, soft, radiance "
+        help="the shadow system, one of texture, planar, depth, omni, soft, radiance, cascades "
         "(see 'shadow systems' below) (default: texture)",
     )
 
@@ -286,7 +300,8 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
         help="the shadow map's size in texels, N (square) or WxH, at most the driver's "
         "maximum texture size: the silhouette map (texture), the depth map (depth, and "
         "each sample's in soft), each cube face (omni: square only), each receiver's "
-        f"radiance texture (radiance); not with planar (default: {DEFAULT_MAP_SIZE})",
+        f"radiance texture (radiance), each cascade's map (cascades, default "
+        f"{DEFAULT_CASCADE_MAP_SIZE}); not with planar (default: {DEFAULT_MAP_SIZE})",
     )
     parser.add_argument(
         "--pcf",
@@ -294,7 +309,7 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="K",
         help="percentage-closer filtering: each depth comparison averaged over a "
-        "(2K+1)x(2K+1) box of texels; --method depth or soft only (the omni pass "
+        "(2K+1)x(2K+1) box of texels; --method depth, soft or cascades only (the omni pass "
         "samples one cube-map texel) (default: 0, no filtering)",
     )
     parser.add_argument(
@@ -305,7 +320,7 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="the depth map's polygon offset against shadow acne, glPolygonOffset(FACTOR, "
         "UNITS): FACTOR times each caster triangle's depth slope plus UNITS depth steps; "
-        "--method depth, omni or soft (WebGPU rounds UNITS to an integer) "
+        "--method depth, omni, soft or cascades (WebGPU rounds UNITS to an integer) "
         f"(default: {DEFAULT_DEPTH_BIAS[0]:g}+2K {DEFAULT_DEPTH_BIAS[1]:g}, "
         "K the --pcf radius)",
     )
@@ -379,6 +394,15 @@ def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
         "cube faces +X -X +Y -Y +Z -Z side by side (omni); its folder must exist "
         "(default: not written)",
     )
+    parser.add_argument(
+        "--cascade-colors",
+        type=Path,
+        default=None,
+        metavar="FILE.png",
+        help="--method cascades: also write the picture with each cascade coloured (red, "
+        "green, blue, yellow from near to far, mixed across the blend bands); its folder "
+        "must exist (default: not written)",
+    )
 
 
 def check_combinations(args: argparse.Namespace) -> None:
@@ -390,6 +414,7 @@ def check_combinations(args: argparse.Namespace) -> None:
             ``--pcf`` and ``--map-size`` with their numbers).
     """
     _check_directional(args)
+    _check_cascades(args)
     _check_api_and_map(args)
     _check_method_options(args)
     _check_pcf_border(args)
@@ -405,12 +430,26 @@ def _check_directional(args: argparse.Namespace) -> None:
     if args.method not in DIRECTIONAL_METHODS:
         raise OptionError(
             f"{given}: --method {args.method} takes a point light; directional lights "
-            "are drawn by --method planar or depth"
+            "are drawn by --method planar, depth or cascades"
         )
     if args.api == "webgpu":
         raise OptionError(
             f"{given}: the demo's WebGPU renderer takes a point light; use --api opengl "
             "(the default) for a directional light"
+        )
+
+
+def _check_cascades(args: argparse.Namespace) -> None:
+    """``--cascade-colors`` only with cascades; cascades light with a sun, not ``--light``."""
+    if args.cascade_colors is not None and args.method != "cascades":
+        raise OptionError(
+            f"--cascade-colors {args.cascade_colors}: --method {args.method} has no cascades; "
+            "it applies to --method cascades"
+        )
+    if args.method == "cascades" and args.light is not None:
+        raise OptionError(
+            f"--light {shown(args.light)}: --method cascades lights the scene with a sun; "
+            "give its direction with --directional X Y Z"
         )
 
 
@@ -435,6 +474,8 @@ def _check_api_and_map(args: argparse.Namespace) -> None:
             "planar": "--method planar draws no shadow map to write",
             "soft": "--method soft draws one depth map per light sample and writes none",
             "radiance": "--method radiance draws a texture per receiver and writes none",
+            "cascades": "--method cascades draws four maps; --cascade-colors writes the "
+            "picture with its cascades coloured",
         }[method]
         raise OptionError(
             f"--shadow-map-output: {why} (it writes the map of --method texture, depth or omni)"
@@ -452,12 +493,12 @@ def _check_method_options(args: argparse.Namespace) -> None:
         )
         raise OptionError(
             f"--pcf {args.pcf}: {why}; percentage-closer filtering applies to "
-            "--method depth or soft"
+            "--method depth, soft or cascades"
         )
     if args.depth_bias is not None and method not in DEPTH_BIAS_METHODS:
         raise OptionError(
             f"--depth-bias {shown(args.depth_bias)}: --method {method} draws no depth "
-            "map; the bias applies to --method depth, omni or soft"
+            "map; the bias applies to --method depth, omni, soft or cascades"
         )
     for option, value in (
         ("--area-light", args.area_light),
@@ -544,6 +585,7 @@ class Options:
         samples, seed: the area light's samples and their jitter seed.
         output: the picture's resolved path.
         map_output: the shadow map's resolved path, or None.
+        cascade_output: ``--cascade-colors``'s resolved path, or None.
         default_output: ``--output`` was not given: create its folder if missing.
     """
 
@@ -561,6 +603,7 @@ class Options:
     seed: int
     output: Path
     map_output: Path | None
+    cascade_output: Path | None
     default_output: bool
 
     @property
@@ -578,6 +621,22 @@ class Options:
     def light_option(self) -> str:
         """The light as an option, for messages: ``--light X Y Z`` or ``--directional X Y Z``."""
         return f"--{'directional' if self.directional else 'light'} {shown(self.light)}"
+
+
+def _light_of(args: argparse.Namespace) -> Any:
+    """The light's vector: ``--directional``, the cascades' default sun, or ``--light``."""
+    if args.directional is not None:
+        return args.directional
+    if args.method == "cascades":
+        return DEFAULT_SUN
+    return args.light or DEFAULT_LIGHT
+
+
+def _map_size_of(args: argparse.Namespace) -> int | tuple[int, int]:
+    """``--map-size``, or the method's default."""
+    if args.map_size is not None:
+        return cast(int | tuple[int, int], args.map_size)
+    return DEFAULT_CASCADE_MAP_SIZE if args.method == "cascades" else DEFAULT_MAP_SIZE
 
 
 def resolve_options(args: argparse.Namespace) -> Options:
@@ -610,16 +669,24 @@ def resolve_options(args: argparse.Namespace) -> Options:
             f"{args.output or DEFAULT_OUTPUT}; the map would overwrite the picture, give "
             "another name"
         )
+    cascade_output = (
+        None
+        if args.cascade_colors is None
+        else png_path("--cascade-colors", args.cascade_colors, create=False)
+    )
+    if cascade_output is not None and cascade_output == output:
+        raise OptionError(
+            f"--cascade-colors {args.cascade_colors}: the same file as --output "
+            f"{args.output or DEFAULT_OUTPUT}; give another name"
+        )
     width, height = args.size
     return Options(
         method=cast(Method, args.method),
         webgpu=args.api == "webgpu",
         mesh=args.mesh,
-        light=np.asarray(
-            args.directional if directional else (args.light or DEFAULT_LIGHT), dtype=np.float64
-        ),
-        directional=directional,
-        map_size=DEFAULT_MAP_SIZE if args.map_size is None else args.map_size,
+        light=np.asarray(_light_of(args), dtype=np.float64),
+        directional=directional or args.method == "cascades",
+        map_size=_map_size_of(args),
         image_size=(width, height),
         pcf=pcf,
         bias=bias,
@@ -628,5 +695,6 @@ def resolve_options(args: argparse.Namespace) -> Options:
         seed=DEFAULT_SEED if args.seed is None else args.seed,
         output=output,
         map_output=map_output,
+        cascade_output=cascade_output,
         default_output=args.output is None,
     )

@@ -214,6 +214,8 @@ def _render_opengl(
     from shadowmath import render as gl_render
 
     method = options.method
+    if method == "cascades":  # drawn by _cascades.draw_cascades, never here
+        raise AssertionError("--method cascades is drawn by draw_cascades")
     light = _light(options, fit)
     try:
         frame = gl_render.render_scene(

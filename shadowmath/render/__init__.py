@@ -20,6 +20,10 @@ does not.
   Lights are points (``Light(position)``), area lights (``edge_u``, ``edge_v``) or,
   for ``method="planar"`` and ``"depth"``, directional (``Light(direction=...)``,
   the homogeneous ``(x, y, z, 0)``: parallel rays, an orthographic depth map).
+* :func:`render_cascades`: a sun's cascaded shadow maps fitted to the camera
+  (:func:`shadowmath.fit_cascades`), drawn as layers of a texture array or tiles of an
+  atlas; the camera-view pass picks the cascade by view depth and blends across the
+  bands; optionally a second picture coloured by cascade.
 * :func:`radiance_texture`: Heckbert and Herf's radiance texture of one receiver
   parallelogram, as a NumPy array.
 * moderngl 5 has no stencil state. Where the articles use the stencil buffer
@@ -37,6 +41,10 @@ from ._camera import perspective as perspective
 from ._context import DEBIAN_PACKAGES as DEBIAN_PACKAGES
 from ._context import GLUnavailableError as GLUnavailableError
 from ._context import standalone_context as standalone_context
+from ._pass_cascades import CASCADE_COLORS as CASCADE_COLORS
+from ._pass_cascades import MAX_CASCADES as MAX_CASCADES
+from ._pass_cascades import CascadeFrame as CascadeFrame
+from ._pass_cascades import render_cascades as render_cascades
 from ._pass_lit import MAX_LIGHTS as MAX_LIGHTS
 from ._pass_planar import PLANAR_POLYGON_OFFSET as PLANAR_POLYGON_OFFSET
 from ._pass_soft import radiance_texture as radiance_texture
@@ -47,16 +55,20 @@ from ._scene import render_scene as render_scene
 from ._shadow_map import render_shadow_map as render_shadow_map
 
 __all__ = [
+    "CASCADE_COLORS",
     "DEBIAN_PACKAGES",
+    "MAX_CASCADES",
     "MAX_LIGHTS",
     "PLANAR_POLYGON_OFFSET",
     "Body",
+    "CascadeFrame",
     "Frame",
     "GLUnavailableError",
     "Light",
     "look_at",
     "perspective",
     "radiance_texture",
+    "render_cascades",
     "render_scene",
     "render_shadow_map",
     "standalone_context",

@@ -1,0 +1,172 @@
+"""``--method cascades``: a sun over a large scene, seen from near the ground to the horizon.
+
+Not the article's wall and floor: a 200 x 200 ground (the plane ``y = 0``, two
+triangles), towers and boxes spread over it and the ``--mesh`` blocker, three
+times the torus's size, in front of the camera, which stands 5 units above the
+ground and looks along ``-z`` toward the horizon. The sun (``--directional``, or
+:data:`~shadowmath.cli._options.DEFAULT_SUN`) is drawn by
+:func:`shadowmath.render.render_cascades` with four cascades fitted to the camera
+by :func:`shadowmath.fit_cascades`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from shadowmath import meshes
+
+from ._build import HUGE_LENGTH, TINY_LENGTH, blocker_mesh, length, placement, rotation
+from ._options import OptionError, Options, shown
+from ._run import (
+    AMBIENT,
+    BACKGROUND,
+    UnavailableError,
+    check_limits,
+    open_device,
+    print_matrix,
+    save_png,
+)
+
+if TYPE_CHECKING:
+    from shadowmath.render import Body, CascadeFrame
+
+#: The ground's side (it spans ``x, z`` in ``[-100, 100]``).
+GROUND_SIZE = 200.0
+#: ``(x, z, width, depth, height, turn in degrees)`` of the towers and boxes.
+TOWERS = (
+    (14.0, 30.0, 1.5, 1.5, 7.0, 0.0),
+    (24.0, 8.0, 3.0, 3.0, 16.0, 10.0),
+    (-8.0, 12.0, 2.0, 2.0, 5.0, 20.0),
+    (12.0, 0.0, 4.0, 2.0, 4.0, -15.0),
+    (-14.0, -5.0, 5.0, 5.0, 14.0, 10.0),
+    (16.0, -20.0, 4.0, 6.0, 10.0, 30.0),
+    (-4.0, -40.0, 8.0, 4.0, 6.0, -20.0),
+    (-35.0, -55.0, 6.0, 6.0, 22.0, 5.0),
+    (30.0, -70.0, 10.0, 5.0, 12.0, 15.0),
+    (0.0, -90.0, 12.0, 8.0, 18.0, -10.0),
+)
+BLOCKER_AT = (5.0, 2.6, 14.0)
+EYE, TARGET = (0.0, 5.0, 40.0), (0.0, 0.0, -60.0)
+NEAR, FAR, FOV_Y = 0.5, 250.0, 50.0
+
+
+def check_sun(direction: NDArray[np.float64]) -> None:
+    """The sun must shine onto the ground's top, with a length the library can normalize.
+
+    Raises:
+        OptionError: ``--directional`` not finite, with ``y <= 0``, or of a length whose
+            square leaves floating point's range.
+    """
+    given = f"--directional {shown(direction)}"
+    if not np.all(np.isfinite(direction)):
+        raise OptionError(f"{given}: coordinates must be finite")
+    if direction[1] <= 0:
+        raise OptionError(
+            f"{given}: the direction points toward the sun, and y = {direction[1]:g} puts it "
+            "on or below the ground (the plane y = 0); give y > 0"
+        )
+    size = length(direction)
+    if not TINY_LENGTH <= size <= HUGE_LENGTH:
+        raise OptionError(
+            f"{given}: the direction's length {size:.3g} is beyond floating point's range for "
+            f"its square; only the direction matters, e.g. --directional {shown(direction / size)}"
+        )
+
+
+def cascade_bodies(options: Options) -> list[Body]:
+    """The ground, the towers and the ``--mesh`` blocker (needs :mod:`shadowmath.render`)."""
+    from shadowmath.render import Body
+
+    ground = meshes.grid((GROUND_SIZE, GROUND_SIZE), segments=(1, 1))
+    flat = placement(rotation((1.0, 0.0, 0.0), -90.0), (0.0, 0.0, 0.0))
+    bodies = [Body(*ground, flat, (0.55, 0.62, 0.5))]
+    for x, z, w, d, h, turn in TOWERS:
+        turned = placement(rotation((0.0, 1.0, 0.0), turn), (x, 0.5 * h, z))
+        bodies.append(Body(*meshes.box((w, h, d)), turned, (0.82, 0.78, 0.7)))
+    tilt = rotation((0.0, 1.0, 0.0), -35.0) @ rotation((1.0, 0.0, 0.0), -25.0)
+    bodies.append(Body(*blocker_mesh(options.mesh), placement(tilt, BLOCKER_AT, 2.0),
+                       (0.85, 0.33, 0.18)))  # fmt: skip
+    return bodies
+
+
+def draw_cascades(options: Options) -> Callable[[], None]:
+    """Check the sun, draw the picture (and the cascade-coloured one), write the files.
+
+    Returns:
+        the printout of the matrices, to run after the notes.
+
+    Raises:
+        OptionError: a bad sun, a size beyond the driver's limits, a file not written.
+        UnavailableError: no OpenGL context, or OpenGL failed to draw.
+    """
+    import moderngl
+
+    from shadowmath.render import Light, look_at, perspective, render_cascades
+
+    check_sun(options.light)
+    bodies = cascade_bodies(options)
+    device = open_device(options)
+    check_limits(options, device)
+    width, height = options.image_size
+    view = look_at(EYE, TARGET)
+    projection = perspective(FOV_Y, width / height, NEAR, FAR)
+    try:
+        frame = render_cascades(
+            bodies, Light(direction=options.light), view, projection,
+            image_size=options.image_size, map_size=options.map_size, pcf_radius=options.pcf,
+            depth_bias=options.bias, cascade_colors=options.cascade_output is not None,
+            ambient=AMBIENT, background=BACKGROUND, ctx=device.ctx,
+        )  # fmt: skip
+    except moderngl.Error as err:
+        raise UnavailableError(f"OpenGL failed to render the cascades: {err}") from None
+    _write(options, frame)
+    return lambda: print_cascades(frame)
+
+
+def _write(options: Options, frame: CascadeFrame) -> None:
+    """Save the picture and the cascade-coloured one, a line for each file."""
+    output = options.output
+    if options.default_output:
+        try:
+            output.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise OptionError(
+                f"--output {output}: cannot create its folder ({err.strerror or err})"
+            ) from None
+    save_png("--output", output, frame.color)
+    print(f"wrote {output}: {summary(options)}")
+    if options.cascade_output is not None and frame.cascade_color is not None:
+        save_png("--cascade-colors", options.cascade_output, frame.cascade_color)
+        print(
+            f"wrote {options.cascade_output}: the same picture with its cascades coloured, "
+            "red, green, blue, yellow from near to far"
+        )
+
+
+def summary(options: Options) -> str:
+    """What the picture shows: its size, the scene, the sun, the maps."""
+    width, height = options.image_size
+    map_w, map_h = options.map_texels
+    sun = tuple(float(c) for c in options.light)
+    return (
+        f"a {width}x{height} PNG, a 200x200 ground with towers and a {options.mesh} under a sun "
+        f"toward {sun}, seen from near the ground toward the horizon, cascaded shadow maps "
+        f"(4 cascades of {map_w}x{map_h}, PCF radius {options.pcf}, depth bias "
+        f"{options.bias[0]:g} {options.bias[1]:g}) drawn with OpenGL"
+    )
+
+
+def print_cascades(frame: CascadeFrame) -> None:
+    """The splits, the bands and each cascade's matrices."""
+    c = frame.cascades
+    print_matrix("splits (view depths bounding the cascades)", np.asarray(c.splits))
+    print_matrix("band_end (cascade i blends into i + 1 up to here)", np.asarray(c.band_end))
+    clip: Any = np.asarray(c.world_to_clip)
+    texture: Any = np.asarray(c.world_to_texture)
+    for i in range(len(clip)):
+        print_matrix(f"world_to_clip[{i}] (cascade {i}'s depth map)", clip[i])
+        print_matrix(f"world_to_texture[{i}] ((s, t, r, 1) in cascade {i})", texture[i])

@@ -1,0 +1,364 @@
+"""Cascaded shadow maps of a sun, seen from a camera: :func:`render_cascades`.
+
+A client of the public API like any user's renderer: :func:`shadowmath.fit_cascades`
+fits the cascades to the camera's ``view`` and ``projection`` and the scene's box;
+every body's depth is drawn into each cascade's map (a layer of a texture array, or a
+tile of an atlas) with ``world_to_clip[i]`` and a polygon offset; the camera-view pass
+picks the cascade by the fragment's view depth, blends across the band and compares
+with PCF (``shaders/cascades.frag``). Every body casts and receives, as with
+``render_scene(..., method="depth")``, whose lit and subtractive passes it shares.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, Literal, NamedTuple
+
+import moderngl
+import numpy as np
+from numpy.typing import NDArray
+
+import shadowmath as sm
+
+from ._context import check_matrix, program, resolve_context, set_matrix, set_uniform, uniform
+from ._context import image_size as _image_size
+from ._pass_depth import depth_bias_option, pcf_radius_option
+from ._pass_lit import draw_lit, finish, subtract_light
+from ._resources import Body, GpuScene, Light, Prepared, prepare_body, prepare_light, read_texture
+
+#: The most cascades the shader takes (its uniform arrays' size).
+MAX_CASCADES = 8
+
+#: The default normal-offset bias, in texels of each cascade (:func:`render_cascades`).
+NORMAL_OFFSET = 0.5
+
+#: The debug view's cascade colours, multiplied into the picture (cascade ``i`` takes
+#: ``CASCADE_COLORS[i % len]``): red, green, blue, yellow, magenta, cyan, orange, violet.
+CASCADE_COLORS = (
+    (1.0, 0.45, 0.45),
+    (0.45, 1.0, 0.45),
+    (0.5, 0.6, 1.0),
+    (1.0, 1.0, 0.4),
+    (1.0, 0.45, 1.0),
+    (0.4, 1.0, 1.0),
+    (1.0, 0.7, 0.35),
+    (0.7, 0.5, 1.0),
+)
+
+
+class CascadeFrame(NamedTuple):
+    """What :func:`render_cascades` returns; images have row 0 at the *top* (as saved).
+
+    Attributes:
+        color: ``(H, W, 3)`` float32 in ``[0, 1]``, the shadowed picture.
+        cascade_color: ``(H, W, 3)`` float32, the same picture tinted by cascade
+            (:data:`CASCADE_COLORS`, blended across the bands); None unless asked.
+        shadow: ``(H, W)`` float32 shadow mask on every visible body (1 shadowed, 0 lit;
+            PCF and the blend bands give fractions).
+        cascade: ``(H, W)`` int32, the cascade serving each pixel's view depth (``-1``
+            on the background and beyond the last split).
+        position: ``(H, W, 3)`` float32 world position of the visible surface (NaN on
+            the background).
+        normal: ``(H, W, 3)`` float32 unit face normal (NaN on the background).
+        body: ``(H, W)`` int32, which body is visible (``-1`` the background).
+        cascades: the :class:`shadowmath.Cascades` the maps were drawn and sampled with.
+        shadow_maps: ``(layers, h, w)`` float32 window depths, row 0 is ``t = 0`` (1 where
+            nothing was drawn): one layer per cascade, or the whole atlas as one layer.
+    """
+
+    color: NDArray[np.float32]
+    cascade_color: NDArray[np.float32] | None
+    shadow: NDArray[np.float32]
+    cascade: NDArray[np.int32]
+    position: NDArray[np.float32]
+    normal: NDArray[np.float32]
+    body: NDArray[np.int32]
+    cascades: sm.Cascades
+    shadow_maps: NDArray[np.float32]
+
+
+class CascadeOptions(NamedTuple):
+    """The checked options of one :func:`render_cascades` call."""
+
+    layout: Literal["layers", "atlas"]
+    pcf_radius: int
+    bias: tuple[float, float]
+    normal_offset: float
+    ambient: float
+    background: tuple[float, float, float]
+    cascade_colors: bool
+
+
+def render_cascades(
+    bodies: Sequence[Body],
+    light: Light,
+    view: Any,
+    projection: Any,
+    *,
+    scene_bounds: Any = None,
+    image_size: int | tuple[int, int] = (512, 384),
+    map_size: int | tuple[int, int] = 1024,
+    count: int = 4,
+    splits: Any = None,
+    scheme: Literal["uniform", "log", "practical"] = "practical",
+    lam: float = 0.5,
+    max_distance: float | None = None,
+    overlap: float = 0.1,
+    stable: bool = False,
+    layout: Literal["layers", "atlas"] = "layers",
+    pcf_radius: int = 0,
+    depth_bias: tuple[float, float] | None = None,
+    normal_offset: float = NORMAL_OFFSET,
+    cascade_colors: bool = False,
+    ambient: float = 0.15,
+    background: tuple[float, float, float] = (0.06, 0.07, 0.09),
+    ctx: moderngl.Context | None = None,
+) -> CascadeFrame:
+    r"""Render bodies under a sun with cascaded shadow maps fitted to the camera.
+
+    1. :func:`shadowmath.fit_cascades` (``light.direction``, ``view``, ``projection``,
+       ``scene_bounds``, ``map_size`` and the split, band, stability, layout and
+       ``pcf_radius`` options, OpenGL conventions).
+    2. Per cascade ``i``: every body's depth through ``world_to_clip[i]`` with
+       ``glPolygonOffset(*depth_bias)``, into layer ``i`` of an ``(n, h, w)`` float
+       texture array (``layout="layers"``), or into tile ``viewports[i]`` of one
+       atlas.
+    3. The lit pass, then the mask: each visible point's view depth
+       ``d = -(view @ p)_z`` picks cascade ``i`` with ``splits[i] <= d < splits[i+1]``;
+       ``world_to_texture[i] @ p = (s, t, r, 1)`` (``p`` moved off its face by the
+       normal offset) is compared with the map over a
+       ``(2k + 1)^2`` box of texels (``r <= stored``: lit), and for ``d <=
+       band_end[i - 1]`` the comparison in cascade ``i - 1`` is mixed in with weight
+       ``(band_end[i-1] - d) / (band_end[i-1] - splits[i])``; then the subtractive pass.
+       With ``cascade_colors`` a second picture multiplies each pixel by its
+       cascade's colour (mixed the same way across the bands).
+
+    Arguments:
+        bodies: every body casts and receives.
+        light: a directional :class:`Light` (``Light(direction=...)``, toward the sun).
+        view: ``(4, 4)`` the camera's world-to-view matrix (OpenGL: it looks down ``-z``),
+            e.g. :func:`look_at`.
+        projection: ``(4, 4)`` its OpenGL projection, e.g. :func:`perspective`.
+        scene_bounds: ``(2, 3)`` ``[min_corner, max_corner]`` holding every caster and
+            receiver; default the bodies' bounding box. A caster outside it may lose
+            its shadow (the maps reach toward the sun only to the box).
+        image_size, map_size: the picture's and each cascade's map size in pixels/texels.
+        count, splits, scheme, lam, max_distance, overlap, stable, layout: as in
+            :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades).
+        pcf_radius: the PCF kernel's radius ``k`` (also the maps' border).
+        depth_bias: ``(factor, units)`` polygon offset; default ``(2.5 + 2 k, 4.0)``.
+        normal_offset: the normal-offset bias in texels: each point is looked up in
+            cascade ``i`` moved along its face normal by ``normal_offset *
+            max(texel_size[i])`` (:data:`NORMAL_OFFSET` by default, 0 for none).
+        cascade_colors: also render the cascade-coloured picture.
+        ambient, background: shading as in :func:`render_scene`.
+        ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
+
+    Returns:
+        :class:`CascadeFrame`.
+
+    Raises:
+        ValueError: bad bodies, matrices, sizes or options; a light that is not
+            directional; more than :data:`MAX_CASCADES` cascades; and whatever
+            :func:`shadowmath.fit_cascades` raises.
+        GLUnavailableError: no OpenGL context could be created.
+
+    Example:
+        >>> from shadowmath.meshes import box, grid
+        >>> from shadowmath.render import Body, Light, look_at, perspective
+        >>> ground = Body(*grid((100.0, 100.0), segments=(1, 1)))
+        >>> tower = Body(*box((2.0, 2.0, 8.0)), to_world=np.array(
+        ...     [[1, 0, 0, 5], [0, 1, 0, 20], [0, 0, 1, 4], [0, 0, 0, 1.0]]))
+        >>> view = look_at([0, -40, 3], [0, 0, 1], [0, 0, 1])
+        >>> frame = render_cascades([ground, tower], Light(direction=(1, 1, 2)), view,
+        ...                         perspective(50.0, 1.0, 0.5, 100.0), image_size=64)
+        >>> frame.shadow.shape, frame.cascades.world_to_clip.shape
+        ((64, 64), (4, 4, 4))
+    """
+    prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
+    if not prepared:
+        raise ValueError("bodies: expected at least one body")
+    sun = prepare_light("light", light)
+    if not sun.directional:
+        raise ValueError("light: cascades need a directional light, Light(direction=...)")
+    if layout not in ("layers", "atlas"):
+        raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
+    k = pcf_radius_option(pcf_radius)
+    if not (np.isfinite(normal_offset) and normal_offset >= 0):
+        raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
+    options = CascadeOptions(layout, k, depth_bias_option(depth_bias, k), float(normal_offset),
+                             float(ambient), background, cascade_colors)  # fmt: skip
+    if not (np.isfinite(options.ambient) and options.ambient >= 0):
+        raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
+    v, p = check_matrix("view", view), check_matrix("projection", projection)
+    bounds = _bounds(prepared) if scene_bounds is None else scene_bounds
+    fit = sm.fit_cascades(
+        sun.position, v, p, bounds, map_size, count=count, splits=splits, scheme=scheme,
+        lam=lam, max_distance=max_distance, overlap=overlap, stable=stable,
+        pcf_radius=k, layout=layout,
+    )  # fmt: skip
+    if fit.splits.shape[-1] - 1 > MAX_CASCADES:
+        raise ValueError(f"count: at most {MAX_CASCADES} cascades, got {fit.splits.shape[-1] - 1}")
+    size = _image_size("image_size", image_size)
+    texels = _image_size("map_size", map_size)
+    gl = resolve_context(ctx)
+    with GpuScene(gl, prepared, (), [sun], p @ v, size, texels) as scene:
+        return _draw(scene, v, fit, options)
+
+
+def _bounds(bodies: Sequence[Prepared]) -> NDArray[np.float64]:
+    """``(2, 3)`` the bodies' world bounding box."""
+    points = np.concatenate([b.world_vertices() for b in bodies])
+    return np.stack([points.min(axis=0), points.max(axis=0)])
+
+
+def _draw(
+    scene: GpuScene, view: NDArray[np.float64], fit: sm.Cascades, options: CascadeOptions
+) -> CascadeFrame:
+    """The maps, the lit pass, the mask and subtractive passes, the debug tint; read back."""
+    (sun,) = scene.lights
+    draw_lit(scene, options.ambient, options.background)
+    depths = draw_cascade_maps(scene, fit, options.layout == "atlas", options.bias)
+    maps = _depth_array(scene.ctx, depths)
+    try:
+        scene.clear_mask()
+        scene.bind_mask()
+        _shade(scene, view, fit, maps, options, mode=0)
+        shadow = read_texture(scene.mask_tex, 1)[..., 0]
+        subtract_light(scene, sun, tuple(range(len(scene.bodies))))
+        color = read_texture(scene.color_tex, 4)[..., :3]
+        tinted = None
+        if options.cascade_colors:
+            scene.use(scene.color_fbo)
+            scene.color_fbo.depth_mask = False
+            scene.surface_tex.use(location=1)
+            scene.blend(moderngl.FUNC_ADD)
+            scene.ctx.blend_func = moderngl.DST_COLOR, moderngl.ZERO  # multiply
+            _shade(scene, view, fit, maps, options, mode=1)
+            tinted = np.clip(read_texture(scene.color_tex, 4)[..., :3], 0.0, 1.0)
+    finally:
+        maps.release()
+        finish(scene)
+    surface = read_texture(scene.surface_tex, 4)
+    normal = read_texture(scene.normal_tex, 4)[..., :3]
+    body = np.rint(surface[..., 3]).astype(np.int32) - 1
+    empty = (body < 0)[..., None]
+    position = np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32)
+    return CascadeFrame(
+        color=np.clip(color, 0.0, 1.0).astype(np.float32),
+        cascade_color=None if tinted is None else tinted.astype(np.float32),
+        shadow=shadow.astype(np.float32),
+        cascade=cascade_index(position, view, np.asarray(fit.splits)),
+        position=position,
+        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        body=body,
+        cascades=fit,
+        shadow_maps=depths,
+    )
+
+
+def cascade_index(
+    position: NDArray[np.float32], view: NDArray[np.float64], splits: NDArray[np.float64]
+) -> NDArray[np.int32]:
+    """``(H, W)`` the cascade ``i`` with ``splits[i] <= d < splits[i + 1]`` for each pixel's
+    view depth ``d = -(view @ p)_z`` (``position`` ``(H, W, 3)``, NaN on the background;
+    ``splits`` ``(n + 1,)``); ``-1`` on the background and outside ``[splits[0], splits[n]]``."""
+    depth = -(position.astype(np.float64) @ view[2, :3] + view[2, 3])
+    valid = np.isfinite(depth) & (depth >= splits[0]) & (depth <= splits[-1])
+    index = np.clip(np.searchsorted(splits, np.where(valid, depth, 0.0), side="right") - 1,
+                    0, len(splits) - 2)  # fmt: skip
+    return np.where(valid, index, -1).astype(np.int32)
+
+
+def draw_cascade_maps(
+    scene: GpuScene, fit: sm.Cascades, atlas: bool, bias: tuple[float, float]
+) -> NDArray[np.float32]:
+    """Every body's depth into each cascade's map: ``(n, h, w)`` layers, or ``(1, H, W)``
+    the atlas (each cascade in its viewport), window depths, row 0 ``t = 0``."""
+    gl = scene.ctx
+    ports = np.asarray(fit.viewports, dtype=np.int64)
+    clip = np.asarray(fit.world_to_clip, dtype=np.float64)
+    if atlas:
+        size = (int((ports[:, 0] + ports[:, 2]).max()), int((ports[:, 1] + ports[:, 3]).max()))
+        groups = [list(range(len(ports)))]
+    else:
+        size = (int(ports[0, 2]), int(ports[0, 3]))
+        groups = [[i] for i in range(len(ports))]
+    prog = program(gl, "depth_map.vert", "depth_map.frag")
+    layers = []
+    for group in groups:
+        tex = gl.depth_texture(size)
+        fbo = gl.framebuffer(depth_attachment=tex)
+        try:
+            fbo.use()
+            gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
+            gl.enable(moderngl.DEPTH_TEST)
+            gl.depth_func = "<"
+            fbo.depth_mask = True
+            fbo.clear(depth=1.0)
+            gl.polygon_offset = bias
+            for i in group:
+                x, y, w, h = (int(c) for c in ports[i])
+                fbo.viewport = (x, y, w, h)
+                for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
+                    set_matrix(prog, "body_to_clip", clip[i] @ body.to_world)
+                    mesh.render(prog)
+            data = np.frombuffer(tex.read(alignment=1), dtype=np.float32)
+            layers.append(data.reshape(size[1], size[0]).copy())
+        finally:
+            gl.polygon_offset = (0.0, 0.0)
+            fbo.release()
+            tex.release()
+    return np.stack(layers)
+
+
+def _depth_array(gl: moderngl.Context, depths: NDArray[np.float32]) -> moderngl.TextureArray:
+    """The ``(layers, h, w)`` depths as an R32F texture array (nearest, clamped)."""
+    n, h, w = depths.shape
+    tex = gl.texture_array((w, h, n), 1, np.ascontiguousarray(depths).tobytes(), dtype="f4")
+    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    tex.repeat_x = False
+    tex.repeat_y = False
+    return tex
+
+
+def _shade(
+    scene: GpuScene,
+    view: NDArray[np.float64],
+    fit: sm.Cascades,
+    maps: moderngl.TextureArray,
+    options: CascadeOptions,
+    mode: int,
+) -> None:
+    """Every body through ``cascades.frag`` in ``mode`` (0 the mask, 1 the cascade tint),
+    into the bound target (the lit pass's record on unit 1, the maps on unit 0)."""
+    prog = program(scene.ctx, "surface.vert", "cascades.frag")
+    n = int(np.asarray(fit.splits).shape[-1]) - 1
+    pad = MAX_CASCADES - n
+    splits = np.asarray(fit.splits, dtype=np.float32)
+    band = np.asarray(fit.band_end, dtype=np.float32)
+    textures = np.asarray(fit.world_to_texture, dtype=np.float64)
+    ports = np.asarray(fit.viewports, dtype=np.int32)
+    colors = np.array([CASCADE_COLORS[i % len(CASCADE_COLORS)] for i in range(MAX_CASCADES)])
+    set_matrix(prog, "world_to_clip", scene.world_to_clip)
+    set_uniform(prog, "maps", 0)
+    set_uniform(prog, "light", tuple(scene.lights[0].homogeneous))
+    set_uniform(prog, "view_depth", tuple(-view[2]))
+    set_uniform(prog, "count", n)
+    uniform(prog, "splits").write(np.pad(splits, (0, pad)).astype(np.float32).tobytes())
+    uniform(prog, "band_end").write(np.pad(band, (0, pad)).astype(np.float32).tobytes())
+    uniform(prog, "world_to_texture").write(
+        b"".join(sm.column_major_bytes(m) for m in textures) + bytes(64 * pad)
+    )
+    uniform(prog, "viewport").write(np.pad(ports, ((0, pad), (0, 0))).tobytes())
+    set_uniform(prog, "atlas", int(options.layout == "atlas"))
+    set_uniform(prog, "pcf_radius", options.pcf_radius)
+    offsets = options.normal_offset * np.max(np.asarray(fit.texel_size), axis=-1)
+    uniform(prog, "normal_offset").write(np.pad(offsets, (0, pad)).astype(np.float32).tobytes())
+    set_uniform(prog, "mode", mode)
+    uniform(prog, "colors").write(colors.astype(np.float32).tobytes())
+    maps.use(location=0)
+    for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
+        set_matrix(prog, "body_to_world", body.to_world)
+        scene.bind_record(prog, i)
+        mesh.render(prog)

@@ -1,0 +1,213 @@
+"""Cascaded shadow maps (render_cascades, fit_cascades) against the ray caster.
+
+A 200 x 200 ground of two triangles with boxes and towers spread over it, under a low
+sun; every body casts and receives. The camera view with cascades may differ from the
+ray caster only in the band of BAND pixels around the edges of the shadow and of the lit
+region (as for method="depth"), and nowhere off it: across a camera near the ground
+looking to the horizon, a camera looking down, and a tower behind the camera whose
+shadow reaches into the view. The test can fail: with scene bounds that leave out that
+tower, its shadow is lost.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from shadowmath.meshes import box, grid
+from shadowmath.render import Body, Light, look_at, perspective, render_cascades
+
+from .depth_scenes import BAND, DepthScene, compare, ray_cast
+from .scenes import place, rotation
+
+SIZE = (320, 200)
+MAP = 1024
+NEAR, FAR = 0.5, 250.0
+MAX_ALL = 0.01  # edges included, at most 1 % of the visible pixels differ
+
+GROUND = Body(*grid((200.0, 200.0), segments=(1, 1)), color=(0.7, 0.75, 0.7))
+#: (x, y, width, depth, height, turn in degrees) of the boxes and towers on the ground.
+BLOCKS = [
+    (-12.0, -70.0, 3.0, 3.0, 4.0, 20.0),
+    (6.0, -62.0, 2.0, 5.0, 6.0, -10.0),
+    (-4.0, -45.0, 6.0, 2.0, 3.0, 70.0),
+    (14.0, -30.0, 4.0, 4.0, 12.0, 0.0),
+    (-20.0, -15.0, 3.0, 3.0, 9.0, 15.0),
+    (2.0, 5.0, 8.0, 3.0, 5.0, -25.0),
+    (-30.0, 30.0, 5.0, 5.0, 12.0, 65.0),
+    (25.0, 40.0, 4.0, 6.0, 10.0, 10.0),
+    (-5.0, 70.0, 10.0, 4.0, 8.0, 5.0),
+    (40.0, 85.0, 6.0, 6.0, 11.0, -30.0),
+]
+#: The caster behind the horizon camera, off the ground (out of its view), whose shadow
+#: reaches into the view.
+BEHIND = (90.0, -140.0, 6.0, 6.0, 75.0, 0.0)
+SUN = Light(direction=(0.6, -0.6, 0.45))  # low, behind the camera's right: long shadows
+
+
+def block(x, y, w, d, h, turn, color=(0.85, 0.55, 0.4)) -> Body:
+    return Body(*box((w, d, h)), to_world=place(rotation((0, 0, 1), turn), (x, y, h / 2)),
+                color=color)  # fmt: skip
+
+
+BODIES = [GROUND, *(block(*b) for b in BLOCKS), block(*BEHIND, color=(0.5, 0.5, 0.9))]
+CAMERAS = {
+    # near the ground, looking along +y to the horizon
+    "horizon": look_at((0.0, -90.0, 2.5), (0.0, 0.0, 2.0), (0, 0, 1)),
+    # high above, looking down at the middle of the ground
+    "down": look_at((-10.0, -60.0, 70.0), (0.0, 0.0, 0.0), (0, 0, 1)),
+}
+PROJECTION = perspective(45.0, SIZE[0] / SIZE[1], NEAR, FAR)
+
+
+def shadows(camera, **kwargs):
+    """Render the scene from ``camera``; the frame and its counts against the ray caster."""
+    view = CAMERAS[camera]
+    kwargs.setdefault("map_size", MAP)
+    frame = render_cascades(BODIES, SUN, view, PROJECTION, image_size=SIZE, **kwargs)
+    scene = DepthScene(BODIES, len(BODIES) - 1, SUN, PROJECTION @ view)
+    truth = ray_cast(frame.body, frame.position, frame.normal, scene)
+    # An edge just outside the picture leaves no change of value inside it to put a band
+    # around: the BAND pixels along the picture's border count as band too.
+    border = np.ones(truth.on.shape, dtype=bool)
+    border[BAND:-BAND, BAND:-BAND] = False
+    truth = truth._replace(band=truth.band | border)
+    return frame, truth, compare(frame.shadow > 0.5, truth)
+
+
+def behind_shadow(frame, truth) -> np.ndarray:
+    """Ground pixels in the tower-behind-the-camera's shadow (it is the last body)."""
+    from shadowmath.groundtruth import segment_hits_triangles
+
+    from .scenes import world_mesh
+
+    on_ground = truth.shadow & (frame.body == 0)
+    p = frame.position[on_ground].astype(np.float64)
+    hit = segment_hits_triangles(p + 1e-4 * np.array([0, 0, 1.0]), (*SUN.direction, 0.0),
+                                 *world_mesh(BODIES[-1]))  # fmt: skip
+    mask = np.zeros_like(on_ground)
+    mask[on_ground] = hit
+    return mask
+
+
+def test_no_face_grazes_the_sun():
+    """The scene's premise: every face meets the sun at least 10 degrees off grazing (acne
+    on grazing faces is the bias's business, measured by test_render_depth)."""
+    from .scenes import world_mesh
+
+    sun = np.asarray(SUN.direction) / np.linalg.norm(SUN.direction)
+    for body in BODIES:
+        v, t = world_mesh(body)
+        n = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+        cos = n @ sun / np.linalg.norm(n, axis=1)
+        assert np.all(np.abs(cos) > np.sin(np.radians(10))), body
+
+
+VARIANTS = {
+    "layers": {},
+    "atlas": {"layout": "atlas"},
+    "stable": {"stable": True},
+    "stable atlas pcf": {"stable": True, "layout": "atlas", "pcf_radius": 1},
+}
+
+
+@pytest.mark.parametrize("variant", list(VARIANTS))
+@pytest.mark.parametrize("camera", list(CAMERAS))
+def test_cascades_agree_with_the_ray_caster(gl, camera, variant):
+    frame, truth, count = shadows(camera, ctx=gl, **VARIANTS[variant])
+    print(f"{camera} {variant}: {count}, cascades used {np.unique(frame.cascade)}")
+    assert count.shadowed > 1500, "the view must show sizeable shadows to test anything"
+    used = np.unique(frame.cascade[frame.body >= 0])
+    assert len(used) >= 3, f"the view must span several cascades, got {used}"
+    assert count.differ_off_band == 0, count
+    assert count.differ <= MAX_ALL * truth.on.sum(), count
+
+
+def test_every_cascade_has_a_band_where_both_agree(gl):
+    """In the blend bands both cascades must hold the shadow: the bands' pixels (view depths
+    in ``[splits[i + 1], band_end[i]]``) are compared like the others and must be there."""
+    frame, truth, _ = shadows("horizon", ctx=gl)
+    c = frame.cascades
+    view = CAMERAS["horizon"]
+    p = frame.position.astype(np.float64)
+    depth = -(p @ view[2, :3] + view[2, 3])
+    splits, band = np.asarray(c.splits), np.asarray(c.band_end)
+    in_band = np.zeros(frame.body.shape, dtype=bool)
+    for i in range(len(band) - 1):
+        assert band[i] > splits[i + 1], "an overlap of 0.1 gives every inner split a band"
+        in_band |= (depth >= splits[i + 1]) & (depth <= band[i])
+    assert (in_band & truth.shadow & ~truth.band).sum() > 20, "the bands must hold shadow"
+    wrong = ((frame.shadow > 0.5) != truth.shadow) & in_band & ~truth.band
+    assert wrong.sum() == 0
+
+
+def test_a_caster_behind_the_camera_keeps_its_shadow(gl):
+    frame, truth, count = shadows("horizon", ctx=gl)
+    behind = behind_shadow(frame, truth)
+    print(f"behind the camera: {int(behind.sum())} pixels of its shadow in view, {count}")
+    assert behind.sum() > 300, "the tower behind the camera must shadow the view"
+    assert (behind & (frame.shadow <= 0.5) & ~truth.band).sum() == 0
+
+
+def test_scene_bounds_without_the_caster_lose_its_shadow(gl):
+    """The test can fail: bounds of the ground and the blocks on it leave out the tower behind
+    the camera; the maps reach toward the sun only to the box's nearest corner, short of the
+    tower's top, and the far part of its shadow, in view, is drawn lit."""
+    tallest = max(b[4] for b in BLOCKS)
+    ground_and_blocks = np.array([[-100.0, -100.0, 0.0], [100.0, 100.0, tallest]])
+    frame, truth, count = shadows("horizon", ctx=gl, scene_bounds=ground_and_blocks)
+    behind = behind_shadow(frame, truth)
+    lost = behind & (frame.shadow <= 0.5)
+    print(f"bounds without the tower: {int(lost.sum())} of {int(behind.sum())} lost, {count}")
+    # lost, but for the pixels that another block shadows too
+    assert lost.sum() > 0.8 * behind.sum()
+    assert count.differ_off_band > 200, count
+
+
+def test_the_debug_view_colours_each_cascade(gl):
+    frame, _, _ = shadows("horizon", ctx=gl, cascade_colors=True)
+    assert frame.cascade_color is not None
+    tint = frame.cascade_color / np.maximum(frame.color, 1e-3)
+    for i in np.unique(frame.cascade[frame.body >= 0]):
+        # off the bands, pixels lit enough to show a colour take their cascade's tint
+        depth_ok = frame.cascade == i
+        bright = depth_ok & (frame.color.min(axis=-1) > 0.2)
+        ratio = np.median(tint[bright], axis=0)
+        from shadowmath.render import CASCADE_COLORS
+
+        assert np.allclose(ratio, CASCADE_COLORS[i], atol=0.05), (i, ratio)
+
+
+def test_the_maps_are_layers_or_an_atlas(gl):
+    layers, _, _ = shadows("horizon", ctx=gl, map_size=(256, 128))
+    atlas, _, _ = shadows("horizon", ctx=gl, map_size=(256, 128), layout="atlas")
+    assert layers.shadow_maps.shape == (4, 128, 256)
+    assert atlas.shadow_maps.shape == (1, 256, 512)
+    ports = np.asarray(atlas.cascades.viewports)
+    for i, (x, y, w, h) in enumerate(ports):
+        tile = atlas.shadow_maps[0, y : y + h, x : x + w]
+        # each tile holds its cascade's map exactly as its own layer: drawn, and nothing
+        # spilled across from a neighbour's viewport (depths to the rasterizer's rounding)
+        assert tile.min() < 1.0, i
+        assert np.array_equal(tile < 1.0, layers.shadow_maps[i] < 1.0), i
+        assert np.allclose(tile, layers.shadow_maps[i], rtol=0, atol=1e-6), i
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"pcf_radius": -1}, "pcf_radius"),
+        ({"layout": "grid"}, "layout"),
+        ({"count": 9}, "count"),
+        ({"depth_bias": (1.0, float("inf"))}, "depth_bias"),
+    ],
+)
+def test_bad_options(gl, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        render_cascades(BODIES, SUN, CAMERAS["down"], PROJECTION, image_size=16, map_size=16,
+                        ctx=gl, **kwargs)  # fmt: skip
+
+
+def test_a_point_light_is_refused(gl):
+    with pytest.raises(ValueError, match="directional"):
+        render_cascades(BODIES, Light((0.0, 0.0, 50.0)), CAMERAS["down"], PROJECTION, ctx=gl)
