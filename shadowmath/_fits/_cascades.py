@@ -202,14 +202,17 @@ def fit_cascades(
     n_given = None if splits is not None else check_count(count)
     lam_v = lam if fixed is None else fixed
     # Python numbers stay Python numbers (the common case): no array conversion per frame.
-    plain = type(lam_v) in (float, int) and type(overlap) in (float, int)
+    plain = all(type(v) in (float, int) for v in (lam_v, overlap)) and (
+        max_distance is None or type(max_distance) in (float, int)
+    )
     ctx, (L, V, P, box, S, U, dmax, lm, ov) = convert(
         light=direction, view=view, projection=projection, scene_bounds=scene_bounds,
-        splits=splits, up=up, max_distance=max_distance,
+        splits=splits, up=up, max_distance=None if plain else max_distance,
         lam=None if plain else lam_v, overlap=None if plain else overlap,
     )  # fmt: skip
     if plain:
         lm, ov = float(lam_v), float(overlap)
+        dmax = None if max_distance is None else float(max_distance)
     checks = Checks(ctx)
     L = _light_vector(checks, L)
     require_matrix("view", V)
@@ -231,7 +234,7 @@ def fit_cascades(
     shapes = [L.shape[:-1], V.shape[:-2], P.shape[:-2], box.shape[:-2]]
     names = ["light", "view", "projection", "scene_bounds"]
     for name, v, drop in (("up", U, 1), ("splits", S, 1), ("max_distance", dmax, 0)):
-        if v is not None:
+        if v is not None and not isinstance(v, float):
             shapes.append(v.shape[: v.ndim - drop])
             names.append(name)
     shape = batch_shape(*shapes, names=names)
@@ -240,6 +243,7 @@ def fit_cascades(
         return _compiled(ctx, spec, layout, shape, (L, V, P, box, U, S, dmax, lm, ov), C, n_given)
     if plain:
         lm, ov = ctx.constant(lm), ctx.constant(ov)
+        dmax = None if dmax is None else ctx.constant(dmax)
     cam = _camera(ctx, checks, V, P, C)
     depths = _splits(ctx, checks, cam, S, dmax, lm, ov, fixed, n_given)
     _value_checks(checks, L, box, U)
@@ -671,8 +675,8 @@ def _compiled(
     n = S.shape[-1] - 1 if S is not None else count
     assert n is not None
     total = math.prod(shape)
-    if type(lm) is float and type(ov) is float and dmax is None:
-        scal = np.array([[lm, np.nan, ov]])
+    if type(lm) is float and type(ov) is float and (dmax is None or type(dmax) is float):
+        scal = np.array([[lm, np.nan if dmax is None else dmax, ov]])
     else:
         scal = np.stack(np.broadcast_arrays(lm, np.nan if dmax is None else dmax, ov), axis=-1)
     given = (U is not None, S is not None, dmax is not None)
