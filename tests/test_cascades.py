@@ -440,3 +440,29 @@ def test_float32_in_float32_out(compiled: bool, options: dict[str, Any]) -> None
     assert all(np.asarray(f).dtype == np.float32 for f in c.frustum[:8])
     want = sm.fit_cascades(*scene(0), 256, **options)
     np.testing.assert_allclose(c.world_to_clip, want.world_to_clip, rtol=2e-3, atol=2e-4)
+
+
+def test_jax_gradients_in_the_camera_and_the_split_positions() -> None:
+    jax = pytest.importorskip("jax")
+    jnp = jax.numpy
+    sun, view, proj, box = scene(9)
+    near = proj[2, 3] / (proj[2, 2] - 1)
+    splits = np.array([near, 5.0, 20.0, 60.0])
+
+    def area(shift: Any, s: Any) -> Any:
+        v = jnp.asarray(view).at[:3, 3].add(shift)  # the camera moved
+        c = sm.fit_cascades(jnp.asarray(sun), v, proj, box, 256, splits=s)
+        return jnp.sum(c.frustum.rx_max * c.frustum.ry_max)
+
+    shift = jnp.asarray([0.3, -0.2, 0.1])
+    g_shift, g_splits = jax.grad(area, argnums=(0, 1))(shift, jnp.asarray(splits))
+    h = 1e-3  # the area is about 3e3: smaller steps drown in its rounding
+    for k in range(3):
+        e = np.eye(3)[k] * h
+        fd = (area(shift + e, splits) - area(shift - e, splits)) / (2 * h)
+        assert float(g_shift[k]) == pytest.approx(float(fd), rel=1e-5, abs=1e-8)
+    for k in (1, 2):  # inner splits: both neighbouring cascades move
+        e = np.eye(4)[k] * h
+        fd = (area(shift, splits + e) - area(shift, splits - e)) / (2 * h)
+        assert float(g_splits[k]) == pytest.approx(float(fd), rel=1e-5, abs=1e-8)
+        assert float(g_splits[k]) != 0.0
