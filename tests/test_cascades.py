@@ -360,8 +360,8 @@ def test_jax_invalid_inputs_are_nan_under_jit() -> None:
         ({"count": 0}, "count: expected an integer >= 1"),
     ],
 )
-@pytest.mark.parametrize("compiled", [True, False])
-def test_errors_name_the_argument(change: dict[str, Any], message: str, compiled: bool) -> None:
+@pytest.mark.parametrize("path", ["compiled", "python", "array"])
+def test_errors_name_the_argument(change: dict[str, Any], message: str, path: str) -> None:
     from shadowmath._backends import _kernels
 
     view = look_at([0, 2, 0], [0, 1, -10])
@@ -373,8 +373,9 @@ def test_errors_name_the_argument(change: dict[str, Any], message: str, compiled
         "map_size": 256,
     } | change
     positional = [args.pop(k) for k in ("light", "view", "projection", "scene_bounds", "map_size")]
-    path = _kernels.disabled() if not compiled else contextlib.nullcontext()
-    with path, pytest.raises(ValueError, match=message):
+    paths = {"compiled": contextlib.nullcontext, "python": _kernels.disabled,
+             "array": _kernels.array_path}  # fmt: skip
+    with paths[path](), pytest.raises(ValueError, match=message):
         sm.fit_cascades(*positional, **args)
 
 
@@ -395,9 +396,11 @@ def test_compiled_loop_equals_array_path(options: dict[str, Any]) -> None:
     sun, view, proj, box = (np.stack(v) for v in zip(*scenes, strict=True))
     proj[:, 2, 2:] = perspective(1.0, 1.0, 0.5, 120)[2, 2:]  # near 0.5 for the custom splits
     fast = sm.fit_cascades(sun, view, proj, box, 256, **options)
-    with _kernels.disabled():
+    with _kernels.array_path():
         slow = sm.fit_cascades(sun, view, proj, box, 256, **options)
-    for a, b in zip(fast, slow, strict=True):
+    with _kernels.disabled():  # three cameras: the same loop run by Python
+        python = sm.fit_cascades(sun, view, proj, box, 256, **options)
+    for a, b in [*zip(fast, slow, strict=True), *zip(python, slow, strict=True)]:
         for x, y in zip(a if isinstance(a, tuple) else [a], b if isinstance(b, tuple) else [b],
                         strict=True):  # fmt: skip
             np.testing.assert_allclose(np.asarray(x, float), np.asarray(y, float), rtol=1e-9,
@@ -426,13 +429,15 @@ def test_the_specialized_namespace_has_no_collisions() -> None:
             assert seen.setdefault(name, value) is value, (name, module.__name__)
 
 
-@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("path", ["compiled", "python", "array"])
 @pytest.mark.parametrize("options", [{}, {"stable": True}, {"layout": "atlas"}])
-def test_float32_in_float32_out(compiled: bool, options: dict[str, Any]) -> None:
+def test_float32_in_float32_out(path: str, options: dict[str, Any]) -> None:
     from shadowmath._backends import _kernels
 
     sun, view, proj, box = (a.astype(np.float32) for a in scene(0))
-    with _kernels.disabled() if not compiled else contextlib.nullcontext():
+    paths = {"compiled": contextlib.nullcontext, "python": _kernels.disabled,
+             "array": _kernels.array_path}  # fmt: skip
+    with paths[path]():
         c = sm.fit_cascades(sun, view, proj, box, 256, **options)
     for name in ("world_to_light", "world_to_clip", "world_to_texture", "splits", "band_end",
                  "texel_size"):  # fmt: skip

@@ -116,10 +116,20 @@ def loops() -> SimpleNamespace:
     config.CACHE_DIR = cache_dir(sources_hash())
     try:
         jit = numba.njit(cache=True, error_model="numpy")
-        primitives = {**scalar_primitives(), "where": jit(_select), "rint": np.rint}
+        primitives = {
+            **scalar_primitives(),
+            "where": jit(_select),
+            "rint": np.rint,
+            "alloc": jit(_zeros),
+        }
         return specialize(primitives, wrap=jit)
     finally:
         config.CACHE_DIR = old
+
+
+def _zeros(n: int) -> Any:
+    """The loops' float buffer for Numba (module level, so that its disk cache finds it)."""
+    return np.zeros(n)
 
 
 def _select(c: Any, a: Any, b: Any) -> Any:

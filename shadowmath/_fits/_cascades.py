@@ -35,7 +35,7 @@ from shadowmath._math._cascade_formulas import EDGES
 from shadowmath._math._cascade_loop import ROW
 from shadowmath._math._conventions import GraphicsApi, _check_api, _clip_from_gl
 from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
-from shadowmath._math._specialize import formulas
+from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath.lights import DirectionalLight
 
 from ._cascade_splits import SplitScheme, check_count, check_range, check_scheme, split_depths
@@ -239,8 +239,15 @@ def fit_cascades(
             names.append(name)
     shape = batch_shape(*shapes, names=names)
     C = _clip_from_gl(cam_api, camera_reversed_z)
-    if ctx.xp is np and _kernels.available() and warp is None:
-        return _compiled(ctx, spec, layout, shape, (L, V, P, box, U, S, dmax, lm, ov), C, n_given)
+    if ctx.xp is np and warp is None:
+        python = not _kernels.available()
+        if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
+            arrays = (L, V, P, box, U, S, dmax, lm, ov)
+            try:
+                return _compiled(ctx, spec, layout, shape, arrays, C, n_given, python)
+            except (ZeroDivisionError, OverflowError):
+                pass  # Python floats raise where Numba's give inf: invalid input, which the
+                # array driver below reports with its message
     if plain:
         lm, ov = ctx.constant(lm), ctx.constant(ov)
         dmax = None if dmax is None else ctx.constant(dmax)
@@ -668,8 +675,10 @@ def _compiled(
     arrays: tuple[Any, ...],
     C: Any,
     count: int | None,
+    python: bool = False,
 ) -> Cascades:
-    """:func:`fit_cascades` for NumPy input through the compiled loop (``fast`` extra)."""
+    """:func:`fit_cascades` for NumPy input through the compiled loop (``fast`` extra), or,
+    ``python``, the same loop run by Python (a few cameras without Numba)."""
     L, V, P, box, U, S, dmax, lm, ov = arrays
     _scalar_checks(lm, ov)
     n = S.shape[-1] - 1 if S is not None else count
@@ -681,15 +690,25 @@ def _compiled(
         scal = np.stack(np.broadcast_arrays(lm, np.nan if dmax is None else dmax, ov), axis=-1)
     given = (U is not None, S is not None, dmax is not None)
     opts = _options(spec, layout, n, given, ctx.eps, tuple(v for row in C for v in row))
-    out = np.empty((total, n, ROW), dtype=ctx.dtype)
-    splits = np.empty((total, n + 1), dtype=ctx.dtype)
-    status = np.zeros(total, dtype=np.int32)
-    _kernels.loops().cascade_loop(
-        flat_batch(L, shape, (3,)), flat_batch(V, shape, (4, 4)), flat_batch(P, shape, (4, 4)),
-        flat_batch(box, shape, (2, 3)), _NO_UP if U is None else flat_batch(U, shape, (3,)),
-        flat_batch(scal, shape, (3,)), _NO_SPLITS if S is None else flat_batch(S, shape, (n + 1,)),
-        opts, out, splits, status,
+    operands = (
+        flat_batch(L, shape, (3,)), flat_batch(V, shape, (4, 4)).reshape(-1, 16),
+        flat_batch(P, shape, (4, 4)).reshape(-1, 16), flat_batch(box, shape, (2, 3)).reshape(-1, 6),
+        _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (3,)),
+        _NO_SPLITS if S is None else flat_batch(S, shape, (n + 1,)),
     )  # fmt: skip
+    if python:  # one camera without Numba: the same loop on Python lists and floats
+        rows = [[[0.0] * ROW for _ in range(n)] for _ in range(total)]
+        cuts, flags = [[0.0] * (n + 1) for _ in range(total)], [0] * total
+        scalar_formulas().cascade_loop(*(v.tolist() for v in operands), opts.tolist(), rows,
+                                       cuts, flags)  # fmt: skip
+        out = np.asarray(rows, dtype=ctx.dtype)
+        splits = np.asarray(cuts, dtype=ctx.dtype)
+        status = np.asarray(flags, dtype=np.int64)
+    else:
+        out = np.empty((total, n, ROW), dtype=ctx.dtype)
+        splits = np.empty((total, n + 1), dtype=ctx.dtype)
+        status = np.zeros(total, dtype=np.int32)
+        _kernels.loops().cascade_loop(*operands, opts, out, splits, status)
     if status[0] if total == 1 else status.any():
         raise_status(status.reshape(shape), [(1 << i, m) for i, m in enumerate(LOOP_MESSAGES)])
     o = out.reshape(*shape, n, ROW)
@@ -706,6 +725,10 @@ def _compiled(
         viewports=_tiles(n, spec.size, layout)[0],
     )
 
+
+#: The most cameras that NumPy without Numba fits with the loop run by Python (beyond,
+#: the array driver, vectorized over the cameras, is faster).
+PYTHON_LOOP_CAMERAS = 4
 
 _NO_UP = np.zeros((1, 3))
 _NO_SPLITS = np.zeros((1, 2))

@@ -11,8 +11,6 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
-
 # Shared formulas and primitives, rebound by specialize().
 from ._cascade_formulas import (  # noqa: F401
     EDGES,
@@ -29,6 +27,10 @@ from ._cascade_formulas import (  # noqa: F401
 from ._fit_formulas import fit_axes, fit_rows, safe_box, stable_sides, to_light
 from ._formulas import fabs, sqrt, where  # noqa: F401
 from ._loops import _tuple16
+
+#: A float buffer of ``n`` zeros: a NumPy array under Numba, a list in Python (whose
+#: floats stay Python floats, three times faster than NumPy scalars). Bound by specialize().
+alloc: Any = None
 
 #: The loop's checks in report order (bit ``1 << index``); the boundary maps them to messages.
 CHECKS = (
@@ -97,11 +99,12 @@ def inverse4(m: tuple[Any, ...]) -> tuple[tuple[Any, ...], Any]:
 
 
 def _m16(M: Any) -> Any:
+    """A 4x4 matrix's row of 16 numbers as a tuple of floats."""
     return (
-        float(M[0, 0]), float(M[0, 1]), float(M[0, 2]), float(M[0, 3]),
-        float(M[1, 0]), float(M[1, 1]), float(M[1, 2]), float(M[1, 3]),
-        float(M[2, 0]), float(M[2, 1]), float(M[2, 2]), float(M[2, 3]),
-        float(M[3, 0]), float(M[3, 1]), float(M[3, 2]), float(M[3, 3]),
+        float(M[0]), float(M[1]), float(M[2]), float(M[3]),
+        float(M[4]), float(M[5]), float(M[6]), float(M[7]),
+        float(M[8]), float(M[9]), float(M[10]), float(M[11]),
+        float(M[12]), float(M[13]), float(M[14]), float(M[15]),
     )  # fmt: skip
 
 
@@ -128,7 +131,10 @@ def _mul16(a: Any, b: Any) -> Any:
 
 
 def _camera(V: Any, P: Any, C: Any, nc: Any, fc: Any, eps: float) -> Any:
-    """Fill the near corners ``nc`` (4, 3) and far corners ``fc`` (4, 4); sign, near, far, bits."""
+    """Fill the near corners ``nc`` (4 x 3, flat) and far corners ``fc`` (4 x 4, flat).
+
+    Returns the view depth's sign, the near and far depths and the status bits.
+    """
     iP, dp = inverse4(P)
     st = 0
     pn = 1.0
@@ -149,22 +155,21 @@ def _camera(V: Any, P: Any, C: Any, nc: Any, fc: Any, eps: float) -> Any:
             h = [iP[4 * r] * c[0] + iP[4 * r + 1] * c[1] + iP[4 * r + 2] * c[2]
                  + iP[4 * r + 3] * c[3] for r in range(4)]  # fmt: skip
             if z < 0:
-                nc[k, 0], nc[k, 1], nc[k, 2] = h[0] / h[3], h[1] / h[3], h[2] / h[3]
-                nz += 0.25 * nc[k, 2]
+                nc[3 * k], nc[3 * k + 1], nc[3 * k + 2] = h[0] / h[3], h[1] / h[3], h[2] / h[3]
+                nz += 0.25 * nc[3 * k + 2]
             else:
                 sg = -1.0 if h[3] < 0 else 1.0
                 big = max(abs(h[0]), abs(h[1]), abs(h[2]), abs(h[3]))
                 for r in range(4):
-                    fc[k, r] = sg * h[r] / big
-                fz += 0.25 * fc[k, 2]
-                fw += 0.25 * fc[k, 3]
+                    fc[4 * k + r] = sg * h[r] / big
+                fz += 0.25 * fc[4 * k + 2]
+                fw += 0.25 * fc[4 * k + 3]
     finite_far = fw > 32.0 * eps
-    sign = np.sign(fz / fw - nz) if finite_far else np.sign(nz)
-    if sign == 0:
-        sign = 1.0
+    t = fz / fw - nz if finite_far else nz
+    sign = -1.0 if t < 0 else 1.0
     if not (finite_far or sign * nz > 0):
         st |= 1 << 8
-    far = sign * fz / fw if finite_far else np.inf
+    far = sign * fz / fw if finite_far else math.inf
     return sign, sign * nz, far, st
 
 
@@ -188,11 +193,10 @@ def cascade_loop(
     then the camera's C, the maps' C and T C (16 each). ``out``: ``(count, n, ROW)``;
     ``splits``: ``(count, n + 1)``; ``status``: ``(count,)``.
     """
-    n = splits.shape[1] - 1
+    n = len(splits[0]) - 1
     eps = opts[8]
     C, api = _tuple16(opts, 12), (_tuple16(opts, 28), _tuple16(opts, 44))
-    nc, fc = np.empty((4, 3)), np.empty((4, 4))
-    bw, bl, bg = np.empty((8, 3)), np.empty((8, 3)), np.empty((8, 5))
+    nc, fc, bl, bg = alloc(12), alloc(16), alloc(24), alloc(40)
     for i in range(len(out)):
         V, P = _m16(views[i % len(views)]), _m16(projs[i % len(projs)])
         sign, near, far, st = _camera(V, P, C, nc, fc, eps)
@@ -202,8 +206,8 @@ def cascade_loop(
         st |= _split_range(near, far, sc, given[i % len(given)], opts, splits[i])
         Lr, Ur = light[i % len(light)], ups[i % len(ups)]
         box = boxes[i % len(boxes)]
-        coords = max(abs(box[0, 0]), abs(box[0, 1]), abs(box[0, 2]),
-                     abs(box[1, 0]), abs(box[1, 1]), abs(box[1, 2]))  # fmt: skip
+        coords = max(abs(box[0]), abs(box[1]), abs(box[2]),
+                     abs(box[3]), abs(box[4]), abs(box[5]))  # fmt: skip
         a, ok_light, _, ok_up = fit_axes(
             (-float(Lr[0]), -float(Lr[1]), -float(Lr[2])),
             (float(Ur[0]), float(Ur[1]), float(Ur[2])), opts[0] != 0, coords, eps,
@@ -213,13 +217,15 @@ def cascade_loop(
         if not ok_up:
             st |= 1 << 11
         status[i] = st
-        _box_pass(V, P, box, a, sign, bw, bl, bg)
+        _box_pass(V, P, box, a, sign, bl, bg)
         iV = inverse4(V)[0]
+        s = splits[i]
         for j in range(n):
-            s0, s1 = splits[i, j], splits[i, j + 1]
-            end = min(s1 + sc[2] * (s1 - s0), splits[i, n])
-            _cascade(iV, a, (sign, s0, end), (nc, fc), (bw, bl, bg), box, opts, api, out[i, j], j)
-            out[i, j, 56] = end
+            s0, s1 = s[j], s[j + 1]
+            end = min(s1 + sc[2] * (s1 - s0), s[n])
+            row = out[i][j]
+            _cascade(iV, a, (sign, s0, end), (nc, fc), (bl, bg), box, opts, api, row, j)
+            row[56] = end
 
 
 def _entry_checks(L: Any, VP: Any, box: Any, U: Any, opts: Any, eps: float) -> int:
@@ -239,11 +245,10 @@ def _entry_checks(L: Any, VP: Any, box: Any, U: Any, opts: Any, eps: float) -> i
     if not math.isfinite(total):
         st |= 2
     bsum = 0.0
-    for r in range(2):
-        for c in range(3):
-            bsum += box[r, c]
-            if box[1, c] < box[0, c]:
-                st |= 1 << 9
+    for c in range(3):
+        bsum += box[c] + box[3 + c]
+        if box[3 + c] < box[c]:
+            st |= 1 << 9
     if not math.isfinite(bsum):
         st |= 8
     if opts[0] != 0 and not math.isfinite(float(U[0]) + float(U[1]) + float(U[2])):
@@ -288,17 +293,20 @@ def _split_range(near: float, far: float, sc: Any, given: Any, opts: Any, out: A
     return st
 
 
-def _box_pass(V: Any, P: Any, box: Any, a: Any, sign: float, bw: Any, bl: Any, bg: Any) -> None:
-    """The scene box's corners: world (``bw``), light (``bl``), camera side values and depth."""
+def _box_pass(V: Any, P: Any, box: Any, a: Any, sign: float, bl: Any, bg: Any) -> None:
+    """The scene box's corners (``box``: min then max, 6 numbers): light coordinates
+    (``bl``, 8 x 3), camera side values and view depth (``bg``, 8 x 5)."""
     PV = _mul16(P, V)
     for k in range(8):
-        x, y, z = box[k & 1, 0], box[(k >> 1) & 1, 1], box[k >> 2, 2]
-        bw[k, 0], bw[k, 1], bw[k, 2] = x, y, z
+        x = float(box[3 * (k & 1)])
+        y = float(box[3 * ((k >> 1) & 1) + 1])
+        z = float(box[3 * (k >> 2) + 2])
         p = to_light(x, y, z, a)
-        bl[k, 0], bl[k, 1], bl[k, 2] = p[0], p[1], p[2]
+        bl[3 * k], bl[3 * k + 1], bl[3 * k + 2] = p[0], p[1], p[2]
         sides = camera_values(PV, x, y, z)
-        bg[k, 0], bg[k, 1], bg[k, 2], bg[k, 3] = sides[0], sides[1], sides[2], sides[3]
-        bg[k, 4] = sign * (V[8] * x + V[9] * y + V[10] * z + V[11])
+        for c in range(4):
+            bg[5 * k + c] = sides[c]
+        bg[5 * k + 4] = sign * (V[8] * x + V[9] * y + V[10] * z + V[11])
 
 
 def _cascade(
@@ -307,24 +315,24 @@ def _cascade(
     """One cascade's fit into ``row`` (:data:`ROW` numbers)."""
     sign, s0, s1 = d
     nc, fc = cam
-    _, bl, bg = boxp
-    vc, wc, lc, gs = np.empty((8, 3)), np.empty((8, 3)), np.empty((8, 3)), np.empty((8, 6))
-    lo = (box[0, 0], box[0, 1], box[0, 2])
-    hi = (box[1, 0], box[1, 1], box[1, 2])
+    bl, bg = boxp
+    vc, lc, gs = alloc(24), alloc(24), alloc(48)
+    lo = (float(box[0]), float(box[1]), float(box[2]))
+    hi = (float(box[3]), float(box[4]), float(box[5]))
     m12 = (iV[0], iV[1], iV[2], iV[3], iV[4], iV[5], iV[6], iV[7], iV[8], iV[9], iV[10], iV[11])
     for k in range(8):
         depth = s0 if k < 4 else s1
         e = k % 4
-        p = edge_point((nc[e, 0], nc[e, 1], nc[e, 2]), (fc[e, 0], fc[e, 1], fc[e, 2], fc[e, 3]),
-                       sign, depth)  # fmt: skip
-        vc[k, 0], vc[k, 1], vc[k, 2] = p[0], p[1], p[2]
+        near = (nc[3 * e], nc[3 * e + 1], nc[3 * e + 2])
+        far = (fc[4 * e], fc[4 * e + 1], fc[4 * e + 2], fc[4 * e + 3])
+        p = edge_point(near, far, sign, depth)
+        vc[3 * k], vc[3 * k + 1], vc[3 * k + 2] = p[0], p[1], p[2]
         w = affine(m12, p[0], p[1], p[2])
-        wc[k, 0], wc[k, 1], wc[k, 2] = w[0], w[1], w[2]
         q = to_light(w[0], w[1], w[2], a)
-        lc[k, 0], lc[k, 1], lc[k, 2] = q[0], q[1], q[2]
+        lc[3 * k], lc[3 * k + 1], lc[3 * k + 2] = q[0], q[1], q[2]
         g = box_values(w[0], w[1], w[2], lo, hi)
         for c in range(6):
-            gs[k, c] = g[c]
+            gs[6 * k + c] = g[c]
     b = _bounds(lc, gs, bl, bg, s0, s1)
     if opts[1] != 0:
         hx, hy, cx, cy, z_lo, z_hi = _stable(vc, m12, a, b, opts)
@@ -344,14 +352,24 @@ def _bounds(lc: Any, gs: Any, bl: Any, bg: Any, s0: float, s1: float) -> Any:
     for e in range(24):
         k0, k1 = _E0[e % 12], _E1[e % 12]
         if e < 12:
-            g0 = (gs[k0, 0], gs[k0, 1], gs[k0, 2], gs[k0, 3], gs[k0, 4], gs[k0, 5])
-            g1 = (gs[k1, 0], gs[k1, 1], gs[k1, 2], gs[k1, 3], gs[k1, 4], gs[k1, 5])
-            p0, p1 = lc[k0], lc[k1]
+            a0, a1 = 6 * k0, 6 * k1
+            g0 = (gs[a0], gs[a0 + 1], gs[a0 + 2], gs[a0 + 3], gs[a0 + 4], gs[a0 + 5])
+            g1 = (gs[a1], gs[a1 + 1], gs[a1 + 2], gs[a1 + 3], gs[a1 + 4], gs[a1 + 5])
+            pts = lc
         else:
-            g0 = slice_values((bg[k0, 0], bg[k0, 1], bg[k0, 2], bg[k0, 3]), bg[k0, 4], s0, s1)
-            g1 = slice_values((bg[k1, 0], bg[k1, 1], bg[k1, 2], bg[k1, 3]), bg[k1, 4], s0, s1)
-            p0, p1 = bl[k0], bl[k1]
-        t0, t1, ok = clip_segment(g0, g1)
+            a0, a1 = 5 * k0, 5 * k1
+            g0 = slice_values((bg[a0], bg[a0 + 1], bg[a0 + 2], bg[a0 + 3]), bg[a0 + 4], s0, s1)
+            g1 = slice_values((bg[a1], bg[a1 + 1], bg[a1 + 2], bg[a1 + 3]), bg[a1 + 4], s0, s1)
+            pts = bl
+        p0 = (pts[3 * k0], pts[3 * k0 + 1], pts[3 * k0 + 2])
+        p1 = (pts[3 * k1], pts[3 * k1 + 1], pts[3 * k1 + 2])
+        case = _trivial(g0, g1)
+        if case == 1:
+            t0, t1, ok = 0.0, 1.0, True
+        elif case == 2:
+            t0, t1, ok = 0.0, 1.0, False
+        else:
+            t0, t1, ok = clip_segment(g0, g1)
         if ok:
             seen = True
             for t in (t0, t1):
@@ -362,25 +380,35 @@ def _bounds(lc: Any, gs: Any, bl: Any, bg: Any, s0: float, s1: float) -> Any:
                 lz, hz = min(lz, z), max(hz, z)
     if not seen:
         for k in range(8):
-            lx, hx_, ly, hy_ = min(lx, lc[k, 0]), max(hx_, lc[k, 0]), min(ly, lc[k, 1]), max(
-                hy_, lc[k, 1])  # fmt: skip
-            lz, hz = min(lz, lc[k, 2]), max(hz, lc[k, 2])
-    zb = bl[0, 2]
+            x, y, z = lc[3 * k], lc[3 * k + 1], lc[3 * k + 2]
+            lx, hx_, ly, hy_ = min(lx, x), max(hx_, x), min(ly, y), max(hy_, y)
+            lz, hz = min(lz, z), max(hz, z)
+    zb = zt = bl[2]
     for k in range(8):
-        zb = min(zb, bl[k, 2])
-    zt = bl[0, 2]
-    for k in range(8):
-        zt = max(zt, bl[k, 2])
+        zb, zt = min(zb, bl[3 * k + 2]), max(zt, bl[3 * k + 2])
     return lx, hx_, ly, hy_, min(min(zb, lz), hz), hz, zb, zt
+
+
+def _trivial(g0: Any, g1: Any) -> int:
+    """1: the segment is inside every half-space; 2: outside one at both ends; 0: clip it.
+
+    A shortcut of :func:`clip_segment` for the common edges (the answer is the same).
+    """
+    inside = True
+    for j in range(6):
+        if g0[j] < 0 or g1[j] < 0:
+            inside = False
+            if g0[j] < 0 and g1[j] < 0:
+                return 2
+    return 1 if inside else 0
 
 
 def _stable(vc: Any, m12: Any, a: Any, b: Any, opts: Any) -> Any:
     """The stable box of one cascade: sphere, snapped centre, depth range."""
     corners = (
-        vc[0, 0], vc[0, 1], vc[0, 2], vc[1, 0], vc[1, 1], vc[1, 2],
-        vc[2, 0], vc[2, 1], vc[2, 2], vc[3, 0], vc[3, 1], vc[3, 2],
-        vc[4, 0], vc[4, 1], vc[4, 2], vc[5, 0], vc[5, 1], vc[5, 2],
-        vc[6, 0], vc[6, 1], vc[6, 2], vc[7, 0], vc[7, 1], vc[7, 2],
+        vc[0], vc[1], vc[2], vc[3], vc[4], vc[5], vc[6], vc[7], vc[8], vc[9], vc[10], vc[11],
+        vc[12], vc[13], vc[14], vc[15], vc[16], vc[17], vc[18], vc[19], vc[20], vc[21],
+        vc[22], vc[23],
     )  # fmt: skip
     vx, vy, vz, r2 = slice_sphere(corners)
     c = affine(m12, vx, vy, vz)
@@ -432,6 +460,7 @@ FUNCTIONS = (
     "_box_pass",
     "_cascade",
     "_bounds",
+    "_trivial",
     "_stable",
     "_store_cascade",
 )

@@ -81,7 +81,13 @@ def scalar_primitives() -> dict[str, Any]:
         "fabs": abs,
         "rint": _rint,
         "isfinite": math.isfinite,
+        "alloc": _zeros_list,
     }
+
+
+def _zeros_list(n: int) -> list[float]:
+    """The compiled loops' float buffer on Python: a list (its floats stay Python floats)."""
+    return [0.0] * n
 
 
 def _scalar_where(c: Any, a: Any, b: Any) -> Any:
