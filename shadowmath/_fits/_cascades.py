@@ -1,10 +1,16 @@
 r"""Cascaded shadow maps fitted to a camera: :func:`fit_cascades`.
 
-A boundary and an array driver. The boundary converts and checks the arguments
-once, derives the camera's frustum edges (view space) and the splits; the driver
-runs the formulas of :mod:`shadowmath._math._cascade_formulas` on whole arrays,
-vectorized over the batch, the cascades and the 24 clipped edges (NumPy or JAX:
-values and gradients follow the same expressions).
+A boundary and two drivers of the same formulas (:mod:`shadowmath._math._cascade_formulas`):
+
+* NumPy input: the loop of :mod:`shadowmath._math._cascade_loop` over cameras and
+  cascades, compiled by Numba (the ``fast`` extra), or run by Python on lists for one
+  to :data:`PYTHON_LOOP_CAMERAS` cameras without Numba;
+* JAX input (and NumPy batches without Numba): the array driver below, vectorized over
+  the batch, the cascades and the 24 clipped edges; values and gradients follow the
+  same expressions. ``warp="lispsm"`` runs here only.
+
+The boundary converts and checks the arguments once; each driver reports its failed
+checks with the same messages.
 """
 
 from __future__ import annotations

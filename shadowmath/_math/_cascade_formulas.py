@@ -2,7 +2,7 @@ r"""Cascaded shadow maps: the per-point and per-cascade formulas, one source for
 
 A cascade is a directional light's orthographic map fitted to one slice of a
 camera's view frustum, between two view depths ``a < b``. The drivers
-(:mod:`shadowmath._fits._cascades` on whole arrays, :func:`cascade_loop` per
+(:mod:`shadowmath._fits._cascades` on whole arrays, :func:`._cascade_loop.cascade_loop` per
 camera and cascade, compiled by Numba) run the same steps:
 
 1. the slice's eight corners, on the camera frustum's four edge lines at the
