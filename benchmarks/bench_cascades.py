@@ -260,6 +260,7 @@ class Fit(NamedTuple):
     splits: F64
     texel: F64
     to_unit: F64
+    texture: F64 | None = None  # (n, 4, 4) a warped map's world_to_texture (LiSPSM)
 
 
 def light_axes(sun: F64) -> F64:
@@ -414,7 +415,9 @@ def bevy_fit(
     return Fit(splits, np.stack([texel, texel], axis=1), to_unit)
 
 
-def shadowmath_fit(scene: Scene, projection: F64, *, stable: bool, splits: F64 | None) -> Fit:
+def shadowmath_fit(
+    scene: Scene, projection: F64, *, stable: bool, splits: F64 | None, warp: bool = False
+) -> Fit:
     c = sm.fit_cascades(
         scene.sun,
         scene.view,
@@ -426,7 +429,11 @@ def shadowmath_fit(scene: Scene, projection: F64, *, stable: bool, splits: F64 |
         max_distance=None if splits is not None else scene.distance,
         pcf_radius=PCF_RADIUS,
         stable=stable,
+        warp="lispsm" if warp else None,
     )
+    if warp:
+        return Fit(np.asarray(c.splits), np.asarray(c.texel_size), np.zeros((CASCADES, 3, 4)),
+                   np.asarray(c.world_to_texture))  # fmt: skip
     tex = np.asarray(c.world_to_texture)[:, :3]  # (n, 3, 4): s, t, r (orthographic: q = 1)
     to_unit = tex.copy()
     for k, margin in enumerate((c.frustum.margin_x, c.frustum.margin_y)):
@@ -437,8 +444,11 @@ def shadowmath_fit(scene: Scene, projection: F64, *, stable: bool, splits: F64 |
 
 
 BEVY_SPLITS = "shadowmath, bevy's splits"
-SCHEMES = ("three.js", "bevy", "shadowmath", "shadowmath stable", BEVY_SPLITS)
-KEYS = dict(zip(SCHEMES, ("threejs", "bevy", "shadowmath", "stable", "bevy_splits"), strict=True))
+LISPSM = "shadowmath LiSPSM"
+SCHEMES = ("three.js", "bevy", "shadowmath", "shadowmath stable", BEVY_SPLITS, LISPSM)
+KEYS = dict(
+    zip(SCHEMES, ("threejs", "bevy", "shadowmath", "stable", "bevy_splits", "lispsm"), strict=True)
+)
 """The schemes compared. shadowmath's default splits are practical with λ = 0.75 (three.js:
 0.5), from the camera's near plane; :data:`BEVY_SPLITS` is shadowmath's fit on bevy's split
 depths, to tell the fit's gain from the splits'."""
@@ -453,6 +463,8 @@ def fit_scheme(name: str, scene: Scene, projection: F64) -> Fit:
         near, _ = camera_near_far(projection)
         splits = np.concatenate([[near], bevy_bounds(scene.distance)])
         return shadowmath_fit(scene, projection, stable=False, splits=splits)
+    if name == LISPSM:
+        return shadowmath_fit(scene, projection, stable=False, splits=None, warp=True)
     return shadowmath_fit(scene, projection, stable=name.endswith("stable"), splits=None)
 
 
@@ -469,9 +481,35 @@ class Ratios(NamedTuple):
 def ratios(fit: Fit, hits: Hits, sun: F64) -> Ratios:
     n = len(fit.texel)
     index = np.clip(np.searchsorted(fit.splits, hits.depth, side="right") - 1, 0, n - 1)
+    if fit.texture is not None:
+        return warped_ratios(fit.texture[index], hits)
     texel_area = fit.texel[index, 0] * fit.texel[index, 1] / (hits.normal @ sun)
     m = fit.to_unit[index]  # (N, 3, 4)
     uvw = np.einsum("nij,nj->ni", m[:, :, :3], hits.point) + m[:, :, 3]
+    tol = 1e-9
+    inside = np.all((uvw >= -tol) & (uvw <= 1 + tol), axis=1)
+    return Ratios(texel_area / hits.pixel_area, int(np.count_nonzero(~inside)))
+
+
+def warped_ratios(M: F64, hits: Hits) -> Ratios:
+    """A projective map's texel area on the surface, per pixel: ``1 / (W H |det J|)``.
+
+    ``J``: the derivatives of ``(s, t) = (M p)_{xy} / (M p)_w`` along two orthonormal
+    tangents of the surface at the hit; for an orthographic map this is the texel's
+    area projected on the surface along the light, as :func:`ratios` computes it.
+    """
+    p = np.c_[hits.point, np.ones(len(hits.point))]
+    h = np.einsum("nij,nj->ni", M, p)
+    q = h[:, 3:]
+    uvw = h[:, :3] / q
+    grads = (M[:, :3, :3] - uvw[:, :, None] * M[:, 3:, :3]) / q[:, :, None]  # (N, 3, 3)
+    helper = np.where(np.abs(hits.normal[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
+    t1 = np.cross(hits.normal, helper)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(hits.normal, t1)
+    J = np.stack([np.einsum("nj,nj->n", grads[:, k], t) for k in (0, 1) for t in (t1, t2)])
+    det = np.abs(J[0] * J[3] - J[1] * J[2])
+    texel_area = 1.0 / (MAP_SIZE * MAP_SIZE * det)
     tol = 1e-9
     inside = np.all((uvw >= -tol) & (uvw <= 1 + tol), axis=1)
     return Ratios(texel_area / hits.pixel_area, int(np.count_nonzero(~inside)))
