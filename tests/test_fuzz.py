@@ -2270,10 +2270,93 @@ def test_fuzz_bias_jax_eager_jit_vmap(data: st.DataObject) -> None:
 
 #: Which targets fuzz each public name of shadowmath (constants and types through the
 #: functions that take or return them). A new public name must get a target here.
+# --- cascaded shadow maps -------------------------------------------------------------------
+
+
+@given(
+    near=st.floats(1e-3, 10),
+    ratio=st.floats(1.01, 1e5),
+    count=st.integers(1, 8),
+    lam=st.floats(0, 1),
+    scheme=st.sampled_from(["uniform", "log", "practical"]),
+)
+def test_fuzz_cascade_splits(
+    near: float, ratio: float, count: int, lam: float, scheme: str
+) -> None:
+    """Exact ends, increasing, and the blend of the two schemes."""
+    CASES["cascade_splits"] += 1
+    far = near * ratio
+    s = sm.cascade_splits(near, far, count, scheme=scheme, lam=lam)  # type: ignore[arg-type]
+    assert s.shape == (count + 1,) and s[0] == near and s[-1] == far
+    assert np.all(np.diff(s) > 0)
+    w = {"uniform": 0.0, "log": 1.0, "practical": lam}[scheme]
+    i = np.arange(count + 1) / count
+    want = w * near * (far / near) ** i + (1 - w) * (near + (far - near) * i)
+    np.testing.assert_allclose(s, want, rtol=1e-12)
+    with pytest.raises(ValueError, match="far: the split range must end beyond near"):
+        sm.cascade_splits(far, near, count)
+
+
+def _cascade_scene(data: st.DataObject) -> tuple[np.ndarray, ...]:
+    from .cameras import look_at, perspective
+
+    eye = np.array(data.draw(st.tuples(*[st.floats(-50, 50)] * 2)), float)
+    height = data.draw(st.floats(0.5, 30))
+    yaw, pitch = data.draw(st.floats(0, 2 * np.pi)), data.draw(st.floats(-1.2, 0.2))
+    e = np.array([eye[0], height, eye[1]])
+    d = np.array([np.cos(yaw) * np.cos(pitch), np.sin(pitch), np.sin(yaw) * np.cos(pitch)])
+    proj = perspective(data.draw(st.floats(0.3, 2.0)), data.draw(st.floats(0.5, 2.5)),
+                       data.draw(st.floats(0.01, 1.0)), data.draw(st.floats(20, 500)))  # fmt: skip
+    sun = np.array(data.draw(st.tuples(st.floats(-1, 1), st.floats(0.05, 1), st.floats(-1, 1))))
+    top = data.draw(st.floats(1, 40))
+    box = np.array([[-200.0, -1.0, -200.0], [200.0, top, 200.0]])
+    return sun, look_at(e, e + d), proj, box
+
+
+@given(data=st.data())
+def test_fuzz_fit_cascades(data: st.DataObject) -> None:
+    """Random cameras, suns and scenes: every point of a slice inside the scene lands in its
+    cascade's map and depth range, every caster of the box beyond near; the three paths
+    (compiled, Python loop, arrays) agree; a zero sun is refused by name."""
+    CASES["fit_cascades"] += 1
+    sun, view, proj, box = _cascade_scene(data)
+    options = data.draw(st.sampled_from([{}, {"stable": True}, {"layout": "atlas"},
+                                         {"scheme": "uniform", "count": 2}]))  # fmt: skip
+    c = sm.fit_cascades(sun, view, proj, box, 512, **options)
+    assert isinstance(c, sm.Cascades)
+    assert np.all(np.isfinite(c.world_to_clip)) and np.all(np.diff(c.splits) > 0)
+    assert np.all(c.band_end >= c.splits[1:] * (1 - 1e-12))
+    # Points of each slice inside the box: sampled along the camera's rays.
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    inv_p, inv_v = np.linalg.inv(proj), np.linalg.inv(view)
+    for i in range(len(c.band_end)):
+        ndc = np.c_[rng.uniform(-1, 1, (400, 2)), np.zeros(400), np.ones(400)]
+        ray = (inv_p @ ndc.T).T
+        ray = ray[:, :3] / ray[:, 3:]
+        depth = rng.uniform(c.splits[i], c.band_end[i], 400)
+        p = ray * (depth / -ray[:, 2])[:, None]
+        w = (inv_v @ np.c_[p, np.ones(400)].T).T[:, :3]
+        w = w[np.all((w >= box[0]) & (w <= box[1]), axis=1)]
+        h = np.c_[w, np.ones(len(w))] @ c.world_to_clip[i].T
+        q = h[:, :3] / h[:, 3:]
+        m = c.frustum.margin_x[i]
+        assert np.all(np.abs(q[:, :2]) <= m * (1 + 1e-9)), np.abs(q[:, :2]).max()
+        assert np.all((q[:, 2] >= -1) & (q[:, 2] <= 1))
+        b = np.array([[box[k & 1, 0], box[k >> 1 & 1, 1], box[k >> 2, 2]] for k in range(8)])
+        hb = np.c_[b, np.ones(8)] @ c.world_to_clip[i].T
+        assert np.all(hb[:, 2] / hb[:, 3] >= -1)
+    with _kernels.array_path():
+        slow = sm.fit_cascades(sun, view, proj, box, 512, **options)
+    np.testing.assert_allclose(c.world_to_clip, slow.world_to_clip, rtol=1e-8, atol=1e-10)
+    with pytest.raises(ValueError, match="light: zero direction"):
+        sm.fit_cascades(np.zeros(3), view, proj, box, 512, **options)
+
+
 PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "GRAPHICS_APIS": ("test_fuzz_api_convention", "test_fuzz_fit_shadow_scene_options"),
     "NEAR_FAR_SLACK": ("test_fuzz_fit_shadow_scene_options",),
     "ApiConvention": ("test_fuzz_api_convention",),
+    "Cascades": ("test_fuzz_fit_cascades",),
     "CubeFaceCoords": ("test_fuzz_cube_face", "test_fuzz_cube_jax_eager_jit_vmap"),
     "CubeFaceDepth": ("test_fuzz_cube_face_projection_and_depth",),
     "DirectionalLight": ("test_fuzz_fit_shadow_scene_options",
@@ -2308,6 +2391,8 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "cube_face_projection": ("test_fuzz_cube_face_projection_and_depth",
                              "test_fuzz_cube_jax_eager_jit_vmap"),
     "cube_face_views": ("test_fuzz_cube_face", "test_fuzz_cube_jax_eager_jit_vmap"),
+    "cascade_splits": ("test_fuzz_cascade_splits",),
+    "fit_cascades": ("test_fuzz_fit_cascades",),
     "fit_shadow": ("test_fuzz_fit_shadow", "test_fuzz_fit_shadow_scene_options",
                    "test_fuzz_fit_shadow_invalid_options",
                    "test_fuzz_fit_shadow_jax_eager_jit_vmap"),
