@@ -348,8 +348,15 @@ def _bounds(lc: Any, gs: Any, bl: Any, bg: Any, s0: float, s1: float) -> Any:
     """Light-space bounds of the slice intersected with the box (with the slice's fallback)."""
     inf = math.inf
     lx, hx_, ly, hy_, lz, hz = inf, -inf, inf, -inf, inf, -inf
+    # A slice whose eight corners are all in the (convex) box lies in it: the intersection
+    # is the slice, its vertices the corners; the edge clips below would find just them.
+    whole = True
+    for k in range(48):
+        if gs[k] < 0:
+            whole = False
+            break
     seen = False
-    for e in range(24):
+    for e in range(0 if whole else 24):
         k0, k1 = _E0[e % 12], _E1[e % 12]
         if e < 12:
             a0, a1 = 6 * k0, 6 * k1
@@ -372,13 +379,23 @@ def _bounds(lc: Any, gs: Any, bl: Any, bg: Any, s0: float, s1: float) -> Any:
             t0, t1, ok = clip_segment(g0, g1)
         if ok:
             seen = True
+            dx, dy, dz = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
             for t in (t0, t1):
-                x = p0[0] + t * (p1[0] - p0[0])
-                y = p0[1] + t * (p1[1] - p0[1])
-                z = p0[2] + t * (p1[2] - p0[2])
-                lx, hx_, ly, hy_ = min(lx, x), max(hx_, x), min(ly, y), max(hy_, y)
-                lz, hz = min(lz, z), max(hz, z)
-    if not seen:
+                x, y, z = p0[0] + t * dx, p0[1] + t * dy, p0[2] + t * dz
+                # Comparisons, not min()/max(): the Python run of this loop calls nothing.
+                if x < lx:
+                    lx = x
+                if x > hx_:
+                    hx_ = x
+                if y < ly:
+                    ly = y
+                if y > hy_:
+                    hy_ = y
+                if z < lz:
+                    lz = z
+                if z > hz:
+                    hz = z
+    if whole or not seen:
         for k in range(8):
             x, y, z = lc[3 * k], lc[3 * k + 1], lc[3 * k + 2]
             lx, hx_, ly, hy_ = min(lx, x), max(hx_, x), min(ly, y), max(hy_, y)
