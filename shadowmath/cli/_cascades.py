@@ -27,6 +27,7 @@ from ._run import (
     UnavailableError,
     check_limits,
     open_device,
+    output_path,
     print_matrix,
     save_png,
 )
@@ -129,14 +130,7 @@ def draw_cascades(options: Options) -> Callable[[], None]:
 
 def _write(options: Options, frame: CascadeFrame) -> None:
     """Save the picture and the cascade-coloured one, a line for each file."""
-    output = options.output
-    if options.default_output:
-        try:
-            output.parent.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise OptionError(
-                f"--output {output}: cannot create its folder ({err.strerror or err})"
-            ) from None
+    output = output_path(options)
     save_png("--output", output, frame.color)
     print(f"wrote {output}: {summary(options)}")
     if options.cascade_output is not None and frame.cascade_color is not None:

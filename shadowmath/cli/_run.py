@@ -312,14 +312,8 @@ def save_png(option: str, path: Path, image: NDArray[Any]) -> None:
         raise OptionError(f"{option} {path}: cannot write it ({err.strerror or err})") from None
 
 
-def write_outputs(options: Options, rendered: Rendered) -> None:
-    """Save the picture and the shadow map (when asked), printing a line for each file.
-
-    The default output folder is created when missing, any other must exist.
-
-    Raises:
-        OptionError: a file (or the default folder) cannot be written, naming its option.
-    """
+def output_path(options: Options) -> Path:
+    """``--output``, its default folder created when missing (any other must exist)."""
     output = options.output
     if options.default_output:
         try:
@@ -328,6 +322,18 @@ def write_outputs(options: Options, rendered: Rendered) -> None:
             raise OptionError(
                 f"--output {output}: cannot create its folder ({err.strerror or err})"
             ) from None
+    return output
+
+
+def write_outputs(options: Options, rendered: Rendered) -> None:
+    """Save the picture and the shadow map (when asked), printing a line for each file.
+
+    The default output folder is created when missing, any other must exist.
+
+    Raises:
+        OptionError: a file (or the default folder) cannot be written, naming its option.
+    """
+    output = output_path(options)
     save_png("--output", output, rendered.color)
     print(f"wrote {output}: {summary(options, rendered.adapter)}")
     if options.map_output is not None and rendered.map_picture is not None:
