@@ -118,23 +118,31 @@ def clip_segment(g0: tuple[Any, ...], g1: tuple[Any, ...]) -> tuple[Any, Any, An
     r"""Liang–Barsky: the part ``[t_0, t_1]`` of a segment inside six half-spaces, and whether any.
 
     ``g0``, ``g1``: the six affine half-space values at the segment's ends, so
-    ``g(t) = g_0 + t (g_1 - g_0)``; a plane crossed from outside to inside raises
-    ``t_0`` to ``g_0 / (g_0 - g_1)``, one crossed the other way lowers ``t_1``
-    to it, and a segment outside one plane at both ends is empty.
+    ``g(t) = g_0 + t (g_1 - g_0)``; each plane is one :func:`clip_plane` step.
     """
     t0 = g0[0] * 0.0
     t1 = t0 + 1.0
     ok = t0 == t0
     for j in range(6):
-        a, b = g0[j], g1[j]
-        d = a - b
-        t = a / where(d != 0, d, 1.0)
-        entering = (a < 0) & (b >= 0)
-        leaving = (a >= 0) & (b < 0)
-        t0 = where(entering & (t > t0), t, t0)
-        t1 = where(leaving & (t < t1), t, t1)
-        ok = ok & ((a >= 0) | (b >= 0))
+        t0, t1, ok = clip_plane(t0, t1, ok, g0[j], g1[j])
     return t0, t1, ok & (t0 <= t1)
+
+
+def clip_plane(t0: Any, t1: Any, ok: Any, a: Any, b: Any) -> tuple[Any, Any, Any]:
+    """One half-space of :func:`clip_segment`, with values ``a``, ``b`` at the ends.
+
+    A plane crossed from outside to inside raises ``t_0`` to ``a / (a - b)``, one
+    crossed the other way lowers ``t_1`` to it, and a segment outside it at both ends
+    is empty (``ok`` false). A plane with both ends inside changes nothing, so the
+    compiled loop calls this only for the planes an end is outside of.
+    """
+    d = a - b
+    t = a / where(d != 0, d, 1.0)
+    entering = (a < 0) & (b >= 0)
+    leaving = (a >= 0) & (b < 0)
+    t0 = where(entering & (t > t0), t, t0)
+    t1 = where(leaving & (t < t1), t, t1)
+    return t0, t1, ok & ((a >= 0) | (b >= 0))
 
 
 def slice_sphere(
@@ -217,6 +225,7 @@ FUNCTIONS = (
     "slice_values",
     "box_values",
     "clip_segment",
+    "clip_plane",
     "slice_sphere",
     "_mean4",
     "_far2",

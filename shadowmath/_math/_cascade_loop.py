@@ -18,10 +18,9 @@ from ._cascade_formulas import (  # noqa: F401
     box_values,
     camera_values,
     cascade_box,
-    clip_segment,
+    clip_plane,
     edge_point,
     slice_sphere,
-    slice_values,
     split_depth,
 )
 from ._fit_formulas import fit_axes, fit_rows, safe_box, stable_sides, to_light
@@ -377,18 +376,20 @@ def _bounds(lc: Any, gs: Any, bl: Any, bg: Any, s0: float, s1: float) -> Any:
         if c0 & c1:
             continue
         pts = lc if e < 12 else bl
-        if c0 | c1:
-            if e < 12:
-                a0, a1 = 6 * k0, 6 * k1
-                g0 = (gs[a0], gs[a0 + 1], gs[a0 + 2], gs[a0 + 3], gs[a0 + 4], gs[a0 + 5])
-                g1 = (gs[a1], gs[a1 + 1], gs[a1 + 2], gs[a1 + 3], gs[a1 + 4], gs[a1 + 5])
-            else:
-                a0, a1 = 5 * k0, 5 * k1
-                g0 = slice_values((bg[a0], bg[a0 + 1], bg[a0 + 2], bg[a0 + 3]), bg[a0 + 4],
-                                  s0, s1)  # fmt: skip
-                g1 = slice_values((bg[a1], bg[a1 + 1], bg[a1 + 2], bg[a1 + 3]), bg[a1 + 4],
-                                  s0, s1)  # fmt: skip
-            t0, t1, ok = clip_segment(g0, g1)
+        if c0 | c1:  # clip by the planes an end is outside of (the others change nothing)
+            t0, t1, ok, crossed = 0.0, 1.0, True, c0 | c1
+            for j in range(6):
+                if crossed & (1 << j):
+                    if e < 12:
+                        a, b = gs[6 * k0 + j], gs[6 * k1 + j]
+                    elif j < 4:
+                        a, b = bg[5 * k0 + j], bg[5 * k1 + j]
+                    elif j == 4:
+                        a, b = bg[5 * k0 + 4] - s0, bg[5 * k1 + 4] - s0
+                    else:
+                        a, b = s1 - bg[5 * k0 + 4], s1 - bg[5 * k1 + 4]
+                    t0, t1, ok = clip_plane(t0, t1, ok, a, b)
+            ok = ok and t0 <= t1
         else:
             t0, t1, ok = 0.0, 1.0, True
         p0 = (pts[3 * k0], pts[3 * k0 + 1], pts[3 * k0 + 2])
