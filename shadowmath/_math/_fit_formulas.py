@@ -487,7 +487,13 @@ def _crow(c: tuple[float, ...], i: int, m: tuple[Any, ...]) -> tuple[Any, Any, A
 
 def const_times(c: tuple[float, ...], m: tuple[Any, ...]) -> tuple[Any, ...]:
     """``C @ M`` for a constant ``C`` (16 row-major floats) and 16 row-major entries ``M``."""
+    if c == IDENTITY16:  # OpenGL's own clip space: nothing to multiply
+        return m
     return (*_crow(c, 0, m), *_crow(c, 1, m), *_crow(c, 2, m), *_crow(c, 3, m))
+
+
+#: The 4x4 identity as 16 row-major floats (:func:`const_times`'s shortcut).
+IDENTITY16 = (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 
 
 def fit_rows(
