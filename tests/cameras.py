@@ -39,3 +39,18 @@ def orthographic(half_w: float, half_h: float, near: float, far: float) -> np.nd
         [1 / half_w, 0, 0, 0], [0, 1 / half_h, 0, 0],
         [0, 0, -2 / (far - near), -(far + near) / (far - near)], [0, 0, 0, 1],
     ])  # fmt: skip
+
+
+def scene(seed: int, lowest_pitch: float = -0.15) -> tuple[np.ndarray, ...]:
+    """A random camera 1 to 8 units above a 300 x 300 scene box looking near the horizon
+    (its view tilted down by at most ``-lowest_pitch``), and a sun above the horizon."""
+    rng = np.random.default_rng(seed)
+    eye = rng.uniform([-30, 1, -30], [30, 8, 30])
+    yaw = rng.uniform(0, 2 * np.pi)
+    target = eye + [np.cos(yaw), rng.uniform(lowest_pitch, 0.05), np.sin(yaw)]
+    view = look_at(eye, target)
+    proj = perspective(rng.uniform(0.6, 1.4), rng.uniform(0.8, 2.0), rng.uniform(0.05, 1), 120)
+    box = np.array([[-150.0, -0.5, -150.0], [150.0, rng.uniform(10, 20), 150.0]])
+    sun = rng.normal(size=3)
+    sun[1] = abs(sun[1]) + 0.2
+    return sun, view, proj, box

@@ -17,23 +17,9 @@ from scipy.spatial import HalfspaceIntersection
 
 import shadowmath as sm
 
-from .cameras import look_at, orthographic, perspective
+from .cameras import look_at, orthographic, perspective, scene
 
 RNG = np.random.default_rng(17)
-
-
-def scene(seed: int) -> tuple[np.ndarray, ...]:
-    """A random camera near a large scene box, and a sun."""
-    rng = np.random.default_rng(seed)
-    eye = rng.uniform([-30, 1, -30], [30, 8, 30])
-    yaw = rng.uniform(0, 2 * np.pi)
-    target = eye + [np.cos(yaw), rng.uniform(-0.15, 0.05), np.sin(yaw)]
-    view = look_at(eye, target)
-    proj = perspective(rng.uniform(0.6, 1.4), rng.uniform(0.8, 2.0), rng.uniform(0.05, 1), 120)
-    box = np.array([[-150.0, -0.5, -150.0], [150.0, rng.uniform(10, 20), 150.0]])
-    sun = rng.normal(size=3)
-    sun[1] = abs(sun[1]) + 0.2
-    return sun, view, proj, box
 
 
 def body(view: np.ndarray, proj: np.ndarray, box: np.ndarray, a: float, b: float) -> np.ndarray:

@@ -55,6 +55,7 @@ from .strategies import (
     sized_maps,
     unit_vectors,
 )
+from .test_stable_sphere import DUPLICATE
 
 CASES: Counter[str] = Counter()
 
@@ -2429,14 +2430,8 @@ def test_every_public_name_has_a_fuzz_target() -> None:
             assert callable(globals().get(target)), target
 
 
-STABLE_DUPLICATE = np.array([
-    [0.5988462126346276, 0.03972210748165899, -0.2924567509650886],
-    [0.5988462126346276, 0.03972210748165899, -0.2924567509650886],
-    [-0.7819084623568421, -0.2571922406188707, 0.00814218051834351],
-    [-0.2756029052993704, 1.2940638143982073, 1.0067243153057943],
-    [-2.7111624789659685, -1.8890132459676727, -0.17477209205516195],
-    [-0.42219041157635356, 0.2136429974986111, 0.21732193102256359],
-])  # fmt: skip
+#: The repeated vertex that the stable-sphere regression test keeps.
+STABLE_DUPLICATE = DUPLICATE
 
 
 @example(vertices=STABLE_DUPLICATE[1:], offset=1e4, turn=0, gap=0.0)

@@ -22,23 +22,15 @@ import shadowmath as sm
 from shadowmath._fits._lispsm import WARP_MIN_SIN
 
 from .cameras import look_at, perspective
+from .cameras import scene as _scene
 
 SIZE = 1024
 APIS = ["opengl", "vulkan", "direct3d", "metal", "webgpu"]
 
 
 def scene(seed: int) -> tuple[np.ndarray, ...]:
-    """A random camera near the ground of a large scene box, and a sun."""
-    rng = np.random.default_rng(seed)
-    eye = rng.uniform([-30, 1, -30], [30, 8, 30])
-    yaw = rng.uniform(0, 2 * np.pi)
-    target = eye + [np.cos(yaw), rng.uniform(-0.3, 0.05), np.sin(yaw)]
-    view = look_at(eye, target)
-    proj = perspective(rng.uniform(0.6, 1.4), rng.uniform(0.8, 2.0), rng.uniform(0.05, 1), 120)
-    box = np.array([[-150.0, -0.5, -150.0], [150.0, rng.uniform(10, 20), 150.0]])
-    sun = rng.normal(size=3)
-    sun[1] = abs(sun[1]) + 0.2
-    return sun, view, proj, box
+    """:func:`tests.cameras.scene` with views tilted down by up to 0.3."""
+    return _scene(seed, lowest_pitch=-0.3)
 
 
 def horizon() -> tuple[np.ndarray, ...]:

@@ -101,9 +101,14 @@ def check_range(checks: Checks, n: Array, f: Array, lm: Array, fixed: float | No
     if fixed != 0.0:
         checks.require(
             (n > 0) | (lm == 0),
-            "near: logarithmic splits need near > 0 (use scheme='uniform' for a range "
-            "that starts at the camera)",
+            LOG_NEAR,
         )
+
+
+LOG_NEAR = (
+    "near: logarithmic splits need near > 0 (use scheme='uniform' for a range that starts "
+    "at the camera)"
+)
 
 
 def split_depths(xp: Any, n: Array, f: Array, lm: Array, count: int) -> Array:

@@ -38,13 +38,20 @@ from shadowmath._boundary._validate import (
 )
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._cascade_formulas import EDGES
-from shadowmath._math._cascade_loop import ROW
+from shadowmath._math._cascade_loop import CHECKS, ROW
 from shadowmath._math._conventions import GraphicsApi, _check_api, _clip_from_gl
 from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
 from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath.lights import DirectionalLight
 
-from ._cascade_splits import SplitScheme, check_count, check_range, check_scheme, split_depths
+from ._cascade_splits import (
+    LOG_NEAR,
+    SplitScheme,
+    check_count,
+    check_range,
+    check_scheme,
+    split_depths,
+)
 from ._lispsm import check_warp, warp_cascades
 from ._spec import ShadowMapSpec, api_rows, spec_from_options
 
@@ -281,14 +288,7 @@ def _value_checks(checks: Checks, L: Array, box: Array, U: Array | None) -> None
     xp = checks.ctx.xp
     checks.require(all_finite(xp, L, 1), non_finite("light"))
     checks.require(all_finite(xp, box, 2), non_finite("scene_bounds"))
-    checks.require(
-        xp.all(box[..., 1, :] >= box[..., 0, :], axis=-1),
-        "scene_bounds: the max corner must be >= the min corner on every axis",
-    )
-    checks.require(
-        xp.max(xp.abs(L), axis=-1) > 0,
-        "light: zero direction (x = y = z = 0): a directional light points toward the light",
-    )
+    checks.require(xp.all(box[..., 1, :] >= box[..., 0, :], axis=-1), MESSAGES["bounds_order"])
     if U is not None:
         checks.require(all_finite(xp, U, 1), non_finite("up"))
 
@@ -311,18 +311,15 @@ def _camera(ctx: Context, checks: Checks, V: Array, P: Array, C: Any) -> Camera:
     checks.require(all_finite(xp, V, 2), non_finite("view"))
     checks.require(all_finite(xp, P, 2), non_finite("projection"))
     last = xp.asarray([0.0, 0.0, 0.0, 1.0], dtype=ctx.dtype)
-    checks.require(
-        xp.all(V[..., 3, :] == last, axis=-1),
-        "view: expected an affine world-to-view matrix (last row 0, 0, 0, 1)",
-    )
+    checks.require(xp.all(V[..., 3, :] == last, axis=-1), MESSAGES["view_affine"])
     eps = ctx.eps
-    dv = _det3(V)
-    scale = xp.prod(xp.sqrt(xp.sum(V[..., :3, :3] ** 2, axis=-1)), axis=-1)
-    checks.require(xp.abs(dv) > 64 * eps * scale, "view: singular (its 3x3 part has no inverse)")
-    dp = xp.linalg.det(P)
+    # The linear part's Hadamard test, as a blocker's placement's (free of scale).
+    ok_v = formulas(xp).placement_ok(tuple(V[..., i // 4, i % 4] for i in range(16)), eps)
+    checks.require(ok_v, MESSAGES["view_singular"])
     pscale = xp.prod(xp.sqrt(xp.sum(P**2, axis=-1)), axis=-1)
-    checks.require(xp.abs(dp) > 64 * eps * pscale, "projection: singular (no inverse)")
-    safe = ~((xp.abs(dp) > 64 * eps * pscale) & (xp.abs(dv) > 64 * eps * scale))
+    ok_p = xp.abs(xp.linalg.det(P)) > 64 * eps * pscale
+    checks.require(ok_p, MESSAGES["projection_singular"])
+    safe = ~(ok_p & ok_v)
     eye = xp.eye(4, dtype=ctx.dtype)
     Vs = xp.where(safe[..., None, None], eye, V)
     Ps = xp.where(safe[..., None, None], eye, P)
@@ -345,20 +342,8 @@ def _camera(ctx: Context, checks: Checks, V: Array, P: Array, C: Any) -> Camera:
     sign = xp.where(finite_far, xp.sign(fz / safe_fw - nz), xp.sign(nz))
     sign = xp.where(sign == 0, xp.ones_like(sign), sign)
     far_depth = xp.where(finite_far, sign * fz / safe_fw, xp.asarray(np.inf, dtype=ctx.dtype))
-    checks.require(
-        finite_far | (sign * nz > 0),
-        "projection: an infinite far plane needs a perspective camera (near > 0)",
-    )
+    checks.require(finite_far | (sign * nz > 0), MESSAGES["infinite_far"])
     return Camera(near, far, sign, sign * nz, far_depth, inv_v, xp.matmul(P, V))
-
-
-def _det3(M: Array) -> Array:
-    a = M[..., :3, :3]
-    return (
-        a[..., 0, 0] * (a[..., 1, 1] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 1])
-        - a[..., 0, 1] * (a[..., 1, 0] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 0])
-        + a[..., 0, 2] * (a[..., 1, 0] * a[..., 2, 1] - a[..., 1, 1] * a[..., 2, 0])
-    )
 
 
 class Depths(NamedTuple):
@@ -384,31 +369,21 @@ def _splits(
     tol = float(np.sqrt(ctx.eps))
     if S is not None:
         checks.require(all_finite(xp, S, 1), non_finite("splits"))
-        checks.require(
-            xp.all(S[..., 1:] > S[..., :-1], axis=-1), "splits: the depths must increase"
-        )
+        checks.require(xp.all(S[..., 1:] > S[..., :-1], axis=-1), MESSAGES["splits_increase"])
         checks.require(
             # Within sqrt(eps) relative: the camera's own near/far, rounded by its inverse.
             (S[..., 0] >= cam.near - tol * xp.abs(cam.near)) & (S[..., -1] <= cam.far * (1 + tol)),
-            "splits: the depths must lie within the camera's [near, far] view depths",
+            MESSAGES["splits_range"],
         )
         s = S
     else:
         far = cam.far
         if dmax is not None:
             checks.require(all_finite(xp, dmax, 0), non_finite("max_distance"))
-            checks.require(
-                (dmax > cam.near) & (dmax <= cam.far),
-                "max_distance: the shadow distance must lie beyond the camera's near plane "
-                "and no farther than its far plane",
-            )
+            checks.require((dmax > cam.near) & (dmax <= cam.far), MESSAGES["max_distance"])
             far = xp.where(dmax > cam.near, xp.minimum(dmax, cam.far), cam.near + 1)
         else:
-            checks.require(
-                xp.isfinite(cam.far),
-                "max_distance: the projection's far plane is at infinity; give the "
-                "shadow distance as max_distance",
-            )
+            checks.require(xp.isfinite(cam.far), MESSAGES["far_infinite"])
         check_range(checks, cam.near, far, lm, fixed)
         assert count is not None
         safe_far = xp.where(far > cam.near, far, cam.near + 1)
@@ -442,9 +417,8 @@ def _fit(
     up = (0.0, 0.0, 0.0) if U is None else (U[..., 0], U[..., 1], U[..., 2])
     a, ok_light, _, ok_up = F.fit_axes((-L[..., 0], -L[..., 1], -L[..., 2]), up, U is not None,
                                        coords, ctx.eps)  # fmt: skip
-    checks.require(ok_light, "light: zero direction (x = y = z = 0): a directional light "
-                   "points toward the light")  # fmt: skip
-    checks.require(ok_up, msg.UP_PARALLEL)
+    checks.require(ok_light, MESSAGES["light_zero"])
+    checks.require(ok_up, MESSAGES["up_parallel"])
     a_n = tuple(v[..., None] for v in a)  # per cascade
     view, world = _slice_corners(xp, F, cam, depths)
     bounds, zb = _clipped_bounds(
@@ -622,8 +596,7 @@ def _tiles(n: int, size: tuple[int, int], layout: str) -> tuple[Array, tuple[int
         ports = np.tile(np.array([0, 0, w, h]), (n, 1))
         ports.setflags(write=False)  # cached: shared by every call
         return ports, (1, 1, np.zeros((n, 2), dtype=int))
-    cols = int(np.ceil(np.sqrt(n)))
-    rows = int(np.ceil(n / cols))
+    cols, rows = _grid(n, layout)
     cells = np.array([(i % cols, i // cols) for i in range(n)])
     ports = np.column_stack([cells[:, 0] * w, cells[:, 1] * h, np.full(n, w), np.full(n, h)])
     ports.setflags(write=False)  # cached: shared by every call
@@ -648,29 +621,31 @@ def _in_tile(xp: Any, tex: tuple[Array, ...], tile: tuple[int, int, Array]) -> t
     return (*s, *t, *tex[8:16])
 
 
-#: The compiled loop's checks (:data:`._cascade_loop.CHECKS`, same order) and their messages.
-LOOP_MESSAGES = (
-    non_finite("light"),
-    non_finite("view"),
-    non_finite("projection"),
-    non_finite("scene_bounds"),
-    non_finite("up"),
-    "view: expected an affine world-to-view matrix (last row 0, 0, 0, 1)",
-    "view: singular (its 3x3 part has no inverse)",
-    "projection: singular (no inverse)",
-    "projection: an infinite far plane needs a perspective camera (near > 0)",
-    "scene_bounds: the max corner must be >= the min corner on every axis",
-    "light: zero direction (x = y = z = 0): a directional light points toward the light",
-    msg.UP_PARALLEL,
-    "max_distance: the projection's far plane is at infinity; give the shadow distance as "
-    "max_distance",
-    "max_distance: the shadow distance must lie beyond the camera's near plane and no "
-    "farther than its far plane",
-    "near: logarithmic splits need near > 0 (use scheme='uniform' for a range that starts "
-    "at the camera)",
-    "splits: the depths must increase",
-    "splits: the depths must lie within the camera's [near, far] view depths",
-)
+#: The messages of the value checks, by the names of :data:`._cascade_loop.CHECKS`: the
+#: compiled loop reports its status bits with them, the array driver its ``require``\ s.
+MESSAGES = {
+    "light_finite": non_finite("light"),
+    "view_finite": non_finite("view"),
+    "projection_finite": non_finite("projection"),
+    "bounds_finite": non_finite("scene_bounds"),
+    "up_finite": non_finite("up"),
+    "view_affine": "view: expected an affine world-to-view matrix (last row 0, 0, 0, 1)",
+    "view_singular": "view: singular (its 3x3 part has no inverse)",
+    "projection_singular": "projection: singular (no inverse)",
+    "infinite_far": "projection: an infinite far plane needs a perspective camera (near > 0)",
+    "bounds_order": "scene_bounds: the max corner must be >= the min corner on every axis",
+    "light_zero": "light: zero direction (x = y = z = 0): a directional light points toward "
+    "the light",
+    "up_parallel": msg.UP_PARALLEL,
+    "far_infinite": "max_distance: the projection's far plane is at infinity; give the "
+    "shadow distance as max_distance",
+    "max_distance": "max_distance: the shadow distance must lie beyond the camera's near "
+    "plane and no farther than its far plane",
+    "log_near": LOG_NEAR,
+    "splits_increase": "splits: the depths must increase",
+    "splits_range": "splits: the depths must lie within the camera's [near, far] view depths",
+}
+LOOP_MESSAGES = tuple(MESSAGES[name] for name in CHECKS)
 
 
 def _compiled(

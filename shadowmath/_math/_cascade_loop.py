@@ -23,7 +23,7 @@ from ._cascade_formulas import (  # noqa: F401
     slice_sphere,
     split_depth,
 )
-from ._fit_formulas import fit_axes, fit_rows, safe_box, stable_sides, to_light
+from ._fit_formulas import fit_axes, fit_rows, placement_ok, safe_box, stable_sides, to_light
 from ._formulas import fabs, sqrt, where  # noqa: F401
 from ._loops import _tuple16
 
@@ -254,12 +254,7 @@ def _entry_checks(L: Any, VP: Any, box: Any, U: Any, opts: Any, eps: float) -> i
         st |= 16
     if not (V[12] == 0 and V[13] == 0 and V[14] == 0 and V[15] == 1):
         st |= 1 << 5
-    det = V[0] * (V[5] * V[10] - V[6] * V[9]) - V[1] * (V[4] * V[10] - V[6] * V[8]) + V[2] * (
-        V[4] * V[9] - V[5] * V[8])  # fmt: skip
-    scale = 1.0
-    for r in range(3):
-        scale *= math.sqrt(V[4 * r] ** 2 + V[4 * r + 1] ** 2 + V[4 * r + 2] ** 2)
-    if not abs(det) > 64.0 * eps * scale:
+    if not placement_ok(V, eps):  # the linear part's Hadamard test, as the array driver's
         st |= 1 << 6
     return st
 
