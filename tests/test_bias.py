@@ -473,3 +473,17 @@ def test_numpy_integers_are_sizes() -> None:
         slope_scaled_bias(M, p, n, map_size=(np.int64(64), np.int32(32)), radius=np.int64(1)),
         slope_scaled_bias(M, p, n, map_size=(64, 32), radius=1),
     )
+
+
+def test_texel_size_where_the_gradients_square_past_float32() -> None:
+    """Found by the fuzz: a tiny float32 scene has |grad s x grad t| ~ 1e20, whose square
+    overflows float32; the texel size, 1 / sqrt(W H |D|), is representable and exact."""
+    import warnings
+
+    M = np.diag([1e10, 1e10, 1.0, 1.0]).astype(np.float32)  # |D| = 1e20
+    p = np.array([0.1, 0.2, 0.3], np.float32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow on the way either
+        h = texel_world_size(M, p, map_size=4)
+    assert h.dtype == np.float32
+    assert float(h) == pytest.approx(1 / np.sqrt(16 * 1e20), rel=1e-6)

@@ -35,7 +35,7 @@ from shadowmath._boundary._validate import (
     require_matrix,
 )
 
-from ._vector import cross, dot
+from ._vector import cross, dot, norm
 
 PcfFilter = Literal["box", "bilinear"]
 PCF_FILTERS: tuple[PcfFilter, ...] = ("box", "bilinear")
@@ -98,7 +98,7 @@ def _texel_size(xp: ModuleType, M: Array, p: Array, W: int, H: int) -> Array:
     """``sqrt(1 / (W H |grad s x grad t|))``: the texel's width across the ray."""
     gs, gt, _ = _texture_gradients(xp, M, p)
     D = cross(xp, gs, gt)
-    return 1 / xp.sqrt(W * H * xp.sqrt(dot(xp, D, D)))
+    return 1 / xp.sqrt(W * H * norm(xp, D))  # |D| without squaring it (float32's range)
 
 
 def _texel_size_on_surface(xp: ModuleType, M: Array, p: Array, n: Array, W: int, H: int) -> Array:
@@ -189,7 +189,7 @@ def _prepare(
     gs, gt, _ = _texture_gradients(xp, M, p)
     D = cross(xp, gs, gt)
     checks.require(
-        dot(xp, D, D) > 0,
+        xp.max(xp.abs(D), axis=-1) > 0,  # not D . D: its square leaves float32's range
         "world_to_texture: s and t do not vary across the ray there (a singular matrix)",
     )
     unit_n = None
