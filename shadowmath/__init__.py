@@ -41,6 +41,9 @@ CONVENTIONS
 
 from ._boundary._checks import check_finite as check_finite
 from ._boundary._messages import ShadowFitWarning as ShadowFitWarning
+from ._fits._camera import ShadowCamera as ShadowCamera
+from ._fits._camera import camera_to_world as camera_to_world
+from ._fits._camera import shadow_camera as shadow_camera
 from ._fits._cascade_splits import cascade_splits as cascade_splits
 from ._fits._cascades import Cascades as Cascades
 from ._fits._cascades import fit_cascades as fit_cascades
@@ -111,6 +114,7 @@ __all__ = [
     "LightFrame",
     "Mesh",
     "PointLight",
+    "ShadowCamera",
     "ShadowFitWarning",
     "ShadowMapSpec",
     "ShadowSetup",
@@ -122,6 +126,7 @@ __all__ = [
     "area_light_samples_jax",
     "blocker_projection",
     "border_margin",
+    "camera_to_world",
     "cascade_splits",
     "check_finite",
     "column_major_bytes",
@@ -149,6 +154,7 @@ __all__ = [
     "receiver_texel_size",
     "receiver_texture_matrix",
     "rolled_light_frame",
+    "shadow_camera",
     "silhouette_coverage",
     "slope_scaled_bias",
     "smooth_frustum",

@@ -54,3 +54,19 @@ def scene(seed: int, lowest_pitch: float = -0.15) -> tuple[np.ndarray, ...]:
     sun = rng.normal(size=3)
     sun[1] = abs(sun[1]) + 0.2
     return sun, view, proj, box
+
+
+def frustum(l: float, r: float, b: float, t: float, n: float, f: float) -> np.ndarray:  # noqa: E741
+    """glFrustum (the OpenGL specification's matrix): an off-axis perspective projection."""
+    return np.array([
+        [2 * n / (r - l), 0, (r + l) / (r - l), 0], [0, 2 * n / (t - b), (t + b) / (t - b), 0],
+        [0, 0, -(f + n) / (f - n), -2 * f * n / (f - n)], [0, 0, -1, 0],
+    ])  # fmt: skip
+
+
+def ortho(l: float, r: float, b: float, t: float, n: float, f: float) -> np.ndarray:  # noqa: E741
+    """glOrtho (the OpenGL specification's matrix): an off-centre orthographic projection."""
+    return np.array([
+        [2 / (r - l), 0, 0, -(r + l) / (r - l)], [0, 2 / (t - b), 0, -(t + b) / (t - b)],
+        [0, 0, -2 / (f - n), -(f + n) / (f - n)], [0, 0, 0, 1],
+    ])  # fmt: skip

@@ -2353,6 +2353,40 @@ def test_fuzz_fit_cascades(data: st.DataObject) -> None:
         sm.fit_cascades(np.zeros(3), view, proj, box, 512, **options)
 
 
+@given(data=st.data())
+def test_fuzz_shadow_camera(data: st.DataObject) -> None:
+    """Random lights, casters and APIs: the camera's numbers rebuild the fit's clip matrix
+    with the textbook look-at and glFrustum/glOrtho; camera_to_world is the rigid inverse of
+    that look-at for every engine's axes."""
+    from .cameras import frustum, look_at, ortho
+
+    CASES["shadow_camera"] += 1
+    coords = st.floats(-20, 20)
+    centre = np.array(data.draw(st.tuples(coords, coords, coords)))
+    half = np.array(data.draw(st.tuples(*[st.floats(0.1, 5)] * 3)))
+    box = centre + half * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    direction = np.array(data.draw(st.tuples(coords, st.floats(0.5, 20), coords)))
+    point = data.draw(st.booleans())
+    light = (sm.PointLight(centre + direction * (1 + 2 * half.max() / np.linalg.norm(direction)))
+             if point else sm.DirectionalLight(direction))  # fmt: skip
+    api = data.draw(st.sampled_from(sm.GRAPHICS_APIS))
+    setup = sm.fit_shadow(light, box, data.draw(st.integers(16, 2048)), api=api)
+    cam = sm.shadow_camera(setup)
+    view = look_at(cam.eye, cam.eye + cam.forward, cam.up)
+    n, f = float(cam.near), float(cam.far)
+    lo, r, b, t = (float(v) for v in (cam.left, cam.right, cam.bottom, cam.top))
+    proj = frustum(lo * n, r * n, b * n, t * n, n, f) if point else ortho(lo, r, b, t, n, f)
+    clip = sm.api_convention(api=api).gl_clip_to_clip @ proj @ view
+    scale = np.abs(setup.blocker_to_clip).max()
+    np.testing.assert_allclose(clip, setup.blocker_to_clip, rtol=0, atol=1e-9 * scale)
+    look = data.draw(st.sampled_from(["-z", "+y", "+z"]))
+    M = sm.camera_to_world(cam, look=look)
+    np.testing.assert_allclose(M[:3, :3].T @ M[:3, :3], np.eye(3), atol=1e-12)
+    assert np.isclose(np.linalg.det(M[:3, :3]), 1.0)
+    if look == "-z":
+        np.testing.assert_allclose(M @ view, np.eye(4), atol=1e-9 * max(1, np.abs(cam.eye).max()))
+
+
 PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "GRAPHICS_APIS": ("test_fuzz_api_convention", "test_fuzz_fit_shadow_scene_options"),
     "NEAR_FAR_SLACK": ("test_fuzz_fit_shadow_scene_options",),
@@ -2368,6 +2402,7 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "Mesh": ("test_fuzz_fit_shadow_scene_options", "test_fuzz_fit_shadow_invalid_options"),
     "PointLight": ("test_fuzz_fit_shadow_scene_options",
                    "test_fuzz_fit_shadow_jax_eager_jit_vmap"),
+    "ShadowCamera": ("test_fuzz_shadow_camera",),
     "ShadowFitWarning": ("test_fuzz_fit_shadow_scene_options", "test_fuzz_shadow_map_spec"),
     "ShadowMapSpec": ("test_fuzz_shadow_map_spec", "test_fuzz_fit_shadow_scene_options"),
     "ShadowSetup": ("test_fuzz_fit_shadow", "test_fuzz_fit_shadow_scene_options"),
@@ -2393,6 +2428,8 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
                              "test_fuzz_cube_jax_eager_jit_vmap"),
     "cube_face_views": ("test_fuzz_cube_face", "test_fuzz_cube_jax_eager_jit_vmap"),
     "cascade_splits": ("test_fuzz_cascade_splits",),
+    "camera_to_world": ("test_fuzz_shadow_camera",),
+    "shadow_camera": ("test_fuzz_shadow_camera",),
     "fit_cascades": ("test_fuzz_fit_cascades",),
     "fit_shadow": ("test_fuzz_fit_shadow", "test_fuzz_fit_shadow_scene_options",
                    "test_fuzz_fit_shadow_invalid_options",
