@@ -61,7 +61,8 @@ def fit_depth(
     stable: bool = False,
 ) -> ShadowSetup:
     """One setup per light: the sides fit all blockers (in world coordinates), with
-    ``1 + pcf_radius`` border texels so a kernel never reads past the silhouette, and
+    the border the shader's box kernel needs (``pcf_radius=``: :func:`pcf_border_texels`,
+    ``max(1, pcf_radius)`` texels) so a kernel never reads past the silhouette, and
     the depth range holds every body's triangles where the map covers them
     (``fit_shadow(..., receivers=Triangles(...))``), as a user's renderer calls it.
     ``light`` is a point ``(x, y, z)`` or a homogeneous ``(x, y, z, w)``, ``w = 0`` a
@@ -74,7 +75,7 @@ def fit_depth(
         light,
         casters,
         map_size,
-        border_texels=1 + pcf_radius,
+        pcf_radius=pcf_radius,
         receivers=Triangles(corners),
         stable=stable,
     )
