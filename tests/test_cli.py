@@ -408,38 +408,50 @@ def test_map_size_follows_the_library_border_rule(text):
     [
         (
             ["--method", "depth", "--pcf", "50", "--map-size", "64"],
-            "--pcf 50 with --map-size 64: a PCF radius of 50 keeps 51 empty texels on each "
-            "side of the depth map (1 + K, so that no 101x101 kernel reads past the "
-            "silhouette), which leaves no texel inside a 64x64 map; use --map-size 103 or "
-            "more, or --pcf 30 or less",
+            "--pcf 50 with --map-size 64: a PCF radius of 50 keeps 50 empty texels on each "
+            "side of the depth map (max(1, K), so that no 101x101 kernel reads past the "
+            "silhouette), which leaves no texel inside a 64x64 map; use --map-size 101 or "
+            "more, or --pcf 31 or less",
         ),
         (
-            ["--method", "depth", "--pcf", "1", "--map-size", "4"],
-            "--pcf 1 with --map-size 4: a PCF radius of 1 keeps 2 empty texels on each side "
-            "of the depth map (1 + K, so that no 3x3 kernel reads past the silhouette), which "
-            "leaves no texel inside a 4x4 map; use --map-size 5 or more, or leave --pcf out "
-            "(no filtering)",
+            ["--method", "depth", "--pcf", "2", "--map-size", "4"],
+            "--pcf 2 with --map-size 4: a PCF radius of 2 keeps 2 empty texels on each side "
+            "of the depth map (max(1, K), so that no 5x5 kernel reads past the silhouette), "
+            "which leaves no texel inside a 4x4 map; use --map-size 5 or more, or --pcf 1 or "
+            "less",
         ),
         (
-            ["--method", "soft", "--pcf", "3", "--map-size", "8x64"],
-            "--pcf 3 with --map-size 8x64: a PCF radius of 3 keeps 4 empty texels",
+            ["--method", "soft", "--pcf", "4", "--map-size", "8x64"],
+            "--pcf 4 with --map-size 8x64: a PCF radius of 4 keeps 4 empty texels",
         ),
         (
-            ["--method", "depth", "--pcf", "127"],
-            "--pcf 127 with --map-size 256 (the default): a PCF radius of 127 keeps 128",
+            ["--method", "depth", "--pcf", "128"],
+            "--pcf 128 with --map-size 256 (the default): a PCF radius of 128 keeps 128",
         ),
         (
-            ["--method", "depth", "--directional", "0", "1", "1", "--pcf", "9", "--map-size", "20"],
-            "--pcf 9 with --map-size 20:",
+            [
+                "--method",
+                "depth",
+                "--directional",
+                "0",
+                "1",
+                "1",
+                "--pcf",
+                "10",
+                "--map-size",
+                "20",
+            ],
+            "--pcf 10 with --map-size 20:",
         ),
         (
-            ["--method", "depth", "--api", "webgpu", "--pcf", "9", "--map-size", "20"],
-            "--pcf 9 with --map-size 20:",
+            ["--method", "depth", "--api", "webgpu", "--pcf", "10", "--map-size", "20"],
+            "--pcf 10 with --map-size 20:",
         ),
     ],
 )
 def test_map_too_small_for_the_pcf_border_names_both_options(capsys, tmp_path, args, message):
-    # The renderer's depth map keeps 1 + K empty texels on each side: K needs 2 K + 3 texels.
+    # The renderer's depth map keeps max(1, K) empty texels on each side (pcf_border_texels):
+    # K >= 1 needs 2 K + 1 texels.
     out = tmp_path / "x.png"
     err = _error(capsys, [*SMALL, *args, "--output", str(out)])
     assert err.split(": error: ")[1].startswith(message)
@@ -448,11 +460,11 @@ def test_map_too_small_for_the_pcf_border_names_both_options(capsys, tmp_path, a
 
 @pytest.mark.usefixtures("gl")
 def test_the_smallest_map_for_a_pcf_radius_renders(capsys, tmp_path):
-    """The demo's PCF border rule is the renderer's, not a stricter one: 2 K + 3 texels draw."""
+    """The demo's PCF border rule is the renderer's, not a stricter one: 2 K + 1 texels draw."""
     out = tmp_path / "x.png"
     # A directional light: a point light's frustum through a 1-texel centre is very wide.
     sun = ["--method", "depth", "--directional", "-1", "2", "1.5"]
-    assert main([*SMALL, *sun, "--pcf", "2", "--map-size", "7", "--output", str(out)]) == 0
+    assert main([*SMALL, *sun, "--pcf", "2", "--map-size", "5", "--output", str(out)]) == 0
     assert "PCF radius 2" in capsys.readouterr().out
 
 
@@ -742,7 +754,7 @@ def test_a_fit_that_fails_for_another_reason_names_the_mesh():
 
 
 def test_a_pcf_border_too_wide_for_the_fit_names_pcf_and_map_size(capsys, tmp_path, monkeypatch):
-    """A fit refused with the 1 + K border but made with one texel: the border is the cause."""
+    """A fit refused with the max(1, K) border but made with one texel: the border is the cause."""
     import shadowmath as sm
 
     real = sm.fit_shadow
@@ -756,8 +768,8 @@ def test_a_pcf_border_too_wide_for_the_fit_names_pcf_and_map_size(capsys, tmp_pa
     for method in ("depth", "soft"):
         err = _too_far(capsys, tmp_path, ["--method", method, "--pcf", "5", "--map-size", "64"])
         assert err.startswith(
-            "--pcf 5 with --map-size 64x64: the 6-texel border that a PCF radius of 5 keeps on "
-            "each side of the depth map leaves 52x52 texels for the blocker's silhouette, too "
+            "--pcf 5 with --map-size 64x64: the 5-texel border that a PCF radius of 5 keeps on "
+            "each side of the depth map leaves 54x54 texels for the blocker's silhouette, too "
             "few to fit one from "
         )
         assert err.endswith(

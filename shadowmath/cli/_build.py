@@ -469,7 +469,7 @@ def fit_in_front(
     ``light`` is the point light or one of the area light's samples (``what`` says
     which), ``option`` the option that placed it.
 
-    The map keeps the border the renderer gives it: ``1 + K`` texels for ``--pcf K``
+    The map keeps the border the renderer gives it: ``max(1, K)`` texels for ``--pcf K``
     (depth, soft; :func:`~shadowmath.cli._options.depth_border_texels`), else one.
 
     Raises:

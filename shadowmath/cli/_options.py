@@ -514,12 +514,13 @@ def _check_method_options(args: argparse.Namespace) -> None:
 
 def depth_border_texels(pcf: int) -> int:
     """The empty border on each side of the reference renderer's depth maps (depth, soft):
-    ``1 + K`` texels for PCF radius ``K``, so that no kernel reads past the silhouette."""
-    return 1 + pcf
+    :func:`shadowmath.pcf_border_texels` of its box kernel, ``max(1, K)`` texels for PCF
+    radius ``K``, so that no kernel reads past the silhouette."""
+    return sm.pcf_border_texels(pcf)
 
 
 def _check_pcf_border(args: argparse.Namespace) -> None:
-    """``--pcf K`` (depth, soft): the depth map must have texels inside its ``1 + K`` border.
+    """``--pcf K`` (depth, soft): the depth map must have texels inside its ``max(1, K)`` border.
 
     The rule of :func:`shadowmath.border_margin` with :func:`depth_border_texels`.
     """
@@ -531,16 +532,15 @@ def _check_pcf_border(args: argparse.Namespace) -> None:
         return
     w, h = (size, size) if isinstance(size, int) else size
     given = f"{w}" if isinstance(size, int) else f"{w}x{h}"
-    fitting = (min(w, h) - 3) // 2
-    widest = f"--pcf {fitting} or less" if fitting else "leave --pcf out (no filtering)"
+    fitting = (min(w, h) - 1) // 2  # the widest K with 2 max(1, K) + 1 texels: >= 1 (size >= 3)
     if args.map_size is None:
         given += " (the default)"
     raise OptionError(
         f"--pcf {args.pcf} with --map-size {given}: a PCF radius of {args.pcf} keeps "
-        f"{border} empty texels on each side of the depth map (1 + K, so that no "
+        f"{border} empty texels on each side of the depth map (max(1, K), so that no "
         f"{2 * args.pcf + 1}x{2 * args.pcf + 1} kernel reads past the silhouette), which "
         f"leaves no texel inside a {w}x{h} map; use --map-size {2 * border + 1} or more, "
-        f"or {widest}"
+        f"or --pcf {fitting} or less"
     )
 
 
