@@ -22,6 +22,9 @@ Sections (``--only NAME``, repeatable or comma-separated):
 * ``cascades``: ``benchmarks/bench_cascades.py``, ``fit_cascades``: the shadow-map texel's area
   per pixel on the receivers of three scenes against three.js's and bevy's schemes, and the
   time of four cascades for one camera and for a batch of 100.
+* ``atlas``: ``benchmarks/bench_atlas.py``, ``allocate_atlas`` + ``fit_atlas`` for 64 lights per
+  frame against a loop of public calls per light, the fraction of the atlas used, and the tiles
+  moved over frames of small motion.
 
 Each prints a Markdown table: median (with its repeat count), the baseline measured in the
 same process, ratio = median / baseline median, the issue's target and an informational
@@ -47,11 +50,16 @@ from typing import Any
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+import bench_atlas
 import bench_cascades
 from speed import SECTIONS as SPEED_SECTIONS
 from speed._timing import Config, Section, table, target_line, targets
 
-SECTIONS: dict[str, ModuleType] = {**SPEED_SECTIONS, bench_cascades.NAME: bench_cascades}
+SECTIONS: dict[str, ModuleType] = {
+    **SPEED_SECTIONS,
+    bench_cascades.NAME: bench_cascades,
+    bench_atlas.NAME: bench_atlas,
+}
 
 
 def _version(dist: str) -> str:

@@ -41,6 +41,12 @@ CONVENTIONS
 
 from ._boundary._checks import check_finite as check_finite
 from ._boundary._messages import ShadowFitWarning as ShadowFitWarning
+from ._fits._atlas import AtlasFit as AtlasFit
+from ._fits._atlas import ShadowAtlas as ShadowAtlas
+from ._fits._atlas import allocate_atlas as allocate_atlas
+from ._fits._atlas import atlas_tile_transforms as atlas_tile_transforms
+from ._fits._atlas import atlas_viewports as atlas_viewports
+from ._fits._atlas import fit_atlas as fit_atlas
 from ._fits._camera import ShadowCamera as ShadowCamera
 from ._fits._camera import camera_to_world as camera_to_world
 from ._fits._camera import shadow_camera as shadow_camera
@@ -105,6 +111,7 @@ __all__ = [
     "GRAPHICS_APIS",
     "NEAR_FAR_SLACK",
     "ApiConvention",
+    "AtlasFit",
     "Cascades",
     "CubeFaceCoords",
     "CubeFaceDepth",
@@ -114,6 +121,7 @@ __all__ = [
     "LightFrame",
     "Mesh",
     "PointLight",
+    "ShadowAtlas",
     "ShadowCamera",
     "ShadowFitWarning",
     "ShadowMapSpec",
@@ -121,9 +129,12 @@ __all__ = [
     "SpotLight",
     "Triangles",
     "adaptive_frustum",
+    "allocate_atlas",
     "api_convention",
     "area_light_samples",
     "area_light_samples_jax",
+    "atlas_tile_transforms",
+    "atlas_viewports",
     "blocker_projection",
     "border_margin",
     "camera_to_world",
@@ -136,6 +147,7 @@ __all__ = [
     "cube_face_direction",
     "cube_face_projection",
     "cube_face_views",
+    "fit_atlas",
     "fit_cascades",
     "fit_shadow",
     "helper_axis",

@@ -17,7 +17,17 @@ from pathlib import Path
 import jax
 
 ROOT = Path(__file__).resolve().parent.parent
-EXPECTED = ["single", "options", "batch", "large", "derivatives", "gpu", "coverage", "cascades"]
+EXPECTED = [
+    "single",
+    "options",
+    "batch",
+    "large",
+    "derivatives",
+    "gpu",
+    "coverage",
+    "cascades",
+    "atlas",
+]
 
 
 def _has_gpu() -> bool:

@@ -1,0 +1,913 @@
+r"""A shadow atlas for many lights: :func:`allocate_atlas`, :func:`fit_atlas`.
+
+One square depth texture holds every light's shadow map as a power-of-two tile (six
+face tiles for a point light's cube map). Per frame a renderer calls
+
+1. :func:`allocate_atlas` with each light's screen coverage (and last frame's atlas):
+   the tile sizes (Godot's rule, under a budget) and places (a quadtree, kept from
+   frame to frame), on host integers (:mod:`shadowmath._math._atlas_tiles`);
+2. :func:`fit_atlas` with the lights and their casters: one fit per tile, drawn
+   with ``world_to_clip[t]`` inside ``viewports[t]`` and sampled with
+   ``world_to_texture[t]``. The 2D lights are grouped by (kind, tile size, border)
+   and each group runs :func:`fit_shadow`'s compiled loop once (NumPy with Numba) or
+   its array driver (JAX, or NumPy alone); the cube lights' faces are
+   :func:`cube_face_views` and :func:`cube_face_projection` with the border ring, on
+   whole arrays.
+
+The rule, the borders and the API conventions are written out in ``docs/atlas.md``.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import operator
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from shadowmath._backends import _kernels
+from shadowmath._boundary._status import WIDE_WARNING, fit_messages
+from shadowmath._boundary._validate import (
+    Array,
+    Checks,
+    Context,
+    convert,
+    non_finite,
+    raise_status,
+    require_last,
+    shape_error,
+)
+from shadowmath._math import _atlas_tiles as tiles
+from shadowmath._math._bias import PcfFilter, _check_kernel
+from shadowmath._math._conventions import GraphicsApi, _check_api, _texture_from_clip
+from shadowmath._math._cube import _APIS, _cube_face_views, _depth_row
+from shadowmath._math._frame import stack_matrix
+from shadowmath._math._frustum import NEAR_FAR_SLACK, border_margin
+from shadowmath._math._pcf import _border_texels
+from shadowmath.lights import DirectionalLight, PointLight, SpotLight
+
+from . import _compiled
+from ._fit_arrays import Inputs, driver, fit_arrays
+from ._spec import FitKey, api_rows
+
+__all__ = [
+    "AtlasFit",
+    "ShadowAtlas",
+    "allocate_atlas",
+    "atlas_tile_transforms",
+    "atlas_viewports",
+    "fit_atlas",
+]
+
+Ints = NDArray[np.int64]
+
+
+class ShadowAtlas(NamedTuple):
+    """Where every light's shadow map lies in the atlas (the result of :func:`allocate_atlas`).
+
+    ``L`` lights, ``T`` tiles (one per 2D light with a tile, six per cube light).
+    Tiles are listed light by light, faces in order. Integer arrays are int64 NumPy.
+
+    Attributes:
+        atlas_size: the atlas is ``atlas_size x atlas_size`` texels.
+        tile_light: ``(T,)`` the light of each tile.
+        tile_face: ``(T,)`` 0 for a 2D map; the cube face ``0..5`` (``+X, -X, +Y, -Y,
+            +Z, -Z``, the order of :func:`cube_face`).
+        tile_rect: ``(T, 3)`` ``(x, y, size)`` in texels: ``x`` from the left, ``y`` the
+            row counted from the atlas's first row in memory.
+        light_size: ``(L,)`` each light's tile size (0: no tile, no shadow this frame).
+        light_tiles: ``(L, 6)`` the tile of each face (``-1`` unused; a 2D light uses
+            column 0).
+        moved: ``(T,)`` True where the tile's rect is not the one it had in
+            ``previous`` (a new tile counts as moved): redraw those.
+        used: the fraction of the atlas's area covered by tiles.
+        light_wish: ``(L,)`` the size each light asked for (its class, before the
+            budget); the hysteresis of the next frame reads it.
+        light_ids: ``(L,)`` the lights' identities, matched against ``previous``.
+        light_cube: ``(L,)`` whether each light is a cube map.
+        light_border: ``(L,)`` each light's border in texels.
+        tile_clamp: ``(T, 4)`` float64 ``(s_min, t_min, s_max, t_max)``: the atlas
+            texture coordinates of the tile's first and last texel centres. Clamp
+            every PCF tap into it: a 2D tile's edge texels are border, always empty,
+            so a clamped tap reads "lit", as a single map's clamp-to-border does.
+        repacked: True when the tiles kept from ``previous`` left no aligned hole for
+            a new one, so every tile was laid out afresh.
+    """
+
+    atlas_size: int
+    tile_light: Ints
+    tile_face: Ints
+    tile_rect: Ints
+    light_size: Ints
+    light_tiles: Ints
+    moved: NDArray[np.bool_]
+    used: float
+    light_wish: Ints
+    light_ids: Ints
+    light_cube: NDArray[np.bool_]
+    light_border: Ints
+    tile_clamp: NDArray[np.float64]
+    repacked: bool
+
+
+class AtlasFit(NamedTuple):
+    """Every tile's matrices (the result of :func:`fit_atlas`), in the chosen API's conventions.
+
+    Attributes:
+        world_to_clip: ``(T, 4, 4)`` draw tile ``t``'s casters with ``world_to_clip[t]``
+            inside ``viewports[t]`` (scissor to it too).
+        world_to_texture: ``(T, 4, 4)`` world to the atlas's ``(s q, t q, r q, q)``:
+            ``(s, t)`` the atlas texture coordinates, ``r`` the depth stored there.
+        viewports: ``(T, 4)`` ``(x, y, width, height)``, :func:`atlas_viewports`.
+        tile_clamp: ``(T, 4)`` the atlas's :attr:`ShadowAtlas.tile_clamp`.
+        near, far: ``(T,)`` each tile's depth range (light ``z`` for a 2D map, the
+            distance along the face's axis for a cube face).
+    """
+
+    world_to_clip: Array
+    world_to_texture: Array
+    viewports: Ints
+    tile_clamp: NDArray[np.float64]
+    near: Array
+    far: Array
+
+
+# ------------------------------------------------------------------ allocation
+
+
+def allocate_atlas(
+    coverage: Any,
+    *,
+    atlas_size: int = 4096,
+    cube: Any = False,
+    border_texels: Any = 1,
+    previous: ShadowAtlas | None = None,
+    min_tile: int | None = None,
+    max_tile: int | None = None,
+    budget: float = 1.0,
+    hysteresis: float = 0.1,
+    light_ids: Any = None,
+) -> ShadowAtlas:
+    r"""Give each light a power-of-two tile of a shadow atlas, stable from frame to frame.
+
+    **Size.** Godot's rule (``shadow_atlas_update_light``): a light covering the
+    fraction ``c`` of the screen wishes ``next_pow2(c * max_tile)`` texels, clamped
+    to ``[min_tile, max_tile]`` (``max_tile`` defaults to Godot's quadrant, half the
+    atlas); ``c = 0`` wishes nothing. With ``previous``, a light keeps its last wish
+    ``p`` while ``p (1 - h) / 2 < c * max_tile <= p (1 + h)`` (``h = hysteresis``).
+
+    **Budget.** Priority is the wished size, then the smaller id (the wish, not the raw
+    coverage, so that noise cannot reorder lights of one class). While the wishes'
+    area (six faces for a cube) exceeds ``budget`` of the atlas, rounds from the least
+    covering light up halve each light's size in turn (one at ``min_tile`` keeps it),
+    stopping as soon as it fits; if every light is at ``min_tile`` and it still does
+    not, lights drop (size 0), the least covering first.
+
+    **Place.** The atlas is a quadtree of ``min_tile`` cells. A light whose id was in
+    ``previous`` with the same size and kind keeps its rect(s). The others go, largest
+    first, into the free node of their size whose largest free ancestor is smallest
+    (ties: the lowest Morton code), so kept tiles never move. Without ``previous``
+    (or if no such node is left: ``repacked``) every tile is laid out afresh along
+    the Morton curve, largest first, which always fits what the budget admitted.
+
+    Arguments:
+        coverage: ``(L,)`` each light's screen coverage, ``>= 0`` (Godot's: the
+            light's range projected on the screen over the viewport's half-extents,
+            ``[0, 1]`` on screen; larger values clamp to ``max_tile``).
+        atlas_size: the atlas side in texels, a power of two.
+        cube: ``bool`` or ``(L,)``: six face tiles (a point light's cube map).
+        border_texels: ``int`` or ``(L,)``: each tile's empty border (2D) or ring (cube),
+            e.g. :func:`pcf_border_texels` of the PCF kernel.
+        previous: the last frame's atlas (same ``atlas_size``), or None.
+        min_tile, max_tile: powers of two; defaults ``max(atlas_size / 64, the smallest
+            power of two >= 4 max(border))`` and ``atlas_size / 2``.
+        budget: the fraction of the atlas's area the tiles may use, in ``(0, 1]``.
+        hysteresis: ``h`` above, in ``[0, 1)``; 0 is Godot's rule exactly.
+        light_ids: ``(L,)`` distinct integers naming the lights across frames
+            (default ``0..L-1``): what ``previous`` is matched by.
+
+    Returns:
+        :class:`ShadowAtlas`.
+
+    Raises:
+        ValueError: a coverage not finite or negative; an ``atlas_size``,
+            ``min_tile`` or ``max_tile`` not a power of two or out of order; a border
+            that leaves no inner texel of ``min_tile``; ``cube``, ``border_texels`` or
+            ``light_ids`` of the wrong length; repeated ids; a ``budget`` or
+            ``hysteresis`` out of range; ``previous`` not a :class:`ShadowAtlas`.
+
+    Example:
+        >>> a = allocate_atlas([0.5, 0.1, 0.0], atlas_size=1024, cube=[False, True, False])
+        >>> a.light_size.tolist(), len(a.tile_light), a.tile_rect[0].tolist()
+        ([256, 64, 0], 7, [0, 0, 256])
+        >>> b = allocate_atlas([0.52, 0.1, 0.2], atlas_size=1024, cube=[False, True, False],
+        ...                    previous=a)
+        >>> int(b.moved.sum()), b.light_size.tolist()  # 0.52: hysteresis keeps 256; one new tile
+        (1, [256, 64, 128])
+    """
+    cov = _coverage(coverage)
+    count = cov.shape[0]
+    size = _power_of_two("atlas_size", atlas_size)
+    is_cube = _per_light("cube", cube, count, np.bool_)
+    border = _per_light("border_texels", border_texels, count, np.int64)
+    if border.size and border.min() < 0:
+        raise ValueError(f"border_texels: must be >= 0, got {int(border.min())}")
+    lo, hi = _tile_range(size, min_tile, max_tile, int(border.max(initial=0)))
+    if not 0 < _real("budget", budget) <= 1:
+        raise ValueError(
+            f"budget: the fraction of the atlas to use must lie in (0, 1], got {budget!r}"
+        )
+    if not 0 <= _real("hysteresis", hysteresis) < 1:
+        raise ValueError(f"hysteresis: must lie in [0, 1), got {hysteresis!r}")
+    ids = _ids(light_ids, count)
+    if previous is not None and not isinstance(previous, ShadowAtlas):
+        raise ValueError(f"previous: expected a ShadowAtlas or None, got {type(previous).__name__}")
+    options = _Options(size, lo, hi, float(budget), float(hysteresis))
+    return _allocate(cov, is_cube, border, ids, previous, options)
+
+
+class _Options(NamedTuple):
+    size: int
+    min_tile: int
+    max_tile: int
+    budget: float
+    hysteresis: float
+
+
+def _real(name: str, value: object) -> float:
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.number):
+        raise ValueError(f"{name}: expected a number, got {value!r}")
+    return float(value)
+
+
+def _coverage(coverage: Any) -> NDArray[np.float64]:
+    try:
+        cov = np.asarray(coverage, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"coverage: expected (L,) numbers, got {coverage!r}") from None
+    if cov.ndim != 1:
+        raise shape_error("coverage", "(L,)", cov.shape, "one screen coverage per light")
+    if not np.isfinite(cov).all():
+        raise ValueError(non_finite("coverage"))
+    if cov.size and cov.min() < 0:
+        raise ValueError(f"coverage: must be >= 0 (a fraction of the screen), got {cov.min()}")
+    return cov
+
+
+def _power_of_two(name: str, value: object) -> int:
+    try:
+        if isinstance(value, bool | np.bool_):
+            raise TypeError
+        n = operator.index(value)  # type: ignore[arg-type]
+    except TypeError:
+        raise ValueError(f"{name}: expected an integer power of two, got {value!r}") from None
+    if n < 1 or n & (n - 1):
+        raise ValueError(f"{name}: must be a power of two (1, 2, 4, ...), got {n}")
+    return n
+
+
+def _per_light(name: str, value: Any, count: int, dtype: Any) -> Any:
+    v = np.asarray(value)
+    kind = "b" if dtype is np.bool_ else "iu"
+    if v.dtype.kind not in kind or (dtype is not np.bool_ and v.dtype.kind == "b"):
+        what = "booleans" if dtype is np.bool_ else "integers"
+        raise ValueError(f"{name}: expected {what} (one, or one per light), got {value!r}")
+    if v.ndim > 1 or (v.ndim == 1 and v.shape[0] != count):
+        raise shape_error(name, f"() or ({count},)", v.shape, "one value, or one per light")
+    return np.broadcast_to(v, (count,)).astype(dtype)
+
+
+def _tile_range(
+    size: int, min_tile: int | None, max_tile: int | None, border: int
+) -> tuple[int, int]:
+    hi = size // 2 if max_tile is None else _power_of_two("max_tile", max_tile)
+    hi = max(hi, 1)
+    if min_tile is None:
+        lo = min(hi, max(size // 64, 1 << max(4 * border - 1, 0).bit_length()))
+    else:
+        lo = _power_of_two("min_tile", min_tile)
+    if hi > size:
+        raise ValueError(f"max_tile: must be <= atlas_size ({size}), got {hi}")
+    if lo > hi:
+        raise ValueError(f"min_tile: must be <= max_tile ({hi}), got {lo}")
+    if lo <= 2 * border:
+        raise ValueError(
+            f"border_texels: a border of {border} texels on each side leaves no inner texel "
+            f"of a {lo}-texel tile (min_tile); need 2 * border_texels < min_tile"
+        )
+    if size // lo > 1 << 15:
+        raise ValueError(f"min_tile: at most 32768 tiles per side, got {size // lo}")
+    return lo, hi
+
+
+def _ids(light_ids: Any, count: int) -> Ints:
+    if light_ids is None:
+        return np.arange(count, dtype=np.int64)
+    ids = _per_light("light_ids", light_ids, count, np.int64)
+    if np.unique(ids).size != count:
+        raise ValueError("light_ids: must be distinct (one identity per light)")
+    return np.asarray(ids)
+
+
+def _match(ids: Ints, previous: ShadowAtlas | None) -> Ints:
+    """Each light's index in ``previous`` (by id), or -1."""
+    if previous is None:
+        return np.full(ids.shape, -1, dtype=np.int64)
+    old = previous.light_ids
+    if old.shape == ids.shape and np.array_equal(old, ids):
+        return np.arange(ids.size, dtype=np.int64)
+    if old.size == 0:
+        return np.full(ids.shape, -1, dtype=np.int64)
+    order = np.argsort(old, kind="stable")
+    pos = np.minimum(np.searchsorted(old[order], ids), old.size - 1)
+    return np.where(old[order][pos] == ids, order[pos], -1).astype(np.int64)
+
+
+def _allocate(
+    cov: NDArray[np.float64],
+    is_cube: NDArray[np.bool_],
+    border: Ints,
+    ids: Ints,
+    previous: ShadowAtlas | None,
+    o: _Options,
+) -> ShadowAtlas:
+    """The allocation rule on checked arrays (see :func:`allocate_atlas`)."""
+    faces = np.where(is_cube, 6, 1).astype(np.int64)
+    prev_at = _match(ids, previous)
+    had = prev_at >= 0
+    safe = np.where(had, prev_at, 0)
+    prev_wish = None
+    if previous is not None and previous.light_wish.size:
+        prev_wish = np.where(had, previous.light_wish[safe], 0)
+    wish = tiles.size_classes(cov, o.max_tile, o.min_tile, prev_wish, o.hysteresis)
+    # Priority: the wished class, then the id; not the raw coverage, whose noise would
+    # reorder equal classes from frame to frame and move their tiles under the budget.
+    order = np.lexsort((ids, -wish))
+    grid = o.size // o.min_tile
+    sizes = tiles.shrink_to_budget(wish, faces, order, o.min_tile, int(o.budget * grid * grid))
+    if _unchanged(previous, o.size, ids, sizes, is_cube):
+        assert previous is not None
+        moved = np.zeros(previous.tile_light.shape, dtype=bool)
+        return previous._replace(moved=moved, light_wish=wish, light_border=border, repacked=False)
+    lit = np.flatnonzero(sizes)
+    per = faces[lit]
+    tile_light = np.repeat(lit, per)
+    count = tile_light.size
+    tile_face = np.arange(count) - np.repeat(np.cumsum(per) - per, per)
+    light_tiles = np.full((cov.size, 6), -1, dtype=np.int64)
+    light_tiles[tile_light, tile_face] = np.arange(count)
+    side = sizes[tile_light] // o.min_tile
+    rank_of = np.empty(cov.size, dtype=np.int64)
+    rank_of[order] = np.arange(cov.size)
+    rank = rank_of[tile_light] * 6 + tile_face
+    prev_rect = np.full((count, 3), -1, dtype=np.int64)
+    keep = np.zeros(count, dtype=bool)
+    if previous is not None and previous.atlas_size == o.size and previous.light_size.size:
+        old_tile = previous.light_tiles[safe[tile_light], tile_face]
+        exists = had[tile_light] & (old_tile >= 0)
+        prev_rect[exists] = previous.tile_rect[old_tile[exists]]
+        same = had & (previous.light_size[safe] == sizes) & (previous.light_cube[safe] == is_cube)
+        keep = same[tile_light] & exists
+    rect, repacked = _layout(side, rank, keep, prev_rect, grid, o.min_tile)
+    moved = ~np.all(rect == prev_rect, axis=1)
+    x, y, s = (rect[:, i].astype(np.float64) for i in range(3))
+    clamp = np.stack([x + 0.5, y + 0.5, x + s - 0.5, y + s - 0.5], axis=1) / o.size
+    used = float((sizes.astype(np.float64) ** 2 * faces).sum() / float(o.size) ** 2)
+    return ShadowAtlas(
+        o.size, tile_light, tile_face, rect, sizes, light_tiles, moved, used, wish, ids,
+        is_cube, border, clamp, repacked,
+    )  # fmt: skip
+
+
+def _unchanged(
+    previous: ShadowAtlas | None, size: int, ids: Ints, sizes: Ints, is_cube: NDArray[np.bool_]
+) -> bool:
+    """The same lights with the same sizes and kinds as ``previous``: every tile stays."""
+    return (
+        previous is not None
+        and previous.atlas_size == size
+        and np.array_equal(previous.light_ids, ids)
+        and np.array_equal(previous.light_size, sizes)
+        and np.array_equal(previous.light_cube, is_cube)
+    )
+
+
+def _layout(
+    side: Ints, rank: Ints, keep: NDArray[np.bool_], prev_rect: Ints, grid: int, cell: int
+) -> tuple[Ints, bool]:
+    """Each tile's ``(x, y, size)``: kept ones where they were, the others placed."""
+    rect = np.empty((side.size, 3), dtype=np.int64)
+    rect[:, 2] = side * cell
+    if keep.all():
+        return prev_rect.copy(), False
+    codes = np.empty(side.size, dtype=np.int64)
+    repacked = False
+    if keep.any():
+        kept = prev_rect[keep] // cell
+        codes[keep] = tiles.morton_encode(kept[:, 0], kept[:, 1])
+        occupied = tiles.occupancy(grid, codes[keep], side[keep])
+        new = np.flatnonzero(~keep)
+        for t in new[np.lexsort((rank[new], -side[new]))]:
+            codes[t] = tiles.place(occupied, int(side[t]))
+            if codes[t] < 0:
+                repacked = True
+                break
+    if not keep.any() or repacked:
+        codes = tiles.pack(side, rank)
+    cx, cy = tiles.morton_decode(codes)
+    rect[:, 0], rect[:, 1] = cx * cell, cy * cell
+    return rect, repacked
+
+
+# ------------------------------------------------------------------ conventions
+
+
+def atlas_viewports(atlas: ShadowAtlas, *, api: GraphicsApi = "opengl") -> Ints:
+    r"""Each tile's viewport ``(x, y, width, height)`` in ``api``'s viewport convention.
+
+    OpenGL counts viewport ``y`` from the bottom row of the framebuffer, which is
+    the texture's first row in memory; Vulkan, Direct3D, Metal and WebGPU count it
+    from the top row, which is *their* texture's first row in memory. ``tile_rect``'s
+    ``y`` counts rows from the first row in memory, so in every API the viewport is
+    ``(x, y, size, size)`` of the rect: the same numbers, each in its own convention
+    (``docs/atlas.md`` derives it; the tests rasterize by each API's rules).
+
+    Arguments:
+        atlas: a :class:`ShadowAtlas`.
+        api: ``"opengl"`` (default), ``"vulkan"``, ``"direct3d"``, ``"metal"`` or ``"webgpu"``.
+
+    Returns:
+        ``(T, 4)`` int64.
+
+    Raises:
+        ValueError: an unknown ``api``.
+
+    Example:
+        >>> a = allocate_atlas([1.0, 0.2], atlas_size=512)
+        >>> atlas_viewports(a, api="vulkan").tolist()
+        [[0, 0, 256, 256], [256, 0, 64, 64]]
+    """
+    _check_api(api, False)
+    rect = atlas.tile_rect
+    return np.concatenate([rect, rect[:, 2:3]], axis=1)
+
+
+def atlas_tile_transforms(
+    atlas: ShadowAtlas, *, api: GraphicsApi = "opengl"
+) -> NDArray[np.float64]:
+    r"""The matrices from each tile's own texture coordinates to the atlas's.
+
+    A tile at ``(x, y, n)`` in an ``A``-texel atlas holds its map's ``s, t in [0, 1]``
+    at atlas texels ``x + n s``, ``y + n t`` (``t`` and ``y`` both count from the
+    first row in memory, in every API), so
+
+    .. math::
+
+        T_\mathrm{tile} = \begin{bmatrix} n/A & 0 & 0 & x/A \\ 0 & n/A & 0 & y/A \\
+        0 & 0 & 1 & 0 \\ 0 & 0 & 0 & 1 \end{bmatrix},
+        \qquad M_\mathrm{world \to atlas} = T_\mathrm{tile}\, M_\mathrm{world \to tile}
+
+    acting on homogeneous ``(s q, t q, r q, q)`` (``r`` and ``q`` unchanged).
+
+    Arguments:
+        atlas: a :class:`ShadowAtlas`.
+        api: as in :func:`atlas_viewports` (the matrices are the same in every API).
+
+    Returns:
+        ``(T, 4, 4)`` float64.
+
+    Raises:
+        ValueError: an unknown ``api``.
+
+    Example:
+        >>> a = allocate_atlas([1.0, 0.2], atlas_size=512)
+        >>> atlas_tile_transforms(a)[1] @ [1.0, 1.0, 0.5, 1.0]  # the tile's far corner
+        array([0.625, 0.125, 0.5  , 1.   ])
+    """
+    _check_api(api, False)
+    return _tile_transforms(atlas.tile_rect, atlas.atlas_size)
+
+
+def _tile_transforms(rect: Ints, size: int) -> NDArray[np.float64]:
+    T = np.zeros((rect.shape[0], 4, 4))
+    T[:, 0, 0] = T[:, 1, 1] = rect[:, 2] / size
+    T[:, 0, 3], T[:, 1, 3] = rect[:, 0] / size, rect[:, 1] / size
+    T[:, 2, 2] = T[:, 3, 3] = 1.0
+    return T
+
+
+# ------------------------------------------------------------------ fitting
+
+_POINT, _SPOT, _SUN = 0, 1, 2
+
+
+def fit_atlas(
+    lights: Any,
+    blocker_vertices: Any,
+    atlas: ShadowAtlas,
+    *,
+    receivers: Any = None,
+    near: Any = None,
+    far: Any = None,
+    api: GraphicsApi = "opengl",
+    reversed_z: bool = False,
+    pcf_radius: int | None = None,
+    pcf_filter: PcfFilter = "box",
+) -> AtlasFit:
+    r"""Fit every tile of an atlas: the matrices that draw and sample each light's map.
+
+    * **2D light** (point, spot or directional): :func:`fit_shadow`'s fit with the
+      tile's size and border (map ``n``, border ``b``: the casters stay within
+      ``|x_ndc|, |y_ndc| <= (n - 2b) / n``), then moved into the tile:
+      ``world_to_texture = T_tile @ T C P W`` (:func:`atlas_tile_transforms`).
+    * **cube light**: face ``i``'s ``world_to_clip = P V_i`` with ``V_i`` of
+      :func:`cube_face_views` and ``P`` of :func:`cube_face_projection` with the
+      border ring ``b`` (scale ``k = (n - 2b) / n``); ``world_to_texture =
+      T_tile @ T_api @ P V_i`` (``T_api`` the API's ``clip_to_texture``). ``near =
+      k D_min (1 - 1/64)`` and ``far = D_max (1 + 1/64)`` over the casters (and the
+      receivers for ``far``), ``D`` the largest absolute coordinate of ``p - light``:
+      every caster drawn in a face, ring included, lies at a face depth
+      ``>= k D``. A renderer picks the face with :func:`cube_face`'s rule (the
+      major axis of ``p - light``) and samples ``light_tiles[l, face]``.
+
+    Arguments:
+        lights: a sequence of ``L`` lights, each a :class:`PointLight`,
+            :class:`SpotLight` or :class:`DirectionalLight` (each may hold a batch:
+            its entries are consecutive lights); or an ``(L, 4)`` homogeneous array
+            (``w = 0`` directional); or an ``(L, 3)`` array of point lights. Cube
+            tiles need point lights.
+        blocker_vertices: ``(N, 3)`` casters shared by every light, or ``(L, N, 3)``.
+        atlas: the :class:`ShadowAtlas` of these lights (``L`` entries).
+        receivers: ``(M, 3)`` points the shadows fall on: they only push ``far``.
+        near, far: scalars or ``(L,)``: the depth range of the point and spot lights
+            (ignored for directional ones, whose range is fitted), instead of the casters'.
+        api, reversed_z: the graphics API's conventions (:func:`api_convention`).
+        pcf_radius, pcf_filter: the kernel the atlas is sampled with: refused when a
+            light's border is narrower than :func:`pcf_border_texels` of it.
+
+    Returns:
+        :class:`AtlasFit`, one entry per tile of ``atlas`` (lights without a tile have
+        none). NumPy input gives NumPy arrays; concrete JAX arrays (not under ``jit``:
+        the atlas is host data) run the array driver and give JAX arrays.
+
+    Raises:
+        ValueError: what :func:`fit_shadow` raises for a light (the message names it:
+            ``lights[i]``), a light list of the wrong length or kind, a cube tile for a
+            spot or directional light, a caster at a cube light's position, non-finite
+            casters or receivers, wrong shapes, an ``atlas`` that is not a
+            :class:`ShadowAtlas`, an unknown ``api``, a kernel wider than a border.
+
+    Example:
+        >>> import numpy as np, shadowmath as sm
+        >>> box = np.array([[x, y, z] for x in (-1, 1) for y in (0, 2) for z in (-1, 1)], float)
+        >>> lights = [sm.SpotLight(np.array([0.0, 6.0, 0.0]), np.array([0.0, -1.0, 0.0]),
+        ...                        np.array(0.6)), sm.PointLight(np.array([3.0, 1.0, 0.0]))]
+        >>> atlas = allocate_atlas([0.5, 0.25], atlas_size=1024, cube=[False, True])
+        >>> fit = fit_atlas(lights, box, atlas, api="vulkan")
+        >>> fit.world_to_clip.shape, fit.viewports[0].tolist()
+        ((7, 4, 4), [0, 0, 256, 256])
+    """
+    if not isinstance(atlas, ShadowAtlas):
+        raise ValueError(f"atlas: expected a ShadowAtlas (from allocate_atlas), got {atlas!r}")
+    _check_api(api, reversed_z)
+    count = atlas.light_size.shape[0]
+    if pcf_radius is not None:
+        need = _border_texels(*_check_kernel(pcf_radius, pcf_filter, ("pcf_radius", "pcf_filter")))
+        if count and int(atlas.light_border.min()) < need:
+            raise ValueError(
+                f"pcf_radius: a {pcf_filter} kernel of radius {pcf_radius} needs borders of "
+                f"{need} texels; the atlas has {int(atlas.light_border.min())} (allocate it "
+                f"with border_texels=sm.pcf_border_texels({pcf_radius}, {pcf_filter!r}))"
+            )
+    kinds, data = _read_lights(lights, count)
+    ctx, (data, verts, R, n, f) = convert(
+        lights=data, blocker_vertices=blocker_vertices, receivers=receivers, near=near, far=far
+    )
+    xp = ctx.xp
+    _check_arrays(verts, R, n, f, count)
+    for name, v in (("blocker_vertices", verts), ("receivers", R)):
+        if v is not None and not ctx.lazy and not bool(xp.all(xp.isfinite(v))):
+            raise ValueError(non_finite(name))
+    if bool(np.any(atlas.light_cube & (kinds != _POINT))):
+        i = int(np.flatnonzero(atlas.light_cube & (kinds != _POINT))[0])
+        raise ValueError(f"lights[{i}]: a cube map needs a point light (atlas cube=True)")
+    parts: list[tuple[Ints, Array, Array, Array, Array]] = []
+    flat = _fit_2d(ctx, atlas, kinds, data, verts, R, n, f, reversed_z, api)
+    parts.extend(flat)
+    cubes = np.flatnonzero(atlas.light_cube & (atlas.light_size > 0))
+    if cubes.size:
+        parts.append(_fit_cubes(ctx, atlas, cubes, data, verts, R, n, f, api, reversed_z))
+    T = xp.asarray(_tile_transforms(atlas.tile_rect, atlas.atlas_size), dtype=ctx.dtype)
+    clip, tex, lo, hi = _gather(ctx, parts, atlas.tile_light.shape[0])
+    return AtlasFit(clip, T @ tex, atlas_viewports(atlas), atlas.tile_clamp, lo, hi)
+
+
+def _gather(ctx: Context, parts: list[Any], total: int) -> tuple[Array, ...]:
+    """The parts' ``(tiles, clip, texture, near, far)`` in tile order."""
+    xp = ctx.xp
+    if xp is np:  # scattered into place: no concatenation
+        clip, tex = np.empty((2, total, 4, 4), dtype=ctx.dtype)
+        lo, hi = np.empty((2, total), dtype=ctx.dtype)
+        for tiles_, *values in parts:
+            for out, v in zip((clip, tex, lo, hi), values, strict=True):
+                out[tiles_] = v
+        return clip, tex, lo, hi
+    if not parts:
+        return xp.zeros((0, 4, 4), ctx.dtype), xp.zeros((0, 4, 4), ctx.dtype), \
+            xp.zeros(0, ctx.dtype), xp.zeros(0, ctx.dtype)  # fmt: skip
+    back = np.empty(total, dtype=np.int64)
+    back[np.concatenate([p[0] for p in parts])] = np.arange(total)
+    return tuple(xp.concatenate([p[k] for p in parts])[back] for k in range(1, 5))
+
+
+def _read_lights(lights: Any, count: int) -> tuple[Ints, Any]:
+    """Each light's kind and its ``(L, 8)`` row: position or direction, then a spot's
+    axis, ``tan(angle)`` and angle."""
+    if isinstance(lights, _TYPED):
+        lights = [lights]
+    if isinstance(lights, list | tuple) and (not lights or isinstance(lights[0], _TYPED)):
+        kinds: list[int] = []
+        rows: list[list[float]] = []
+        for i, light in enumerate(lights):
+            kind = _KINDS.get(type(light))
+            if kind is None:
+                raise ValueError(
+                    f"lights[{i}]: expected sm.PointLight, sm.SpotLight or sm.DirectionalLight, "
+                    f"got {type(light).__name__}"
+                )
+            first = light[0]
+            if type(first) is np.ndarray and first.shape == (3,):  # one light: the common case
+                if kind != _SPOT:
+                    kinds.append(kind)
+                    rows.append(first.tolist() + _PAD)
+                    continue
+                d, a = light[1], light[2]
+                if type(d) is np.ndarray and d.shape == (3,) and _scalar(a):
+                    kinds.append(_SPOT)
+                    angle = float(a)
+                    rows.append([*first.tolist(), *d.tolist(), math.tan(angle), angle])
+                    continue
+            _typed_rows(light, kinds, rows)
+        kind_arr = np.array(kinds, dtype=np.int64)
+        data = np.array(rows, dtype=np.float64).reshape(-1, 8)
+    else:
+        arr = np.asarray(lights) if not hasattr(lights, "shape") else lights
+        if arr.ndim != 2 or arr.shape[-1] not in (3, 4):
+            raise shape_error(
+                "lights", "a sequence of typed lights, (L, 4) or (L, 3)", tuple(arr.shape),
+                "a homogeneous light is (x, y, z, w), w = 0 directional",
+            )  # fmt: skip
+        w = np.asarray(arr[:, 3]) if arr.shape[-1] == 4 else np.ones(arr.shape[0])
+        kind_arr = np.where(w == 0, _SUN, _POINT).astype(np.int64)
+        safe_w = np.where(w == 0, 1.0, w)[:, None]
+        xyz = np.asarray(arr[:, :3]) / safe_w
+        data = np.concatenate([xyz, np.zeros((arr.shape[0], 5))], axis=1)
+    if kind_arr.shape[0] != count:
+        raise ValueError(f"lights: the atlas has {count} lights, got {kind_arr.shape[0]}")
+    return kind_arr, data
+
+
+_TYPED = (PointLight, SpotLight, DirectionalLight)
+_KINDS = {PointLight: _POINT, SpotLight: _SPOT, DirectionalLight: _SUN}
+_PAD = [0.0] * 5
+
+
+def _scalar(a: object) -> bool:
+    return type(a) is float or (type(a) is np.ndarray and a.shape == ())
+
+
+def _typed_rows(light: Any, kinds: list[int], rows: list[list[float]]) -> None:
+    """Append a typed light's rows (one per batch entry)."""
+    spot = isinstance(light, SpotLight)
+    first = np.asarray(light[0], dtype=np.float64)
+    require_last("light.position" if spot else "light", first, 3)
+    if not spot:
+        kind = _SUN if isinstance(light, DirectionalLight) else _POINT
+        for v in first.reshape(-1, 3).tolist():
+            kinds.append(kind)
+            rows.append(v + _PAD)
+        return
+    d = np.asarray(light.direction, dtype=np.float64)
+    require_last("light.direction", d, 3)
+    p = first.reshape(-1, 3)
+    count = p.shape[0]
+    d = np.broadcast_to(d.reshape(-1, 3), (count, 3))
+    a = np.broadcast_to(np.asarray(light.angle, dtype=np.float64).reshape(-1), (count,))
+    for pi, di, ai in zip(p.tolist(), d.tolist(), a.tolist(), strict=True):
+        kinds.append(_SPOT)
+        rows.append([*pi, *di, math.tan(ai), ai])
+
+
+def _check_arrays(
+    verts: Array, R: Array | None, n: Array | None, f: Array | None, count: int
+) -> None:
+    if verts.ndim not in (2, 3) or verts.shape[-1] != 3 or verts.shape[-2] == 0:
+        raise shape_error("blocker_vertices", "(N, 3) or (L, N, 3), N >= 1", tuple(verts.shape))
+    if verts.ndim == 3 and verts.shape[0] != count:
+        raise shape_error("blocker_vertices", f"({count}, N, 3)", tuple(verts.shape),
+                          "one caster set per light")  # fmt: skip
+    if R is not None and (R.ndim != 2 or R.shape[-1] != 3 or R.shape[0] == 0):
+        raise shape_error("receivers", "(M, 3), M >= 1", tuple(R.shape))
+    for name, v in (("near", n), ("far", f)):
+        if v is not None and (v.ndim > 1 or (v.ndim == 1 and v.shape[0] != count)):
+            raise shape_error(name, f"() or ({count},)", tuple(v.shape))
+
+
+def _fit_2d(
+    ctx: Context, atlas: ShadowAtlas, kinds: Ints, data: Array, verts: Array, R: Array | None,
+    n: Array | None, f: Array | None, reversed_z: bool, api: str,
+) -> list[tuple[Ints, Array, Array, Array, Array]]:  # fmt: skip
+    """One fit per group of 2D lights of one (kind, size, border).
+
+    The lights are sorted by group, so each group is a slice; the compiled loop of each
+    group writes straight into its slice of one output block.
+    """
+    lights = np.flatnonzero((~atlas.light_cube) & (atlas.light_size > 0))
+    if lights.size == 0:
+        return []
+    code = (kinds[lights] << 40) | (atlas.light_size[lights] << 16) | atlas.light_border[lights]
+    order = np.argsort(code, kind="stable")
+    lights, code = lights[order], code[order]
+    starts = [0, *(np.flatnonzero(code[1:] != code[:-1]) + 1).tolist()]
+    ends = [*starts[1:], lights.size]
+    rows = api_rows(api, bool(reversed_z))
+    light_rows = data[lights]
+    positions = light_rows[:, :3] if ctx.is_jax else np.ascontiguousarray(light_rows[:, :3])
+    per_light = verts[lights] if verts.ndim == 3 else None
+    near_all = None if n is None else _pick(ctx, n, lights)
+    far_all = None if f is None else _pick(ctx, f, lights)
+    compiled = not ctx.is_jax and _kernels.available()
+    block = _Block(ctx, lights.size) if compiled else None
+    out = []
+    for start, end, c in zip(starts, ends, code[starts].tolist(), strict=True):
+        kind, size, border = c >> 40, (c >> 16) & 0xFFFFFF, c & 0xFFFF
+        sun = kind == _SUN
+        given = (not sun and n is not None, not sun and f is not None)
+        key = _group_key(kind, size, border, rows, R is not None, given)
+        part = slice(start, end)
+        a = Inputs(
+            light_rows[part] if kind == _SPOT else positions[part],
+            verts if per_light is None else per_light[part], None, R, None,
+            None if near_all is None or sun else near_all[part],
+            None if far_all is None or sun else far_all[part],
+        )  # fmt: skip
+        if block is not None:
+            block.run(key, a, part, lights)
+        else:
+            out.append(
+                (atlas.light_tiles[lights[part], 0], *_run_arrays(ctx, key, a, lights[part]))
+            )
+    if block is not None:
+        mats, frusta = block.mats, block.out
+        return [
+            (atlas.light_tiles[lights, 0], mats[:, 1], mats[:, 2], frusta[:, 14], frusta[:, 15])
+        ]
+    return out
+
+
+class _Block:
+    """The compiled loop's output for every 2D light, filled group by group."""
+
+    def __init__(self, ctx: Context, count: int) -> None:
+        self.ctx = ctx
+        self.out = np.empty((count, _compiled.ROW), dtype=ctx.dtype)
+        self.mats = np.empty((count, 4, 4, 4), dtype=ctx.dtype)
+        self.status = np.empty(count, dtype=np.int32)
+
+    def run(self, key: FitKey, a: Inputs, part: slice, lights: Ints) -> None:
+        count = part.stop - part.start
+        status = self.status[part]
+        operands = _compiled.operands((count,), a, count == 1)
+        options = _compiled.options(key, self.ctx.dtype)
+        _kernels.loops().fit_loop(*operands, options, self.out[part], self.mats[part], status)
+        if status.any():
+            errors = status & ~WIDE_WARNING
+            if errors.any():
+                i = int(np.flatnonzero(errors)[0])
+                _raise_for(
+                    int(lights[part][i]), errors[i : i + 1], bool(np.isfinite(a.verts).all())
+                )
+
+
+def _pick(ctx: Context, v: Array, idx: Ints) -> Array:
+    return ctx.xp.broadcast_to(v, (idx.size,)) if v.ndim == 0 else v[idx]
+
+
+@functools.lru_cache(maxsize=256)
+def _group_key(
+    kind: int, size: int, border: int, rows: Any, has_receivers: bool, given: tuple[bool, bool]
+) -> FitKey:
+    margins = border_margin(size, border_texels=border)
+    return FitKey(kind == _SUN, kind == _SPOT, False, False, margins, (size, size), rows,
+                  False, has_receivers, False, *given)  # fmt: skip
+
+
+def _run_arrays(ctx: Context, key: FitKey, a: Inputs, idx: Ints) -> tuple[Array, ...]:
+    """``world_to_clip``, the tile's ``world_to_texture``, near and far of one group, on
+    whole arrays (JAX, or NumPy without the compiled loops)."""
+    count = idx.size
+    if ctx.xp is np and count <= _SCALAR_GROUP:
+        return _run_scalars(ctx, key, a, idx)
+    checks = Checks(ctx)
+    try:
+        with np.errstate(all="ignore"):
+            e = fit_arrays(ctx, checks, key, a, driver(ctx, scalar=False))
+    except ValueError as err:
+        raise ValueError(f"lights{idx.tolist()}: {err}") from None
+    xp = ctx.xp
+    clip, tex = (stack_matrix(xp, tuple(xp.broadcast_to(v, (count,)) for v in m))
+                 for m in (e.clip, e.tex))  # fmt: skip
+    lo, hi = (xp.broadcast_to(v, (count,)) for v in (e.box[2], e.box[3]))
+    return clip, tex, lo, hi
+
+
+#: NumPy without the compiled loops fits groups of at most this many lights one light at a
+#: time on Python floats (as fit_shadow does one light): the array driver's hundreds of
+#: NumPy calls cost more than that below it.
+_SCALAR_GROUP = 8
+
+
+def _run_scalars(ctx: Context, key: FitKey, a: Inputs, idx: Ints) -> tuple[Array, ...]:
+    """:func:`_run_arrays` one light at a time with the per-entry steps on Python floats."""
+    d = driver(ctx, scalar=True)
+    mats, depth = [], []
+    for i, light in enumerate(idx.tolist()):
+        one = Inputs(
+            a.light[i], a.verts if a.verts.ndim == 2 else a.verts[i], None, a.R, None,
+            None if a.near is None else a.near[i], None if a.far is None else a.far[i],
+        )  # fmt: skip
+        try:
+            with np.errstate(all="ignore"):
+                e = fit_arrays(ctx, Checks(ctx), key, one, d)
+        except ValueError as err:
+            raise ValueError(f"lights[{light}]: {err}") from None
+        mats.append((*e.clip, *e.tex))
+        depth.append((e.box[2], e.box[3]))
+    m = np.array(mats, dtype=ctx.dtype).reshape(-1, 2, 4, 4)
+    z = np.array(depth, dtype=ctx.dtype)
+    return m[:, 0], m[:, 1], z[:, 0], z[:, 1]
+
+
+def _raise_for(light: int, status: Array, finite: bool) -> None:
+    try:
+        raise_status(status, fit_messages(finite))
+    except ValueError as err:
+        raise ValueError(f"lights[{light}]: {err}") from None
+
+
+def _fit_cubes(
+    ctx: Context, atlas: ShadowAtlas, cubes: Ints, data: Array, verts: Array, R: Array | None,
+    n: Array | None, f: Array | None, api: str, reversed_z: bool,
+) -> tuple[Ints, Array, Array, Array, Array]:  # fmt: skip
+    """The six faces of every cube light at once: ``(tiles, clip, texture, near, far)``."""
+    xp = ctx.xp
+    P = data[cubes, :3]
+    if not bool(xp.all(xp.isfinite(P))):
+        bad = int(cubes[np.flatnonzero(~np.isfinite(np.asarray(P)).all(axis=1))[0]])
+        raise ValueError(f"lights[{bad}]: {non_finite('light')}")
+    # Components first, (C, 3, N): NumPy reduces a trailing axis of 3 slowly.
+    VT = xp.matrix_transpose(verts[None] if verts.ndim == 2 else verts[cubes])
+    offsets = xp.abs(VT - P[:, :, None])
+    D = xp.maximum(xp.maximum(offsets[:, 0], offsets[:, 1]), offsets[:, 2])  # face depth
+    d_min, d_max = xp.min(D, axis=-1), xp.max(D, axis=-1)
+    if R is not None:
+        d_max = xp.maximum(d_max, xp.max(xp.abs(R[None] - P[:, None, :]), axis=(-2, -1)))
+    size = atlas.light_size[cubes].astype(np.float64)
+    k = xp.asarray((size - 2 * atlas.light_border[cubes]) / size, dtype=ctx.dtype)
+    scale = xp.maximum(xp.max(xp.abs(VT), axis=(-2, -1)), xp.max(xp.abs(P), axis=-1))
+    close = np.asarray(d_min <= 32 * ctx.eps * scale)
+    if close.any():
+        bad = int(cubes[np.flatnonzero(close)[0]])
+        raise ValueError(
+            f"lights[{bad}]: a caster lies at the cube light's position (within rounding); "
+            "no near plane can keep it: move the light or give near="
+        )
+    lo = k * d_min * (1 - NEAR_FAR_SLACK) if n is None else _pick(ctx, n, cubes)
+    hi = d_max * (1 + NEAR_FAR_SLACK) if f is None else _pick(ctx, f, cubes)
+    ok = np.asarray(xp.isfinite(lo) & xp.isfinite(hi) & (lo > 0) & (hi > lo))
+    if not ok.all():
+        bad = int(cubes[np.flatnonzero(~ok)[0]])
+        raise ValueError(f"lights[{bad}]: near and far must be finite with 0 < near < far")
+    zero_to_one, flip_y = _APIS[api]
+    a, b = _depth_row(lo, hi, zero_to_one, bool(reversed_z))
+    Pm = _face_projections(xp, k, -k if flip_y else k, a, b)
+    clip = Pm[:, None] @ _cube_face_views(xp, P)  # (C, 6, 4, 4)
+    T = ctx.constant(_texture_from_clip(api, bool(reversed_z)))
+    tex = T @ clip
+    tile = atlas.light_tiles[cubes].reshape(-1)
+    lo, hi = xp.repeat(lo, 6), xp.repeat(hi, 6)
+    return tile, clip.reshape(-1, 4, 4), tex.reshape(-1, 4, 4), lo, hi
+
+
+def _face_projections(xp: Any, kx: Array, ky: Array, a: Array, b: Array) -> Array:
+    """``(C, 4, 4)`` :func:`cube_face_projection` matrices, one per light (written in place
+    for NumPy: sixteen broadcasts cost more than the fit)."""
+    if xp is not np:
+        zero = xp.zeros_like(kx)
+        return stack_matrix(xp, (kx, zero, zero, zero, zero, ky, zero, zero,
+                                 zero, zero, a, b, zero, zero, zero - 1, zero))  # fmt: skip
+    P = np.zeros((kx.shape[0], 4, 4), dtype=np.result_type(kx, a))
+    P[:, 0, 0], P[:, 1, 1], P[:, 2, 2], P[:, 2, 3], P[:, 3, 2] = kx, ky, a, b, -1.0
+    return P
