@@ -1,0 +1,484 @@
+"""pygfx's own shadows with shadowmath's cameras (shadowmath.integrations.pygfx), against the
+ray caster.
+
+pygfx renders the scene offscreen (wgpu on Mesa's Vulkan driver without a GPU) twice, with
+the light's shadows on and off; a pixel is in shadow where the shadowed picture keeps less
+than half of the unshadowed one's linear light. The ground truth: the pixel's surface point,
+found by casting the camera's ray through the pixel centre against the meshes, then
+segments from that point to the light against the casters (shadowmath.groundtruth). No
+shadow pixel may be lost outside a band of BAND pixels around the edges of the shadow, of
+the lit region and of the bodies. pygfx's default cameras fail the same comparison (the test
+can fail), and their texels are several times larger on the receivers.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+import pytest
+
+import shadowmath as sm
+from shadowmath.groundtruth import segment_hits_triangles
+from shadowmath.meshes import box, grid, torus
+
+from .scenes import edge_band, place, rotation
+
+SIZE = (200, 150)  # the picture, width x height
+BAND = 2
+LIFT = 1e-4  # the ground truth's segments start this far off the surface
+DOCS = Path(__file__).resolve().parents[2] / "docs" / "pygfx.md"
+
+
+def _unavailable(err: Exception) -> None:
+    message = (
+        f"no pygfx offscreen renderer: {err}; install the 'pygfx' extra and the Debian "
+        "package mesa-vulkan-drivers (apt-get install -y mesa-vulkan-drivers)"
+    )
+    if os.environ.get("SHADOWMATH_REQUIRE_GL") == "1":
+        pytest.fail(f"SHADOWMATH_REQUIRE_GL=1: {message}")
+    pytest.skip(message)
+
+
+@pytest.fixture(scope="session")
+def gfx() -> Any:
+    """pygfx itself; missing, it fails on CI (SHADOWMATH_REQUIRE_GL=1) and skips elsewhere."""
+    try:
+        import pygfx
+    except ImportError as err:
+        _unavailable(err)
+    return pygfx
+
+
+@pytest.fixture(scope="session")
+def pygfx_canvas(gfx) -> Any:
+    """The offscreen canvas and renderer (wgpu's adapter: Mesa's llvmpipe without a GPU)."""
+    try:
+        from rendercanvas.offscreen import RenderCanvas
+
+        canvas = RenderCanvas(size=SIZE, pixel_ratio=1)
+        renderer = gfx.renderers.WgpuRenderer(
+            canvas, pixel_scale=1, pixel_filter="nearest", ppaa="none"
+        )
+    except Exception as err:  # no rendercanvas, or no wgpu adapter
+        _unavailable(err)
+    return canvas, renderer
+
+
+# ---- scenes ------------------------------------------------------------------------------
+
+
+class Body(NamedTuple):
+    vertices: np.ndarray  # (N, 3) world coordinates
+    triangles: np.ndarray  # (M, 3)
+    cast: bool  # a caster (the fit's blocker); the others only receive
+
+
+def body(mesh: sm.Mesh, to_world: np.ndarray, *, cast: bool) -> Body:
+    v = np.asarray(mesh.vertices, dtype=float) @ to_world[:3, :3].T + to_world[:3, 3]
+    return Body(v, np.asarray(mesh.triangles), cast)
+
+
+class Scene(NamedTuple):
+    bodies: list[Body]
+    kind: str  # "directional" or "spot"
+    light: np.ndarray  # toward the light (directional) or its position (spot)
+    aim: np.ndarray  # the spot's target (and the default directional light's target)
+    angle: float  # the spot's half-angle in radians
+    eye: tuple[float, float, float]  # the viewing camera
+    target: tuple[float, float, float]
+
+    def casters(self) -> np.ndarray:
+        return np.concatenate([b.vertices for b in self.bodies if b.cast])
+
+    def sm_light(self) -> Any:
+        if self.kind == "directional":
+            return sm.DirectionalLight(self.light)
+        return sm.SpotLight(self.light, self.aim - self.light, np.array(self.angle))
+
+
+FLOOR = body(grid((12.0, 12.0), segments=(2, 2)), place(), cast=False)
+BOX = body(box((1.2, 1.2, 1.2)), place(rotation((0, 0, 1), 30), (0, 0, 0.6)), cast=True)
+TORUS = body(
+    torus(1.0, 0.35, segments=32, sides=16),
+    place(rotation((1.0, 0.5, 0.0), 80.0), (0.0, 0.0, 1.6)),
+    cast=True,
+)
+SCENES = {
+    "box, sun": Scene(
+        [FLOOR, BOX], "directional", np.array([-3.0, -1.5, 3.5]), np.zeros(3), 0.0,
+        (3.0, -5.0, 5.0), (0.0, 0.0, 0.5),
+    ),
+    "torus, sun": Scene(
+        [FLOOR, TORUS], "directional", np.array([4.0, 1.0, 3.5]), np.zeros(3), 0.0,
+        (2.0, -5.5, 4.5), (0.0, 0.0, 1.0),
+    ),
+    "box, spot": Scene(
+        [FLOOR, BOX], "spot", np.array([-3.0, -1.5, 3.5]), np.array([0.0, 0.0, 0.6]), 0.7,
+        (3.0, -5.0, 5.0), (0.0, 0.0, 0.5),
+    ),
+    "torus, spot": Scene(
+        [FLOOR, TORUS], "spot", np.array([4.0, 1.0, 3.5]), np.array([0.0, 0.0, 1.2]), 0.75,
+        (2.0, -5.5, 4.5), (0.0, 0.0, 1.0),
+    ),
+}  # fmt: skip
+
+
+def fit(scene: Scene) -> sm.ShadowSetup:
+    from shadowmath.integrations.pygfx import PYGFX_SHADOW_MAP_SIZE
+
+    return sm.fit_shadow(
+        scene.sm_light(), scene.casters(), PYGFX_SHADOW_MAP_SIZE, pcf_radius=2, api="webgpu"
+    )
+
+
+def pygfx_scene(scene: Scene, *, fitted: bool) -> tuple[Any, Any, Any]:
+    """(scene, camera, light): flat-shaded grey meshes, one shadow-casting light."""
+    import pygfx as gfx
+
+    from shadowmath.integrations.pygfx import set_shadow_camera
+
+    world = gfx.Scene()
+    for b in scene.bodies:
+        corners = b.vertices[b.triangles]  # unshared vertices: one face normal each
+        n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        n /= np.linalg.norm(n, axis=1, keepdims=True)
+        geometry = gfx.Geometry(
+            positions=corners.reshape(-1, 3).astype(np.float32),
+            normals=np.repeat(n, 3, axis=0).astype(np.float32),
+            indices=np.arange(3 * len(corners), dtype=np.int32).reshape(-1, 3),
+        )
+        mesh = gfx.Mesh(geometry, gfx.MeshPhongMaterial(color="#808080", specular="#000000"))
+        mesh.cast_shadow, mesh.receive_shadow = b.cast, True
+        world.add(mesh)
+    if scene.kind == "directional":
+        light = gfx.DirectionalLight(intensity=8.0, cast_shadow=True)
+        light.local.position = scene.aim + 10.0 * scene.light / np.linalg.norm(scene.light)
+    else:
+        light = gfx.SpotLight(intensity=8.0, cast_shadow=True, angle=scene.angle)
+        light.local.position = scene.light
+    light.target.local.position = scene.aim
+    world.add(light, light.target)
+    if fitted:
+        set_shadow_camera(light, fit(scene))
+    camera = gfx.PerspectiveCamera(45, SIZE[0] / SIZE[1])
+    camera.local.position = scene.eye
+    camera.world.reference_up = (0, 0, 1)
+    camera.look_at(scene.target)
+    return world, camera, light
+
+
+def draw(canvas_renderer: Any, world: Any, camera: Any) -> np.ndarray:
+    canvas, renderer = canvas_renderer
+    canvas.request_draw(lambda: renderer.render(world, camera))
+    srgb = np.asarray(canvas.draw())[..., :3].astype(np.float64) / 255.0
+    linear = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
+    return linear.mean(axis=-1)
+
+
+class Picture(NamedTuple):
+    shadowed: np.ndarray  # (H, W) the shadowed picture keeps under half the light
+    reached: np.ndarray  # the unshadowed picture is lit there
+    light: Any  # the pygfx light (its shadow camera as rendered)
+    camera: Any  # the viewing camera, as rendered
+    peak: float  # brightest unshadowed linear value (under 1: nothing clipped)
+
+
+def render(canvas_renderer: Any, scene: Scene, *, fitted: bool) -> Picture:
+    world, camera, light = pygfx_scene(scene, fitted=fitted)
+    shaded = draw(canvas_renderer, world, camera)
+    light.cast_shadow = False
+    bare = draw(canvas_renderer, world, camera)
+    light.cast_shadow = True
+    reached = bare > 0.01
+    shadowed = shaded < 0.5 * bare
+    return Picture(shadowed, reached, light, camera, float(bare.max()))
+
+
+# ---- the ground truth ----------------------------------------------------------------------
+
+
+def pixel_rays(camera: Any) -> tuple[np.ndarray, np.ndarray]:
+    """World origins and directions through the pixel centres (row 0 at the top)."""
+    w, h = SIZE
+    x = (np.arange(w) + 0.5) / w * 2 - 1
+    y = 1 - (np.arange(h) + 0.5) / h * 2
+    X, Y = np.meshgrid(x, y)
+    inv = np.linalg.inv(np.asarray(camera.camera_matrix, dtype=np.float64))
+    ends = []
+    for depth in (0.0, 1.0):  # pygfx's clip depth runs 0..1
+        ndc = np.stack([X, Y, np.full_like(X, depth), np.ones_like(X)], axis=-1)
+        p = ndc.reshape(-1, 4) @ inv.T
+        ends.append(p[:, :3] / p[:, 3:])
+    d = ends[1] - ends[0]
+    return ends[0], d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def first_hits(origins, dirs, vertices, triangles, chunk=512):
+    """Möller–Trumbore: the nearest triangle along each ray (-1 where none) and its distance."""
+    A, B, C = (vertices[triangles[:, i]] for i in range(3))
+    e1, e2 = B - A, C - A
+    best_t = np.full(len(origins), np.inf)
+    best = np.full(len(origins), -1)
+    for s in range(0, len(origins), chunk):
+        o, d = origins[s : s + chunk, None], dirs[s : s + chunk, None]
+        h = np.cross(d, e2)
+        det = np.sum(e1 * h, axis=-1)
+        ok = np.abs(det) > 1e-12
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        q = o - A
+        u = np.sum(q * h, axis=-1) * inv
+        k = np.cross(q, e1)
+        v = np.sum(d * k, axis=-1) * inv
+        t = np.sum(e2 * k, axis=-1) * inv
+        hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-6)
+        t = np.where(hit, t, np.inf)
+        i = np.argmin(t, axis=1)
+        tmin = t[np.arange(len(i)), i]
+        best_t[s : s + chunk] = tmin
+        best[s : s + chunk] = np.where(np.isfinite(tmin), i, -1)
+    return best, best_t
+
+
+class Truth(NamedTuple):
+    on: np.ndarray  # pixels showing a body
+    reached: np.ndarray  # facing the light and inside the spot's cone
+    shadow: np.ndarray  # reached and blocked
+    band: np.ndarray  # within BAND pixels of an edge of the shadow, the lit region or a body
+    points: np.ndarray  # (H, W, 3) the surface point of each pixel (NaN off the bodies)
+
+
+def ground_truth(scene: Scene, camera: Any) -> Truth:
+    origins, dirs = pixel_rays(camera)
+    vertices = np.concatenate([b.vertices for b in scene.bodies])
+    offsets = np.cumsum([0] + [len(b.vertices) for b in scene.bodies[:-1]])
+    triangles = np.concatenate(
+        [b.triangles + o for b, o in zip(scene.bodies, offsets, strict=True)]
+    )
+    tri, t = first_hits(origins, dirs, vertices, triangles)
+    on = tri >= 0
+    p = origins[on] + t[on, None] * dirs[on]
+    corners = vertices[triangles[tri[on]]]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    n *= -np.sign(np.sum(n * dirs[on], axis=1))[:, None]  # the side the camera sees
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    if scene.kind == "directional":
+        to_light, light = np.broadcast_to(scene.light, p.shape), np.append(scene.light, 0.0)
+        inside = np.ones(len(p), dtype=bool)
+    else:
+        to_light, light = scene.light - p, np.append(scene.light, 1.0)
+        axis = (scene.aim - scene.light) / np.linalg.norm(scene.aim - scene.light)
+        cos = -np.sum(to_light * axis, axis=1) / np.linalg.norm(to_light, axis=1)
+        inside = cos > np.cos(scene.angle)
+    reached = (np.sum(n * to_light, axis=1) > 0) & inside
+    blocked = np.zeros(len(p), dtype=bool)
+    for b in scene.bodies:
+        if b.cast:
+            blocked |= segment_hits_triangles(p + LIFT * n, light, b.vertices, b.triangles)
+
+    def image(values, fill=False):
+        out = np.full(on.shape, fill, dtype=values.dtype)
+        out[on] = values
+        return out.reshape(SIZE[1], SIZE[0])
+
+    on_image = on.reshape(SIZE[1], SIZE[0])
+    shadow = image(blocked & reached)
+    dark = image(blocked | ~reached)
+    band = edge_band(shadow, BAND) | edge_band(dark, BAND) | edge_band(on_image, BAND)
+    points = np.full((len(on), 3), np.nan)
+    points[on] = p
+    return Truth(on_image, image(reached), shadow, band, points.reshape(SIZE[1], SIZE[0], 3))
+
+
+class Count(NamedTuple):
+    shadowed: int  # ground-truth shadow pixels
+    lost: int  # in shadow, drawn lit, off the band
+    acne: int  # lit, drawn in shadow, off the band
+    unreached: int  # reached in truth but unlit in the unshadowed picture, off the band
+
+
+def compare(picture: Picture, truth: Truth) -> Count:
+    off = truth.on & truth.reached & ~truth.band
+    return Count(
+        shadowed=int(truth.shadow.sum()),
+        lost=int((off & truth.shadow & ~picture.shadowed).sum()),
+        acne=int((off & ~truth.shadow & picture.shadowed).sum()),
+        unreached=int((off & ~picture.reached).sum()),
+    )
+
+
+# ---- the integration: exact matrices, pictures, resolution ----------------------------------
+
+
+@pytest.mark.parametrize("name", list(SCENES))
+def test_pygfx_draws_with_the_fitted_matrix(gfx, name):
+    """What pygfx uploads each frame (its private update, run here) is the fit's matrix."""
+    scene = SCENES[name]
+    setup = fit(scene)
+    _, _, light = pygfx_scene(scene, fitted=True)
+    light._gfx_update_uniform_buffer()
+    light.shadow._gfx_update_uniform_buffer(light)
+    uploaded = light.uniform_buffer.data["light_view_proj_matrix"].T.astype(np.float64)
+    expected = np.asarray(setup.blocker_to_clip)  # blocker_to_world is the identity
+    # float32 entries of size up to ~5: a few float32 ulps
+    assert np.max(np.abs(uploaded - expected)) < 1e-6 * max(1.0, np.abs(expected).max())
+    # The casters land inside the map's border margins, as the fit promised.
+    clip = np.c_[scene.casters(), np.ones(len(scene.casters()))] @ uploaded.T
+    ndc = clip[:, :3] / clip[:, 3:]
+    margins = np.array([setup.frustum.margin_x, setup.frustum.margin_y])
+    assert np.all(np.abs(ndc[:, :2]) <= margins + 1e-6)  # the silhouette touches them
+    assert np.all((ndc[:, 2] >= 0) & (ndc[:, 2] <= 1))
+    # The spot's cone keeps its own aim: only the shadow camera follows the fit.
+    if scene.kind == "spot":
+        direction = light.uniform_buffer.data["direction"][:3]
+        axis = (scene.aim - scene.light) / np.linalg.norm(scene.aim - scene.light)
+        assert np.allclose(direction, axis, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", list(SCENES))
+def test_pygfx_with_the_fit_loses_no_shadow_pixel(pygfx_canvas, name):
+    scene = SCENES[name]
+    picture = render(pygfx_canvas, scene, fitted=True)
+    truth = ground_truth(scene, picture.camera)
+    count = compare(picture, truth)
+    print(f"{name}: {count}, peak {picture.peak:.2f}")
+    assert picture.peak < 0.95, "the unshadowed picture must not clip"
+    assert count.shadowed > 300, "the scene must show a sizeable shadow to test anything"
+    assert count.unreached <= 0.005 * (truth.reached & truth.on).sum(), count
+    assert count.lost == 0, count
+    assert count.acne <= 0.005 * count.shadowed, count
+
+
+@pytest.mark.parametrize("name", ["box, sun", "torus, sun"])
+def test_pygfx_default_directional_camera_loses_shadow_pixels(pygfx_canvas, name):
+    """The comparison can fail: pygfx's 1000 x 1000 box blurs the shadow into a faint smear."""
+    scene = SCENES[name]
+    picture = render(pygfx_canvas, scene, fitted=False)
+    count = compare(picture, ground_truth(scene, picture.camera))
+    print(f"{name}, pygfx default: {count}")
+    assert count.lost > 0.5 * count.shadowed, count
+
+
+def test_pygfx_wrong_roll_loses_shadow_pixels(pygfx_canvas):
+    """The up vector matters: the scene's up (0, 0, 1) instead of the fit's rolls the fitted
+    box (twice as wide as high here) off the torus."""
+    scene = SCENES["torus, sun"]
+    world, camera, light = pygfx_scene(scene, fitted=True)
+    light.shadow.camera.world.reference_up = (0.0, 0.0, 1.0)
+    canvas_renderer = pygfx_canvas
+    shaded = draw(canvas_renderer, world, camera)
+    light.cast_shadow = False
+    bare = draw(canvas_renderer, world, camera)
+    picture = Picture(shaded < 0.5 * bare, bare > 0.01, light, camera, float(bare.max()))
+    count = compare(picture, ground_truth(scene, camera))
+    print(f"rolled: {count}")
+    assert count.lost > 0.1 * count.shadowed, count
+
+
+def world_to_texture(light: Any) -> np.ndarray:
+    """pygfx's shadow lookup as shadowmath's world_to_texture: its camera's webgpu clip
+    matrix, then the texture mapping pygfx's shader applies (s = (x+1)/2, t = (1-y)/2)."""
+    clip = np.asarray(light.shadow.camera.camera_matrix, dtype=np.float64)
+    return np.asarray(sm.api_convention(api="webgpu").clip_to_texture) @ clip
+
+
+def texel_sizes(scene: Scene, canvas_renderer: Any = None) -> tuple[float, float]:
+    """Median texel world size on the receivers' shadowed points: (pygfx default, fitted)."""
+    from shadowmath.integrations.pygfx import PYGFX_SHADOW_MAP_SIZE
+
+    sizes = []
+    for fitted in (False, True):
+        _, camera, light = pygfx_scene(scene, fitted=fitted)
+        if not fitted:  # pygfx places its default camera in its once-a-frame update
+            light._gfx_update_uniform_buffer()
+            light.shadow._gfx_update_uniform_buffer(light)
+        camera.set_view_size(*SIZE)
+        truth = ground_truth(scene, camera)
+        points = truth.points[truth.shadow]
+        size = sm.texel_world_size(world_to_texture(light), points, map_size=PYGFX_SHADOW_MAP_SIZE)
+        sizes.append(float(np.median(size)))
+    return sizes[0], sizes[1]
+
+
+@pytest.mark.parametrize("name", list(SCENES))
+def test_pygfx_fit_makes_sharper_texels_than_the_defaults(gfx, name):
+    default, fitted = texel_sizes(SCENES[name])
+    print(f"{name}: texel {default:.4g} (pygfx default) vs {fitted:.4g} (fit), "
+          f"{default / fitted:.1f}x sharper")  # fmt: skip
+    if SCENES[name].kind == "directional":
+        # 1000 world units over 1024 texels, everywhere
+        assert default == pytest.approx(1000 / 1024, rel=1e-6)
+        # the fit's box spans the casters' shadow width (a few units) plus its margins
+        assert fitted < 6.0 / 1024
+    assert default / fitted > 1.5
+
+
+# ---- the docs page's example runs ------------------------------------------------------------
+
+
+def test_docs_example_runs(pygfx_canvas, tmp_path, monkeypatch):
+    """docs/pygfx.md's example, executed as written, draws with the fitted matrix."""
+    code = re.search(r"```python\n(.*?)```", DOCS.read_text(), flags=re.DOTALL)
+    assert code is not None
+    monkeypatch.chdir(tmp_path)
+    namespace: dict[str, Any] = {"__name__": "docs_example"}
+    exec(compile(code.group(1), str(DOCS), "exec"), namespace)
+    assert (tmp_path / "pygfx_shadows.png").stat().st_size > 1000
+    setup, sun, placement = namespace["setup"], namespace["sun"], namespace["placement"]
+    sun.shadow._gfx_update_uniform_buffer(sun)
+    uploaded = sun.uniform_buffer.data["light_view_proj_matrix"].T.astype(np.float64)
+    assert np.allclose(uploaded @ placement, setup.blocker_to_clip, atol=1e-6)
+    spot = namespace["spot"]
+    assert spot.shadow.camera.fov < np.degrees(2 * 0.7) / 2  # the cube, not the cone
+
+
+# ---- arguments -------------------------------------------------------------------------------
+
+
+def test_pygfx_bad_arguments(gfx):
+    from shadowmath.integrations.pygfx import set_shadow_camera
+
+    directional = fit(SCENES["box, sun"])
+    spot = fit(SCENES["box, spot"])
+    with pytest.raises(ValueError, match="PointLight's cube map"):
+        set_shadow_camera(gfx.PointLight(), spot)
+    with pytest.raises(ValueError, match="DirectionalLight or SpotLight"):
+        set_shadow_camera(gfx.AmbientLight(), spot)
+    with pytest.raises(ValueError, match="orthographic fit"):
+        set_shadow_camera(gfx.DirectionalLight(), spot)
+    with pytest.raises(ValueError, match="perspective fit"):
+        set_shadow_camera(gfx.SpotLight(), directional)
+    with pytest.raises(ValueError, match="ShadowSetup or ShadowCamera"):
+        set_shadow_camera(gfx.SpotLight(), np.eye(4))
+    batch = sm.fit_shadow(
+        sm.PointLight(np.array([[0.0, 0.0, 5.0], [1.0, 0.0, 5.0]])), BOX.vertices, 1024
+    )
+    with pytest.raises(ValueError, match=r"one light's fit .* \(2, 3\)"):
+        set_shadow_camera(gfx.SpotLight(), batch)
+    nan = sm.shadow_camera(spot)._replace(near=np.float64(np.nan))
+    with pytest.raises(ValueError, match="non-finite"):
+        set_shadow_camera(gfx.SpotLight(), nan)
+    wide = sm.shadow_camera(spot)._replace(left=np.float64(-300.0))
+    with pytest.raises(ValueError, match="wider than pygfx's 179"):
+        set_shadow_camera(gfx.SpotLight(), wide)
+    on_camera = gfx.SpotLight()
+    head = gfx.PerspectiveCamera()  # pygfx holds a parent weakly: keep it alive
+    head.add(on_camera)
+    with pytest.raises(ValueError, match="parented to a camera"):
+        set_shadow_camera(on_camera, spot)
+
+
+def test_pygfx_narrow_fit_widens_the_frustum_and_cuts_the_window(gfx):
+    """A field of view under pygfx's 1-degree floor: the view offset keeps the exact window."""
+    from shadowmath.integrations.pygfx import set_shadow_camera
+
+    far_light = sm.PointLight(np.array([0.0, -200.0, 150.0]))
+    setup = sm.fit_shadow(far_light, BOX.vertices, 1024, pcf_radius=2, api="webgpu")
+    cam = sm.shadow_camera(setup)
+    assert np.degrees(2 * np.arctan(0.5 * (cam.width + cam.height) / 2)) < 1.0
+    camera = set_shadow_camera(gfx.SpotLight(), setup)
+    assert camera.fov == pytest.approx(1.0, abs=1e-9)
+    assert np.allclose(camera.camera_matrix, setup.blocker_to_clip, rtol=1e-6, atol=1e-5)
