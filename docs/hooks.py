@@ -10,6 +10,10 @@ offline: the build copies MathJax's browser files from the pinned
 ``django-static-mathjax`` package of the ``docs`` extra (it vendors the MathJax
 distribution and needs no Django) to ``javascripts/mathjax/``. Nothing of
 MathJax is committed, and no page loads anything from another host.
+
+The notebooks of ``notebooks/`` are pages too, executed by mkdocs-jupyter on every
+build (``execute: true`` in mkdocs.yml): they stay where Jupyter users find them and
+join the build as ``notebooks/<name>.ipynb``, so the nav names them by that path.
 """
 
 from __future__ import annotations
@@ -21,7 +25,12 @@ import re
 from pathlib import Path
 from typing import Any
 
+from mkdocs.plugins import event_priority
+
 _PACKAGES = ("shadowmath", "shadowmath.render")
+
+ROOT = Path(__file__).resolve().parents[1]
+NOTEBOOKS = "notebooks"  # both the folder in the repository and the pages' folder on the site
 
 MATHJAX_DIST = "django-static-mathjax"
 MATHJAX_VERSION = "3.2.2.1"  # as pinned in pyproject.toml's docs extra
@@ -61,12 +70,74 @@ def mathjax_files() -> dict[str, Path]:
     return files
 
 
+def notebook_files() -> dict[str, Path]:
+    """The site paths of the notebooks (``notebooks/<name>.ipynb``) and their sources."""
+    return {f"{NOTEBOOKS}/{path.name}": path for path in sorted((ROOT / NOTEBOOKS).glob("*.ipynb"))}
+
+
+# Before the plugins' on_files (priority 0): mkdocs-jupyter turns the notebooks into pages there.
+@event_priority(50)
 def on_files(files: Any, *, config: Any) -> Any:
     from mkdocs.structure.files import File
 
     for uri, path in mathjax_files().items():
         files.append(File.generated(config, uri, abs_src_path=str(path)))
+    # Source files read from the repository root rather than docs/ (mkdocs-jupyter needs a
+    # file with a source folder; it cannot read a generated one).
+    for uri in notebook_files():
+        files.append(File(uri, str(ROOT), config.site_dir, config.use_directory_urls))
     return files
+
+
+def on_serve(server: Any, *, config: Any, builder: Any) -> Any:
+    """``mkdocs serve`` rebuilds when a notebook changes, as for a page under docs/."""
+    server.watch(str(ROOT / NOTEBOOKS))
+    return server
+
+
+# nbconvert's page head loads MathJax 2 (from an empty URL here) and Mermaid from a CDN: the
+# site has its own MathJax and no diagrams, and loads nothing from another host.
+_NB_SCRIPT = re.compile(r"<script\b[^>]*>.*?</script>", re.DOTALL)
+_NB_MARKDOWN = re.compile(
+    r'(<div class="jp-RenderedHTMLCommon jp-RenderedMarkdown jp-MarkdownOutput"[^>]*>)'
+    r"(.*?)(</div>)",
+    re.DOTALL,
+)
+_NB_CODE = re.compile(r"(<code>.*?</code>)", re.DOTALL)
+
+
+def _foreign_script(script: str) -> bool:
+    return 'src=""' in script or "text/x-mathjax-config" in script or "https://" in script
+
+
+def _arithmatex(html: str) -> str:
+    """A markdown cell's ``$...$`` and ``$$...$$`` as the spans pymdownx.arithmatex writes."""
+    html = re.sub(
+        r"<p>\$\$(.+?)\$\$</p>", r'<div class="arithmatex">\\[\1\\]</div>', html, flags=re.DOTALL
+    )
+    html = re.sub(
+        r"\$\$(.+?)\$\$", r'<span class="arithmatex">\\[\1\\]</span>', html, flags=re.DOTALL
+    )
+    return re.sub(r"(?<!\\)\$([^$]+?)(?<!\\)\$", r'<span class="arithmatex">\\(\1\\)</span>', html)
+
+
+def notebook_html(html: str) -> str:
+    """A notebook page's HTML from mkdocs-jupyter with the site's MathJax and no CDN scripts."""
+    html = _NB_SCRIPT.sub(lambda m: "" if _foreign_script(m.group()) else m.group(), html)
+
+    def cell(match: re.Match[str]) -> str:
+        head, body, tail = match.groups()
+        parts = _NB_CODE.split(body)  # odd items are code spans: their dollars stay
+        body = "".join(part if k % 2 else _arithmatex(part) for k, part in enumerate(parts))
+        return head + body + tail
+
+    return _NB_MARKDOWN.sub(cell, html)
+
+
+def on_page_content(html: str, *, page: Any, **kwargs: Any) -> str:
+    if page.file.src_uri in notebook_files():
+        return notebook_html(html)
+    return html
 
 
 def _exported() -> list[str]:
