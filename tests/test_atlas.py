@@ -382,6 +382,38 @@ def test_tiles_equal_independent_per_light_fits(api: Any) -> None:
             assert np.allclose(fit.world_to_texture[t], expected, rtol=1e-12, atol=1e-12)
 
 
+FLOOR = np.array(
+    [[-30.0, -1.0, -30.0], [30.0, -1.0, -30.0], [30.0, -1.0, 30.0], [-30.0, -1.0, 30.0]]
+)
+
+
+@pytest.mark.parametrize("kind", ["triangles", "mesh"])
+def test_receiver_triangles_push_far_as_fit_shadow_does(kind: str) -> None:
+    """A floor of two triangles whose corners lie outside every 2D map: each tile's depth
+    range is fit_shadow's with the same receivers (the triangles clipped by the map's
+    sides), and reaches farther than the corners taken as points; a cube face's far is
+    the largest D over the corners."""
+    verts, lights, cube = scene(5)
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    receivers: Any = sm.Triangles(FLOOR[faces]) if kind == "triangles" else sm.Mesh(FLOOR, faces)
+    a = allocate_atlas(np.full(len(lights), 0.2), atlas_size=4096, cube=cube)
+    fit = fit_atlas(lights, verts, a, receivers=receivers)
+    corners = fit_atlas(lights, verts, a, receivers=FLOOR)
+    longer = 0
+    for i, light in enumerate(lights):
+        t = a.light_tiles[i, 0]
+        if cube[i]:
+            D = np.abs(np.concatenate([verts, FLOOR]) - np.asarray(light.position)).max(axis=1)
+            assert fit.far[t] == pytest.approx(D.max() * (1 + 1 / 64), rel=1e-12)
+            continue
+        ref = independent_fit(light, verts, int(a.light_size[i]), 1,
+                              receivers=sm.Triangles(FLOOR[faces]))  # fmt: skip
+        assert fit.near[t] == pytest.approx(float(ref.frustum.near), rel=1e-12)
+        assert fit.far[t] == pytest.approx(float(ref.frustum.far), rel=1e-12)
+        longer += bool(fit.far[t] > corners.far[t] * (1 + 1e-9))
+    assert longer >= 3, "the floor's corners outside the maps must miss part of it"
+
+
 @pytest.mark.parametrize("case", ["scene", "ring"])
 def test_cube_faces_keep_every_caster_within_depth(case: str) -> None:
     verts, lights, cube = scene(4)
@@ -430,13 +462,17 @@ def test_pcf_kernels_stay_inside_their_tiles(radius: int, filt: Any) -> None:
         assert np.all(lo >= [x, y]) and np.all(hi <= [x + n - 1, y + n - 1])
 
 
-def test_numpy_alone_and_jax_give_the_compiled_matrices() -> None:
+@pytest.mark.parametrize("receiving", ["points", "triangles"])
+def test_numpy_alone_and_jax_give_the_compiled_matrices(receiving: str) -> None:
     verts, lights, cube = scene(6)
     a = allocate_atlas(np.linspace(0.9, 0.2, len(lights)), atlas_size=2048, cube=cube)
-    ref = fit_atlas(lights, verts, a, api="direct3d", receivers=verts[:5] * 3)
+    R: Any = verts[:5] * 3
+    if receiving == "triangles":
+        R = sm.Triangles(FLOOR[np.array([[0, 1, 2], [0, 2, 3]])])
+    ref = fit_atlas(lights, verts, a, api="direct3d", receivers=R)
     with _kernels.disabled():
-        alone = fit_atlas(lights, verts, a, api="direct3d", receivers=verts[:5] * 3)
-    on_jax = fit_atlas(lights, jnp.asarray(verts), a, api="direct3d", receivers=verts[:5] * 3)
+        alone = fit_atlas(lights, verts, a, api="direct3d", receivers=R)
+    on_jax = fit_atlas(lights, jnp.asarray(verts), a, api="direct3d", receivers=R)
     for other in (alone, on_jax):
         for name in ("world_to_clip", "world_to_texture", "near", "far"):
             assert np.allclose(np.asarray(getattr(other, name)), getattr(ref, name), rtol=1e-10)

@@ -50,6 +50,7 @@ from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 
 from . import _compiled
 from ._fit_arrays import Inputs, driver, fit_arrays
+from ._setup import _receiver_kind, _receiver_rows
 from ._spec import FitKey, api_rows
 
 __all__ = [
@@ -540,7 +541,10 @@ def fit_atlas(
             tiles need point lights.
         blocker_vertices: ``(N, 3)`` casters shared by every light, or ``(L, N, 3)``.
         atlas: the :class:`ShadowAtlas` of these lights (``L`` entries).
-        receivers: ``(M, 3)`` points the shadows fall on: they only push ``far``.
+        receivers: what the shadows fall on, shared by every light, as in
+            :func:`fit_shadow`: ``(M, 3)`` points, :class:`Triangles` ``(M, 3, 3)`` or a
+            :class:`Mesh` (each triangle clipped by a 2D map's sides, so a floor whose
+            corners lie outside the map still counts). They only push ``far``.
         near, far: scalars or ``(L,)``: the depth range of the point and spot lights
             (ignored for directional ones, whose range is fitted), instead of the casters'.
         api, reversed_z: the graphics API's conventions (:func:`api_convention`).
@@ -582,10 +586,13 @@ def fit_atlas(
                 f"with border_texels=sm.pcf_border_texels({pcf_radius}, {pcf_filter!r}))"
             )
     kinds, data = _read_lights(lights, count)
+    r_kind, r_name, r_array = _receiver_kind(receivers)
     ctx, (data, verts, R, n, f) = convert(
-        lights=data, blocker_vertices=blocker_vertices, receivers=receivers, near=near, far=far
+        lights=data, blocker_vertices=blocker_vertices, **{r_name: r_array}, near=near, far=far
     )
     xp = ctx.xp
+    if R is not None:
+        R = _receiver_rows(ctx, r_kind, R, receivers)
     _check_arrays(verts, R, n, f, count)
     for name, v in (("blocker_vertices", verts), ("receivers", R)):
         if v is not None and not ctx.lazy and not bool(xp.all(xp.isfinite(v))):
@@ -708,8 +715,9 @@ def _check_arrays(
     if verts.ndim == 3 and verts.shape[0] != count:
         raise shape_error("blocker_vertices", f"({count}, N, 3)", tuple(verts.shape),
                           "one caster set per light")  # fmt: skip
-    if R is not None and (R.ndim != 2 or R.shape[-1] != 3 or R.shape[0] == 0):
-        raise shape_error("receivers", "(M, 3), M >= 1", tuple(R.shape))
+    if R is not None and R.ndim != 2:  # rows of 3 (points) or 9 (triangles), checked
+        raise shape_error("receivers", "(M, 3) points or M triangles", tuple(R.shape),
+                          "one set of receivers shared by every light")  # fmt: skip
     for name, v in (("near", n), ("far", f)):
         if v is not None and (v.ndim > 1 or (v.ndim == 1 and v.shape[0] != count)):
             raise shape_error(name, f"() or ({count},)", tuple(v.shape))
@@ -745,7 +753,7 @@ def _fit_2d(
         kind, size, border = c >> 40, (c >> 16) & 0xFFFFFF, c & 0xFFFF
         sun = kind == _SUN
         given = (not sun and n is not None, not sun and f is not None)
-        key = _group_key(kind, size, border, rows, R is not None, given)
+        key = _group_key(kind, size, border, rows, _receiver_flags(R), given)
         part = slice(start, end)
         a = Inputs(
             light_rows[part] if kind == _SPOT else positions[part],
@@ -795,13 +803,19 @@ def _pick(ctx: Context, v: Array, idx: Ints) -> Array:
     return ctx.xp.broadcast_to(v, (idx.size,)) if v.ndim == 0 else v[idx]
 
 
+def _receiver_flags(R: Array | None) -> tuple[bool, bool]:
+    """Whether there are receivers, and whether they are triangles (rows of 9)."""
+    return R is not None, R is not None and R.shape[-1] == 9
+
+
 @functools.lru_cache(maxsize=256)
 def _group_key(
-    kind: int, size: int, border: int, rows: Any, has_receivers: bool, given: tuple[bool, bool]
-) -> FitKey:
+    kind: int, size: int, border: int, rows: Any, receivers: tuple[bool, bool],
+    given: tuple[bool, bool],
+) -> FitKey:  # fmt: skip
     margins = border_margin(size, border_texels=border)
     return FitKey(kind == _SUN, kind == _SPOT, False, False, margins, (size, size), rows,
-                  False, has_receivers, False, *given)  # fmt: skip
+                  False, receivers[0], False, *given, triangles=receivers[1])  # fmt: skip
 
 
 def _run_arrays(ctx: Context, key: FitKey, a: Inputs, idx: Ints) -> tuple[Array, ...]:
@@ -872,8 +886,9 @@ def _fit_cubes(
     offsets = xp.abs(VT - P[:, :, None])
     D = xp.maximum(xp.maximum(offsets[:, 0], offsets[:, 1]), offsets[:, 2])  # face depth
     d_min, d_max = xp.min(D, axis=-1), xp.max(D, axis=-1)
-    if R is not None:
-        d_max = xp.maximum(d_max, xp.max(xp.abs(R[None] - P[:, None, :]), axis=(-2, -1)))
+    if R is not None:  # a triangle's largest D is at a corner (D is convex)
+        corners = xp.reshape(R, (-1, 3))
+        d_max = xp.maximum(d_max, xp.max(xp.abs(corners[None] - P[:, None, :]), axis=(-2, -1)))
     size = atlas.light_size[cubes].astype(np.float64)
     k = xp.asarray((size - 2 * atlas.light_border[cubes]) / size, dtype=ctx.dtype)
     scale = xp.maximum(xp.max(xp.abs(VT), axis=(-2, -1)), xp.max(xp.abs(P), axis=-1))

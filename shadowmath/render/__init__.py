@@ -24,6 +24,9 @@ does not.
   (:func:`shadowmath.fit_cascades`), drawn as layers of a texture array or tiles of an
   atlas; the camera-view pass picks the cascade by view depth and blends across the
   bands; optionally a second picture coloured by cascade.
+* :func:`render_atlas`: many point (cube-mapped), spot and directional lights whose
+  shadow maps share one atlas (:func:`shadowmath.allocate_atlas`,
+  :func:`shadowmath.fit_atlas`), each light's shadow mask and the picture lit by all.
 * :func:`radiance_texture`: Heckbert and Herf's radiance texture of one receiver
   parallelogram, as a NumPy array.
 * moderngl 5 has no stencil state. Where the articles use the stencil buffer
@@ -41,6 +44,8 @@ from ._camera import perspective as perspective
 from ._context import DEBIAN_PACKAGES as DEBIAN_PACKAGES
 from ._context import GLUnavailableError as GLUnavailableError
 from ._context import standalone_context as standalone_context
+from ._pass_atlas import AtlasFrame as AtlasFrame
+from ._pass_atlas import render_atlas as render_atlas
 from ._pass_cascades import CASCADE_COLORS as CASCADE_COLORS
 from ._pass_cascades import MAX_CASCADES as MAX_CASCADES
 from ._pass_cascades import CascadeFrame as CascadeFrame
@@ -60,6 +65,7 @@ __all__ = [
     "MAX_CASCADES",
     "MAX_LIGHTS",
     "PLANAR_POLYGON_OFFSET",
+    "AtlasFrame",
     "Body",
     "CascadeFrame",
     "Frame",
@@ -68,6 +74,7 @@ __all__ = [
     "look_at",
     "perspective",
     "radiance_texture",
+    "render_atlas",
     "render_cascades",
     "render_scene",
     "render_shadow_map",

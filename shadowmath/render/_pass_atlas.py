@@ -1,0 +1,365 @@
+"""Many shadowed lights through one shadow atlas: :func:`render_atlas`.
+
+A client of the public API like any user's renderer: :func:`shadowmath.allocate_atlas`
+gives each light its tile(s) (a point light's cube map six face tiles) and
+:func:`shadowmath.fit_atlas` their matrices (OpenGL conventions); every caster's depth is
+drawn into each tile's viewport (scissored to it) with a polygon offset; the camera-view
+pass (``shaders/atlas.frag``) picks each light's tile (a cube light's face by
+:func:`shadowmath.cube_face`'s rule) and compares with PCF, every tap clamped into the tile.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, NamedTuple
+
+import moderngl
+import numpy as np
+from numpy.typing import NDArray
+
+import shadowmath as sm
+
+from ._context import check_matrix, program, resolve_context, set_matrix, set_uniform
+from ._context import image_size as _image_size
+from ._pass_depth import depth_bias_option, pcf_radius_option
+from ._pass_lit import draw_lit, finish
+from ._resources import Body, GpuScene, prepare_body, read_texture
+
+#: The default normal-offset bias of :func:`render_atlas`, in texels of each light's map.
+NORMAL_OFFSET = 0.5
+
+#: The atlas lights' kinds, as :func:`render_atlas` takes them.
+AtlasLight = sm.PointLight | sm.SpotLight | sm.DirectionalLight
+
+
+class AtlasFrame(NamedTuple):
+    """What :func:`render_atlas` returns; images have row 0 at the *top* (as saved).
+
+    Attributes:
+        color: ``(H, W, 3)`` float32 in ``[0, 1]``, the picture lit by every light.
+        shadow: ``(L, H, W)`` float32, each light's shadow mask on the visible bodies (1
+            shadowed, 0 lit or not reached by the light; PCF gives fractions).
+        position: ``(H, W, 3)`` float32 world position of the visible surface (NaN on
+            the background).
+        normal: ``(H, W, 3)`` float32 unit face normal (NaN on the background).
+        body: ``(H, W)`` int32, which body is visible (``-1`` the background).
+        atlas: the :class:`shadowmath.ShadowAtlas` (pass it as ``previous`` next frame).
+        fit: the :class:`shadowmath.AtlasFit` the tiles were drawn and sampled with.
+        shadow_map: ``(A, A)`` float32 window depths of the whole atlas, row 0 its first
+            row in memory (``t = 0``); 1 where nothing was drawn.
+    """
+
+    color: NDArray[np.float32]
+    shadow: NDArray[np.float32]
+    position: NDArray[np.float32]
+    normal: NDArray[np.float32]
+    body: NDArray[np.int32]
+    atlas: sm.ShadowAtlas
+    fit: sm.AtlasFit
+    shadow_map: NDArray[np.float32]
+
+
+class _Options(NamedTuple):
+    """The checked shading options of one :func:`render_atlas` call."""
+
+    cast: list[bool]
+    pcf_radius: int
+    normal_offset: float
+    ambient: float
+    background: tuple[float, float, float]
+
+
+class _Lights(NamedTuple):
+    """The lights as the shader reads them: ``(L, 4, 4)`` rows of light, colour, spot
+    ``(axis, cos angle)`` (``w = -2`` not a spot), ``(cube, 0, 0, 0)``."""
+
+    rows: NDArray[np.float32]
+    cube: NDArray[np.bool_]
+
+
+def render_atlas(
+    bodies: Sequence[Body],
+    lights: Sequence[AtlasLight],
+    view: Any,
+    projection: Any,
+    *,
+    casters: Sequence[bool] | None = None,
+    colors: Any = None,
+    coverage: Any = None,
+    atlas_size: int = 2048,
+    budget: float = 1.0,
+    previous: sm.ShadowAtlas | None = None,
+    pcf_radius: int = 1,
+    depth_bias: tuple[float, float] | None = None,
+    normal_offset: float = NORMAL_OFFSET,
+    image_size: int | tuple[int, int] = (512, 384),
+    ambient: float = 0.15,
+    background: tuple[float, float, float] = (0.06, 0.07, 0.09),
+    ctx: moderngl.Context | None = None,
+) -> AtlasFrame:
+    r"""Render bodies under many shadowed lights whose maps share one atlas.
+
+    1. :func:`shadowmath.allocate_atlas` (``coverage``, ``atlas_size``, ``budget``,
+       ``previous``; point lights are cube maps of six face tiles, the border
+       :func:`shadowmath.pcf_border_texels` of the kernel), then
+       :func:`shadowmath.fit_atlas` of the casters' world vertices, every body's
+       triangles as receivers (:class:`shadowmath.Triangles`: they push ``far``),
+       OpenGL conventions.
+    2. One depth texture of ``atlas_size``\ ² texels, cleared to 1: per tile ``t``, the
+       viewport and scissor ``viewports[t]``, every caster through ``world_to_clip[t]``
+       with ``glPolygonOffset(*depth_bias)``.
+    3. The lit record, then per light its shadow mask (the point moved off a caster's
+       face by the normal offset), and the picture: ``albedo
+       (ambient + sum_l colour_l max(n . l, 0) (1 - shadow_l))``, a spot lighting only
+       inside its cone.
+
+    Arguments:
+        bodies: the scene; all receive.
+        lights: ``L`` lights, each one :class:`shadowmath.PointLight` (a cube map),
+            :class:`shadowmath.SpotLight` or :class:`shadowmath.DirectionalLight`.
+        view: ``(4, 4)`` the camera's world-to-view matrix (OpenGL: it looks down ``-z``).
+        projection: ``(4, 4)`` its OpenGL projection.
+        casters: ``(len(bodies),)`` which bodies cast (default all). A body that only
+            receives (a ground) costs no texels.
+        colors: ``(L, 3)`` each light's diffuse RGB; default white shared out, ``1.6 / L``.
+        coverage: ``(L,)`` each light's screen coverage for :func:`shadowmath.allocate_atlas`
+            (default 1: every light asks for the largest tile, the budget decides).
+        atlas_size, budget, previous: as in :func:`shadowmath.allocate_atlas`.
+        pcf_radius: the PCF box kernel's radius ``k`` (its tiles' border).
+        depth_bias: ``(factor, units)`` polygon offset; default ``(2.5 + 2 k, 4.0)``.
+        normal_offset: the normal-offset bias on the casters, in texels: a caster's point
+            is looked up moved along its face normal by ``normal_offset`` texels' world
+            size there, times the sine of the angle to the light
+            (:data:`NORMAL_OFFSET` by default, 0 for none; receivers that cast nothing
+            need none).
+        image_size: the picture's size in pixels.
+        ambient, background: shading as in :func:`render_scene`.
+        ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
+
+    Returns:
+        :class:`AtlasFrame`.
+
+    Raises:
+        ValueError: bad bodies, lights, matrices, sizes or options, no caster; and
+            whatever :func:`shadowmath.allocate_atlas` and :func:`shadowmath.fit_atlas`
+            raise.
+        GLUnavailableError: no OpenGL context could be created.
+
+    Example:
+        >>> import shadowmath as sm
+        >>> from shadowmath.meshes import box, grid
+        >>> from shadowmath.render import Body, look_at, perspective
+        >>> ground = Body(*grid((20.0, 20.0), segments=(1, 1)))
+        >>> cube = Body(*box((2.0, 2.0, 2.0)), to_world=np.array(
+        ...     [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1.0]]))
+        >>> lights = [sm.PointLight(np.array([3.0, 0.0, 4.0])),
+        ...           sm.DirectionalLight(np.array([1.0, 1.0, 2.0]))]
+        >>> frame = render_atlas([ground, cube], lights, look_at([0, -12, 8], [0, 0, 0], [0, 0, 1]),
+        ...                      perspective(50.0, 1.0, 0.5, 50.0), casters=[False, True],
+        ...                      image_size=64, atlas_size=512)
+        >>> frame.shadow.shape, frame.atlas.tile_light.tolist()
+        ((2, 64, 64), [0, 0, 0, 0, 0, 0, 1])
+    """
+    prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
+    if not prepared:
+        raise ValueError("bodies: expected at least one body")
+    cast = _casters(casters, len(prepared))
+    table = _light_table(lights, colors)
+    k = pcf_radius_option(pcf_radius)
+    bias = depth_bias_option(depth_bias, k)
+    if not (np.isfinite(normal_offset) and normal_offset >= 0):
+        raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
+    if not (np.isfinite(ambient) and ambient >= 0):
+        raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
+    v, p = check_matrix("view", view), check_matrix("projection", projection)
+    size = _image_size("image_size", image_size)
+    count = len(table.cube)
+    atlas = sm.allocate_atlas(
+        np.ones(count) if coverage is None else coverage, atlas_size=atlas_size,
+        cube=table.cube, border_texels=sm.pcf_border_texels(k), previous=previous,
+        budget=budget,
+    )  # fmt: skip
+    points = np.concatenate([b.world_vertices() for b, c in zip(prepared, cast, strict=True) if c])
+    # Every body's triangles hold what the shadows fall on: a ground's corners may lie
+    # outside a light's map while its middle is under the casters.
+    surfaces = np.concatenate([b.world_vertices()[b.triangles] for b in prepared])
+    fit = sm.fit_atlas(list(lights), points, atlas, receivers=sm.Triangles(surfaces), pcf_radius=k)
+    gl = resolve_context(ctx)
+    with GpuScene(gl, prepared, (), [], p @ v, size, (atlas.atlas_size,) * 2) as scene:
+        depths = draw_atlas(scene, fit, atlas.atlas_size, cast, bias)
+        options = _Options(cast, k, float(normal_offset), float(ambient), background)
+        return _shade_all(scene, table, atlas, fit, depths, options)
+
+
+def _casters(casters: Sequence[bool] | None, count: int) -> list[bool]:
+    if casters is None:
+        return [True] * count
+    flags = [bool(c) for c in casters]
+    if len(flags) != count:
+        raise ValueError(f"casters: expected one flag per body ({count}), got {len(flags)}")
+    if not any(flags):
+        raise ValueError("casters: at least one body must cast")
+    return flags
+
+
+def _light_table(lights: Sequence[AtlasLight], colors: Any) -> _Lights:
+    """The shader's per-light rows; point lights are cube maps."""
+    count = len(lights)
+    if count == 0:
+        raise ValueError("lights: expected at least one light")
+    rgb = np.full((count, 3), 1.6 / count) if colors is None else np.asarray(colors, float)
+    if rgb.shape != (count, 3) or not np.all(np.isfinite(rgb)) or rgb.min() < 0:
+        raise ValueError(f"colors: expected ({count}, 3) finite values >= 0, got {rgb.shape}")
+    rows = np.zeros((count, 4, 4))
+    rows[:, 2, 3] = -2.0
+    for i, light in enumerate(lights):
+        if isinstance(light, sm.DirectionalLight):
+            d = np.asarray(light.direction, dtype=np.float64)
+            rows[i, 0] = [*(d / np.linalg.norm(d)), 0.0]
+        elif isinstance(light, sm.PointLight | sm.SpotLight):
+            rows[i, 0] = [*np.asarray(light.position, dtype=np.float64), 1.0]
+        else:
+            raise ValueError(
+                f"lights[{i}]: expected an sm.PointLight, sm.SpotLight or sm.DirectionalLight, "
+                f"got {type(light).__name__}"
+            )
+        if isinstance(light, sm.SpotLight):
+            axis = np.asarray(light.direction, dtype=np.float64)
+            rows[i, 2] = [*(axis / np.linalg.norm(axis)), np.cos(float(light.angle))]
+        rows[i, 3, 0] = float(isinstance(light, sm.PointLight))
+    rows[:, 1, :3] = rgb
+    if not np.all(np.isfinite(rows)):
+        raise ValueError("lights: positions, directions and angles must be finite and nonzero")
+    return _Lights(rows.astype(np.float32), rows[:, 3, 0] > 0.5)
+
+
+def draw_atlas(
+    scene: GpuScene, fit: sm.AtlasFit, size: int, cast: Sequence[bool], bias: tuple[float, float]
+) -> moderngl.Texture:
+    """Every caster's depth into each tile's viewport (scissored) of one ``size``² depth
+    texture, cleared to 1; returns the texture (released with the scene)."""
+    gl = scene.ctx
+    tex: moderngl.Texture = scene.keep(gl.depth_texture((size, size)))
+    fbo = scene.keep(gl.framebuffer(depth_attachment=tex))
+    prog = program(gl, "depth_map.vert", "depth_map.frag")
+    clip = np.asarray(fit.world_to_clip, dtype=np.float64)
+    try:
+        fbo.use()
+        gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
+        gl.enable(moderngl.DEPTH_TEST)
+        gl.depth_func = "<"
+        fbo.depth_mask = True
+        fbo.clear(depth=1.0)
+        gl.polygon_offset = bias
+        for t, port in enumerate(np.asarray(fit.viewports)):
+            fbo.viewport = fbo.scissor = tuple(int(c) for c in port)
+            for body, mesh, casts in zip(scene.bodies, scene.meshes, cast, strict=True):
+                if casts:
+                    set_matrix(prog, "body_to_clip", clip[t] @ body.to_world)
+                    mesh.render(prog)
+    finally:
+        gl.polygon_offset = (0.0, 0.0)
+        fbo.scissor = None
+    tex.compare_func = ""  # read the stored depth itself (texelFetch)
+    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    return tex
+
+
+def _data_texture(gl: moderngl.Context, rows: NDArray[Any], components: int) -> moderngl.Texture:
+    """``(height, width, components)`` float32 data as a nearest-filtered float texture."""
+    h, w = rows.shape[:2]
+    tex = gl.texture(
+        (w, h), components, np.ascontiguousarray(rows, np.float32).tobytes(), dtype="f4"
+    )
+    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    return tex
+
+
+def _shade_all(
+    scene: GpuScene,
+    table: _Lights,
+    atlas: sm.ShadowAtlas,
+    fit: sm.AtlasFit,
+    depths: moderngl.Texture,
+    options: _Options,
+) -> AtlasFrame:
+    """The lit record, each light's mask, the picture; read back."""
+    gl = scene.ctx
+    texture = np.asarray(fit.world_to_texture, dtype=np.float64)
+    rect = np.concatenate([atlas.tile_rect, np.zeros((len(atlas.tile_rect), 1))], axis=1)
+    tile_rows = np.concatenate([texture, rect[:, None, :]], axis=1)  # (T, 5, 4)
+    faces = atlas.light_tiles.astype(np.float32)[..., None]  # (L, 6, 1)
+    data = [
+        scene.keep(_data_texture(gl, tile_rows, 4)),
+        scene.keep(_data_texture(gl, table.rows, 4)),
+        scene.keep(_data_texture(gl, faces, 1)),
+    ]
+    draw_lit(scene, options.ambient, options.background)
+    prog = program(gl, "surface.vert", "atlas.frag")
+    for unit, (name, tex) in enumerate(zip(("tiles", "lights", "faces"), data, strict=True), 2):
+        tex.use(location=unit)
+        set_uniform(prog, name, unit)
+    depths.use(location=0)
+    set_uniform(prog, "atlas", 0)
+    set_matrix(prog, "world_to_clip", scene.world_to_clip)
+    set_uniform(prog, "light_count", len(table.cube))
+    set_uniform(prog, "pcf_radius", options.pcf_radius)
+    set_uniform(prog, "ambient", options.ambient)
+    set_uniform(prog, "normal_offset", options.normal_offset)
+    try:
+        shadow = []
+        for light in range(len(table.cube)):
+            scene.clear_mask()
+            scene.bind_mask()
+            _draw_bodies(scene, prog, options.cast, mode=0, which=light)
+            shadow.append(read_texture(scene.mask_tex, 1)[..., 0])
+        scene.use(scene.color_fbo)
+        scene.color_fbo.depth_mask = False
+        scene.surface_tex.use(location=1)
+        gl.disable(moderngl.BLEND)
+        gl.enable(moderngl.DEPTH_TEST)
+        gl.depth_func = "<="
+        _draw_bodies(scene, prog, options.cast, mode=1, which=0)
+        color = read_texture(scene.color_tex, 4)[..., :3]
+    finally:
+        finish(scene)
+    return _frame(scene, color, np.stack(shadow), atlas, fit, depths)
+
+
+def _draw_bodies(
+    scene: GpuScene, prog: moderngl.Program, cast: Sequence[bool], mode: int, which: int
+) -> None:
+    set_uniform(prog, "mode", mode)
+    set_uniform(prog, "which", which)
+    for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
+        set_uniform(prog, "casts", float(cast[i]))
+        set_matrix(prog, "body_to_world", body.to_world)
+        set_uniform(prog, "albedo", tuple(body.color))
+        scene.bind_record(prog, i)
+        mesh.render(prog)
+
+
+def _frame(
+    scene: GpuScene,
+    color: NDArray[np.float32],
+    shadow: NDArray[np.float32],
+    atlas: sm.ShadowAtlas,
+    fit: sm.AtlasFit,
+    depths: moderngl.Texture,
+) -> AtlasFrame:
+    surface = read_texture(scene.surface_tex, 4)
+    normal = read_texture(scene.normal_tex, 4)[..., :3]
+    body = np.rint(surface[..., 3]).astype(np.int32) - 1
+    empty = (body < 0)[..., None]
+    size = atlas.atlas_size
+    stored = np.frombuffer(depths.read(alignment=1), dtype=np.float32).reshape(size, size)
+    return AtlasFrame(
+        color=np.clip(color, 0.0, 1.0).astype(np.float32),
+        shadow=shadow.astype(np.float32),
+        position=np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32),
+        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        body=body,
+        atlas=atlas,
+        fit=fit,
+        shadow_map=stored.copy(),
+    )
