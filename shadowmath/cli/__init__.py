@@ -15,6 +15,8 @@ The layers, each a client of the public API (``import shadowmath as sm``,
 * ``_run``: the device and its limits, the render, the files and the printout.
 * ``_cascades``: ``--method cascades``, its own large scene under a sun, drawn with
   cascaded shadow maps (``render_cascades``).
+* ``_atlas``: ``--method atlas``, a ground with blocks under many lights whose shadow
+  maps share one atlas (``render_atlas``).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from typing import Any
 
 import shadowmath as sm
 
+from ._atlas import draw_atlas
 from ._build import build_scene, check_light_and_mesh, fit_light
 from ._cascades import draw_cascades
 from ._options import OptionError, Options, build_parser, resolve_options
@@ -57,6 +60,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             if options.method == "cascades":
                 require_renderer()
                 printout = draw_cascades(options)
+            elif options.method == "atlas":
+                require_renderer()
+                printout = draw_atlas(options)
             else:
                 printout = _draw(options)
     except OptionError as err:

@@ -24,17 +24,17 @@ import shadowmath as sm
 from shadowmath import meshes
 
 #: A shadow system of ``--method`` (the ``method`` of ``render_scene``).
-Method = Literal["texture", "planar", "depth", "omni", "soft", "radiance", "cascades"]
+Method = Literal["texture", "planar", "depth", "omni", "soft", "radiance", "cascades", "atlas"]
 
 #: ``--method``'s shadow systems, and the options that apply to each.
 METHODS: tuple[Method, ...] = (
-    "texture", "planar", "depth", "omni", "soft", "radiance", "cascades",
+    "texture", "planar", "depth", "omni", "soft", "radiance", "cascades", "atlas",
 )  # fmt: skip
-DEPTH_BIAS_METHODS = ("depth", "omni", "soft", "cascades")
-PCF_METHODS = ("depth", "soft", "cascades")
+DEPTH_BIAS_METHODS = ("depth", "omni", "soft", "cascades", "atlas")
+PCF_METHODS = ("depth", "soft", "cascades", "atlas")
 AREA_LIGHT_METHODS = ("soft", "radiance")
 DIRECTIONAL_METHODS = ("planar", "depth", "cascades")
-MAP_OUTPUT_METHODS = ("texture", "depth", "omni")
+MAP_OUTPUT_METHODS = ("texture", "depth", "omni", "atlas")
 APIS = ("opengl", "webgpu")
 
 DEFAULT_LIGHT = (-2.2, 3.6, 6.0)
@@ -43,6 +43,11 @@ DEFAULT_SUN = (1.0, 0.4, 0.5)
 DEFAULT_MAP_SIZE = 256
 #: ``--method cascades``'s default map size, per cascade.
 DEFAULT_CASCADE_MAP_SIZE = 1024
+#: ``--method atlas``'s default atlas size (``--map-size``), and its default and largest
+#: ``--lights``.
+DEFAULT_ATLAS_SIZE = 4096
+DEFAULT_ATLAS_LIGHTS = 24
+MAX_ATLAS_LIGHTS = 256
 DEFAULT_IMAGE_SIZE = (640, 400)
 #: The default picture; its folder is the only one the demo creates when missing.
 DEFAULT_OUTPUT = Path("out/shadow.png")
@@ -99,6 +104,11 @@ shadow systems (--method):
             cascaded depth maps fitted to the camera (fit_cascades; --pcf,
             --depth-bias, --directional for the sun, --map-size per cascade,
             --cascade-colors FILE.png for the cascades coloured)
+  atlas     many lights (--lights N, default {DEFAULT_ATLAS_LIGHTS}: point lights with cube
+            maps, spots and suns) over a ground with blocks, their shadow maps
+            tiles of one atlas (allocate_atlas, fit_atlas; --map-size is the
+            atlas's, a power of two, default {DEFAULT_ATLAS_SIZE}; --pcf,
+            --depth-bias; --shadow-map-output writes the atlas)
   --directional X Y Z replaces the point light with a directional one
   (parallel rays, an orthographic depth map) for planar and depth.
   An option that does not apply to the chosen system is refused.
@@ -117,7 +127,8 @@ examples:
   python -m shadowmath --method depth --api webgpu
   python -m shadowmath --method depth --directional -1 2 1.5
   python -m shadowmath --method soft --area-light 1.5 1 --samples 64
-  python -m shadowmath --method cascades --cascade-colors out/cascades.png"""
+  python -m shadowmath --method cascades --cascade-colors out/cascades.png
+  python -m shadowmath --method atlas --lights 48 --shadow-map-output out/atlas.png"""
 
 
 class OptionError(ValueError):
@@ -225,6 +236,18 @@ def finite_float(text: str) -> float:
     return value
 
 
+def light_count(text: str) -> int:
+    """``--lights``: an integer from 1 to :data:`MAX_ATLAS_LIGHTS`."""
+    expected = f"expected an integer from 1 to {MAX_ATLAS_LIGHTS}"
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{expected}, got {text!r}") from None
+    if not 1 <= value <= MAX_ATLAS_LIGHTS:
+        raise argparse.ArgumentTypeError(f"{expected}, got {text!r}")
+    return value
+
+
 def positive_float(text: str) -> float:
     """``--area-light``: a finite number ``> 0``."""
     value = finite_float(text)
@@ -285,8 +308,16 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
         "--method",
         choices=METHODS,
         default="texture",
-        help="the shadow system, one of texture, planar, depth, omni, soft, radiance, cascades "
-        "(see 'shadow systems' below) (default: texture)",
+        help="the shadow system, one of texture, planar, depth, omni, soft, radiance, "
+        "cascades, atlas (see 'shadow systems' below) (default: texture)",
+    )
+    parser.add_argument(
+        "--lights",
+        type=light_count,
+        default=None,
+        metavar="N",
+        help="--method atlas only: how many lights, from 1 to "
+        f"{MAX_ATLAS_LIGHTS} (default: {DEFAULT_ATLAS_LIGHTS})",
     )
 
 
@@ -309,7 +340,7 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="K",
         help="percentage-closer filtering: each depth comparison averaged over a "
-        "(2K+1)x(2K+1) box of texels; --method depth, soft or cascades only (the omni pass "
+        "(2K+1)x(2K+1) box of texels; --method depth, soft, cascades or atlas only (the omni pass "
         "samples one cube-map texel) (default: 0, no filtering)",
     )
     parser.add_argument(
@@ -320,7 +351,7 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="the depth map's polygon offset against shadow acne, glPolygonOffset(FACTOR, "
         "UNITS): FACTOR times each caster triangle's depth slope plus UNITS depth steps; "
-        "--method depth, omni, soft or cascades (WebGPU rounds UNITS to an integer) "
+        "--method depth, omni, soft, cascades or atlas (WebGPU rounds UNITS to an integer) "
         f"(default: {DEFAULT_DEPTH_BIAS[0]:g}+2K {DEFAULT_DEPTH_BIAS[1]:g}, "
         "K the --pcf radius)",
     )
@@ -413,6 +444,7 @@ def check_combinations(args: argparse.Namespace) -> None:
         OptionError: naming the option, the method, and the methods it applies to (or
             ``--pcf`` and ``--map-size`` with their numbers).
     """
+    _check_atlas(args)
     _check_directional(args)
     _check_cascades(args)
     _check_api_and_map(args)
@@ -437,6 +469,33 @@ def _check_directional(args: argparse.Namespace) -> None:
             f"{given}: the demo's WebGPU renderer takes a point light; use --api opengl "
             "(the default) for a directional light"
         )
+
+
+def _check_atlas(args: argparse.Namespace) -> None:
+    """``--lights`` only with atlas; atlas places its own lights; its map size is the
+    atlas's, one power of two."""
+    if args.lights is not None and args.method != "atlas":
+        raise OptionError(
+            f"--lights {args.lights}: --method {args.method} draws one light; --lights "
+            "applies to --method atlas"
+        )
+    if args.method != "atlas":
+        return
+    for option, value in (("--light", args.light), ("--directional", args.directional)):
+        if value is not None:
+            raise OptionError(
+                f"{option} {shown(value)}: --method atlas places its own lights (point, spot "
+                "and directional, --lights N); leave it out"
+            )
+    size = args.map_size
+    if size is not None:
+        w, h = (size, size) if isinstance(size, int) else size
+        if w != h or w & (w - 1):
+            given = f"{w}" if w == h else f"{w}x{h}"
+            raise OptionError(
+                f"--map-size {given}: --method atlas's map is the atlas, one power of two "
+                f"(square), e.g. --map-size {1 << max(w, h).bit_length() - 1}"
+            )
 
 
 def _check_cascades(args: argparse.Namespace) -> None:
@@ -478,7 +537,8 @@ def _check_api_and_map(args: argparse.Namespace) -> None:
             "picture with its cascades coloured",
         }[method]
         raise OptionError(
-            f"--shadow-map-output: {why} (it writes the map of --method texture, depth or omni)"
+            f"--shadow-map-output: {why} (it writes the map of --method texture, depth, omni "
+            "or atlas)"
         )
 
 
@@ -493,12 +553,12 @@ def _check_method_options(args: argparse.Namespace) -> None:
         )
         raise OptionError(
             f"--pcf {args.pcf}: {why}; percentage-closer filtering applies to "
-            "--method depth, soft or cascades"
+            "--method depth, soft, cascades or atlas"
         )
     if args.depth_bias is not None and method not in DEPTH_BIAS_METHODS:
         raise OptionError(
             f"--depth-bias {shown(args.depth_bias)}: --method {method} draws no depth "
-            "map; the bias applies to --method depth, omni, soft or cascades"
+            "map; the bias applies to --method depth, omni, soft, cascades or atlas"
         )
     for option, value in (
         ("--area-light", args.area_light),
@@ -524,8 +584,8 @@ def _check_pcf_border(args: argparse.Namespace) -> None:
 
     The rule of :func:`shadowmath.border_margin` with :func:`depth_border_texels`.
     """
-    if args.pcf is None or args.method not in PCF_METHODS:
-        return
+    if args.pcf is None or args.method not in PCF_METHODS or args.method == "atlas":
+        return  # the atlas's tiles get their sizes (and room for the border) from the rule
     size = DEFAULT_MAP_SIZE if args.map_size is None else args.map_size
     border = depth_border_texels(args.pcf)
     if has_room(size, border):
@@ -586,6 +646,7 @@ class Options:
         output: the picture's resolved path.
         map_output: the shadow map's resolved path, or None.
         cascade_output: ``--cascade-colors``'s resolved path, or None.
+        lights: ``--lights``, the atlas's light count (read by atlas only).
         default_output: ``--output`` was not given: create its folder if missing.
     """
 
@@ -605,6 +666,7 @@ class Options:
     map_output: Path | None
     cascade_output: Path | None
     default_output: bool
+    lights: int = DEFAULT_ATLAS_LIGHTS
 
     @property
     def map_texels(self) -> tuple[int, int]:
@@ -636,7 +698,8 @@ def _map_size_of(args: argparse.Namespace) -> int | tuple[int, int]:
     """``--map-size``, or the method's default."""
     if args.map_size is not None:
         return cast(int | tuple[int, int], args.map_size)
-    return DEFAULT_CASCADE_MAP_SIZE if args.method == "cascades" else DEFAULT_MAP_SIZE
+    defaults = {"cascades": DEFAULT_CASCADE_MAP_SIZE, "atlas": DEFAULT_ATLAS_SIZE}
+    return defaults.get(args.method, DEFAULT_MAP_SIZE)
 
 
 def resolve_options(args: argparse.Namespace) -> Options:
@@ -697,4 +760,5 @@ def resolve_options(args: argparse.Namespace) -> Options:
         map_output=map_output,
         cascade_output=cascade_output,
         default_output=args.output is None,
+        lights=DEFAULT_ATLAS_LIGHTS if args.lights is None else args.lights,
     )

@@ -214,8 +214,8 @@ def _render_opengl(
     from shadowmath import render as gl_render
 
     method = options.method
-    if method == "cascades":  # drawn by _cascades.draw_cascades, never here
-        raise AssertionError("--method cascades is drawn by draw_cascades")
+    if method == "cascades" or method == "atlas":  # drawn by _cascades / _atlas, never here
+        raise AssertionError(f"--method {method} is drawn by its own module")
     light = _light(options, fit)
     try:
         frame = gl_render.render_scene(
