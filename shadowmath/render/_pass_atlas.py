@@ -21,7 +21,7 @@ import shadowmath as sm
 
 from ._context import check_matrix, program, resolve_context, set_matrix, set_uniform
 from ._context import image_size as _image_size
-from ._pass_depth import depth_bias_option, pcf_radius_option
+from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
 from ._pass_lit import draw_lit, finish
 from ._resources import Body, GpuScene, prepare_body, read_texture
 
@@ -244,13 +244,7 @@ def draw_atlas(
     prog = program(gl, "depth_map.vert", "depth_map.frag")
     clip = np.asarray(fit.world_to_clip, dtype=np.float64)
     try:
-        fbo.use()
-        gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
-        gl.enable(moderngl.DEPTH_TEST)
-        gl.depth_func = "<"
-        fbo.depth_mask = True
-        fbo.clear(depth=1.0)
-        gl.polygon_offset = bias
+        begin_depth_pass(gl, fbo, bias)
         for t, port in enumerate(np.asarray(fit.viewports)):
             fbo.viewport = fbo.scissor = tuple(int(c) for c in port)
             for body, mesh, casts in zip(scene.bodies, scene.meshes, cast, strict=True):

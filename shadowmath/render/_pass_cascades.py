@@ -22,7 +22,7 @@ import shadowmath as sm
 
 from ._context import check_matrix, program, resolve_context, set_matrix, set_uniform, uniform
 from ._context import image_size as _image_size
-from ._pass_depth import depth_bias_option, pcf_radius_option
+from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
 from ._pass_lit import draw_lit, finish, subtract_light
 from ._resources import Body, GpuScene, Light, Prepared, prepare_body, prepare_light, read_texture
 
@@ -290,13 +290,7 @@ def draw_cascade_maps(
         tex = gl.depth_texture(size)
         fbo = gl.framebuffer(depth_attachment=tex)
         try:
-            fbo.use()
-            gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
-            gl.enable(moderngl.DEPTH_TEST)
-            gl.depth_func = "<"
-            fbo.depth_mask = True
-            fbo.clear(depth=1.0)
-            gl.polygon_offset = bias
+            begin_depth_pass(gl, fbo, bias)
             for i in group:
                 x, y, w, h = (int(c) for c in ports[i])
                 fbo.viewport = (x, y, w, h)

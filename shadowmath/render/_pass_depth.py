@@ -31,6 +31,21 @@ def depth_bias(pcf_radius: int) -> tuple[float, float]:
     return factor + 2.0 * pcf_radius, units
 
 
+def begin_depth_pass(
+    gl: moderngl.Context, fbo: moderngl.Framebuffer, bias: tuple[float, float]
+) -> None:
+    """Draw depth only into ``fbo``: cleared to the far depth 1, test ``<``, writes on, no
+    blending or culling (both faces of a caster), ``glPolygonOffset(*bias)``. The caller
+    resets ``gl.polygon_offset`` to ``(0, 0)`` when done."""
+    fbo.use()
+    gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
+    gl.enable(moderngl.DEPTH_TEST)
+    gl.depth_func = "<"
+    fbo.depth_mask = True
+    fbo.clear(depth=1.0)
+    gl.polygon_offset = bias
+
+
 def pcf_radius_option(pcf_radius: object) -> int:
     """A pass's ``pcf_radius`` option, checked: an int ``>= 0``."""
     if not isinstance(pcf_radius, int | np.integer) or pcf_radius < 0:
@@ -101,14 +116,8 @@ def draw_depth_map(
     fbo = gl.framebuffer(depth_attachment=tex)
     prog = program(gl, "depth_map.vert", "depth_map.frag")
     try:
-        fbo.use()
         fbo.viewport = (0, 0, *scene.map_size)
-        gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
-        gl.enable(moderngl.DEPTH_TEST)
-        gl.depth_func = "<"
-        fbo.depth_mask = True
-        fbo.clear(depth=1.0)
-        gl.polygon_offset = bias
+        begin_depth_pass(gl, fbo, bias)
         for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
             set_matrix(prog, "body_to_clip", world_to_clip @ body.to_world)
             mesh.render(prog)
