@@ -22,9 +22,11 @@ import importlib
 import importlib.metadata
 import importlib.resources
 import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from mkdocs.exceptions import PluginError
 from mkdocs.plugins import event_priority
 
 _PACKAGES = ("shadowmath", "shadowmath.render")
@@ -104,6 +106,8 @@ _NB_MARKDOWN = re.compile(
     re.DOTALL,
 )
 _NB_CODE = re.compile(r"(<code>.*?</code>)", re.DOTALL)
+# A notebook links a docs page by its path from notebooks/, which Jupyter opens: ../docs/x.md#a
+_NB_DOCS_LINK = re.compile(r'href="\.\./docs/([^"#]+\.md)(#[^"]*)?"')
 
 
 def _foreign_script(script: str) -> bool:
@@ -121,23 +125,36 @@ def _arithmatex(html: str) -> str:
     return re.sub(r"(?<!\\)\$([^$]+?)(?<!\\)\$", r'<span class="arithmatex">\\(\1\\)</span>', html)
 
 
-def notebook_html(html: str) -> str:
-    """A notebook page's HTML from mkdocs-jupyter with the site's MathJax and no CDN scripts."""
+def notebook_html(html: str, page_url: Callable[[str], str]) -> str:
+    """A notebook page's HTML from mkdocs-jupyter, made a page of this site.
+
+    The site's MathJax typesets the markdown cells' math, nbconvert's CDN scripts are
+    dropped, and links to ``../docs/<page>.md`` lead to the page on the site
+    (``page_url`` gives its URL relative to the notebook's page).
+    """
     html = _NB_SCRIPT.sub(lambda m: "" if _foreign_script(m.group()) else m.group(), html)
 
     def cell(match: re.Match[str]) -> str:
         head, body, tail = match.groups()
         parts = _NB_CODE.split(body)  # odd items are code spans: their dollars stay
         body = "".join(part if k % 2 else _arithmatex(part) for k, part in enumerate(parts))
+        body = _NB_DOCS_LINK.sub(lambda m: f'href="{page_url(m[1])}{m[2] or ""}"', body)
         return head + body + tail
 
     return _NB_MARKDOWN.sub(cell, html)
 
 
-def on_page_content(html: str, *, page: Any, **kwargs: Any) -> str:
-    if page.file.src_uri in notebook_files():
-        return notebook_html(html)
-    return html
+def on_page_content(html: str, *, page: Any, files: Any, **kwargs: Any) -> str:
+    if page.file.src_uri not in notebook_files():
+        return html
+
+    def page_url(src_uri: str) -> str:
+        target = files.get_file_from_path(src_uri)
+        if target is None or not target.is_documentation_page():
+            raise PluginError(f"{page.file.src_uri} links to docs/{src_uri}: no such page")
+        return str(target.url_relative_to(page.file))
+
+    return notebook_html(html, page_url)
 
 
 def _exported() -> list[str]:
