@@ -142,7 +142,9 @@ def render_atlas(
     Raises:
         ValueError: bad bodies, lights, matrices, sizes or options, no caster; and
             whatever :func:`shadowmath.allocate_atlas` and :func:`shadowmath.fit_atlas`
-            raise.
+            raise (among them a caster vertex behind a spot light: its fit, as
+            :func:`shadowmath.fit_shadow`'s, needs every caster in front of the light,
+            even outside the cone).
         GLUnavailableError: no OpenGL context could be created.
 
     Example:
