@@ -49,11 +49,24 @@ def standalone_context() -> moderngl.Context:
                 f"{', '.join(DEBIAN_PACKAGES)} (apt-get install -y {' '.join(DEBIAN_PACKAGES)})"
             ) from err
         _default.append(ctx)
-    return _default[0]
+    return make_current(_default[0])
+
+
+def make_current(ctx: moderngl.Context) -> moderngl.Context:
+    """Make ``ctx`` the thread's current GL context again, and return it.
+
+    Another library's graphics work on this thread can leave its own context current:
+    pygfx's offscreen canvas does (wgpu on Mesa), after which every GL call on ours
+    fails (moderngl: "cannot create buffer"). moderngl's ``__enter__`` makes the context
+    current; its ``__exit__``, which would restore the other one, is not called.
+    """
+    ctx.__enter__()  # type: ignore[no-untyped-call]
+    return ctx
 
 
 def resolve_context(ctx: moderngl.Context | None) -> moderngl.Context:
-    return standalone_context() if ctx is None else ctx
+    """``ctx``, or the shared :func:`standalone_context`, made current."""
+    return standalone_context() if ctx is None else make_current(ctx)
 
 
 def shader_source(name: str) -> str:

@@ -68,6 +68,20 @@ def pygfx_canvas(gfx) -> Any:
     return canvas, renderer
 
 
+@pytest.fixture(scope="module", autouse=True)
+def _gl_current_after_pygfx() -> Any:
+    """pygfx's rendering leaves its own context current on this thread: after this module,
+    make the reference renderer's shared GL context current again for the tests that use
+    it directly (its render functions do so themselves: render.resolve_context)."""
+    yield
+    try:
+        from shadowmath.render import standalone_context
+
+        standalone_context()
+    except Exception:  # no GL here: the GL tests report it themselves
+        pass
+
+
 # ---- scenes ------------------------------------------------------------------------------
 
 
@@ -482,3 +496,31 @@ def test_pygfx_narrow_fit_widens_the_frustum_and_cuts_the_window(gfx):
     camera = set_shadow_camera(gfx.SpotLight(), setup)
     assert camera.fov == pytest.approx(1.0, abs=1e-9)
     assert np.allclose(camera.camera_matrix, setup.blocker_to_clip, rtol=1e-6, atol=1e-5)
+
+
+#: A fresh process: the GL context first, then pygfx's first renderer, whose wgpu instance
+#: (probing every backend, EGL included) leaves its own context current; then a render.
+AFTER_PYGFX = """
+import numpy as np, pygfx as gfx, shadowmath as sm
+from rendercanvas.offscreen import RenderCanvas
+from shadowmath.render import render_shadow_map, standalone_context
+gl = standalone_context()
+gfx.renderers.WgpuRenderer(RenderCanvas(size=(8, 8), pixel_ratio=1))
+box = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], float)
+setup = sm.fit_shadow([0.0, 0.0, 0.0], box, 16)
+mask = render_shadow_map(box, [[0, 4, 6], [0, 6, 2]], setup.blocker_to_clip, 16, ctx=gl)
+assert mask[0].max() == 0 and mask[1:-1, 1:-1].min() == 1  # the border, the face
+print("drawn")
+"""
+
+
+def test_the_reference_renderer_draws_after_pygfx(pygfx_canvas, gl):
+    """pygfx's first renderer leaves another context current on the thread; the reference
+    renderer's functions make theirs current again (render.resolve_context) instead of
+    failing every GL call ("cannot create buffer")."""
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-c", AFTER_PYGFX], capture_output=True, text=True,
+                         timeout=300, check=False)  # fmt: skip
+    assert run.returncode == 0 and "drawn" in run.stdout, run.stderr[-2000:]
