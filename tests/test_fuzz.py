@@ -2456,6 +2456,12 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "smooth_frustum": ("test_fuzz_offcenter_and_smooth_frusta",),
     "smooth_max": ("test_fuzz_smooth_max",),
     "texel_world_size": ("test_fuzz_bias_and_texel_size", "test_fuzz_bias_jax_eager_jit_vmap"),
+    "AtlasFit": ("test_fuzz_fit_atlas",),
+    "ShadowAtlas": ("test_fuzz_allocate_atlas",),
+    "allocate_atlas": ("test_fuzz_allocate_atlas",),
+    "atlas_tile_transforms": ("test_fuzz_fit_atlas",),
+    "atlas_viewports": ("test_fuzz_fit_atlas",),
+    "fit_atlas": ("test_fuzz_fit_atlas",),
     "world_to_light": ("test_fuzz_light_frame",),
 }  # fmt: skip
 
@@ -2540,3 +2546,140 @@ def test_fuzz_spot_light_jax_at_small_scale(
     np.testing.assert_allclose(_f64(got.blocker_to_clip), _f64(want.blocker_to_clip),
                                rtol=1e-3 if np.dtype(dtype) == np.float32 else 1e-9,
                                atol=scale)  # fmt: skip
+
+
+# ---- the shadow atlas ------------------------------------------------------------------------
+
+
+@st.composite
+def atlas_wishes(draw: Any) -> dict[str, Any]:
+    """Coverage (zeros included), cube flags, borders and the atlas's options."""
+    count = draw(st.integers(1, 24))
+    return {
+        "coverage": np.array(draw(st.lists(
+            st.one_of(st.just(0.0), st.floats(0.0, 2.0)), min_size=count, max_size=count))),
+        "cube": np.array(draw(st.lists(st.booleans(), min_size=count, max_size=count))),
+        "border_texels": np.array(draw(st.lists(st.integers(0, 3), min_size=count,
+                                                max_size=count))),
+        "atlas_size": draw(st.sampled_from([256, 1024, 4096])),
+        "budget": draw(st.sampled_from([1.0, 0.5, 0.1, 0.01])),
+        "hysteresis": draw(st.sampled_from([0.0, 0.1, 0.3])),
+    }  # fmt: skip
+
+
+@given(wishes=atlas_wishes(), noise=st.floats(0.0, 0.02), seed=st.integers(0, 2**32 - 1))
+def test_fuzz_allocate_atlas(wishes: dict[str, Any], noise: float, seed: int) -> None:
+    """A valid quadtree layout for any wishes, sizes that never favour the lower-ranked
+    light, Godot's classes when the budget admits them, the same atlas for the same
+    inputs, and no tile moved by coverage noise that changes no light's size."""
+    from .test_atlas import check_layout, godot_class
+
+    CASES["allocate_atlas"] += 1
+    a = sm.allocate_atlas(**wishes)
+    check_layout(a)
+    assert np.array_equal(sm.allocate_atlas(**wishes).tile_rect, a.tile_rect)
+    size = wishes["atlas_size"]
+    smallest = int(max(size // 64, 4 * wishes["border_texels"].max()))
+    wish = [godot_class(c, size // 2, 1 << (smallest - 1).bit_length()) for c in wishes["coverage"]]
+    assert a.light_wish.tolist() == wish
+    area = sum(w * w * (6 if c else 1) for w, c in zip(wish, wishes["cube"], strict=True))
+    if area <= wishes["budget"] * size * size:
+        assert a.light_size.tolist() == wish
+    order = sorted(range(len(wish)), key=lambda i: (-wish[i], i))
+    sizes = a.light_size[order]
+    assert np.all(sizes[:-1] >= sizes[1:])  # the light ahead never gets the smaller tile
+    rng = np.random.default_rng(seed)
+    moved = wishes["coverage"] * (1 + noise * rng.uniform(-1, 1, len(wish)))
+    b = sm.allocate_atlas(**{**wishes, "coverage": moved}, previous=a)
+    check_layout(b)
+    if np.array_equal(b.light_size, a.light_size) and not b.repacked:
+        assert not b.moved.any()
+
+
+@st.composite
+def atlas_scenes(draw: Any) -> tuple[np.ndarray, list[Any], np.ndarray]:
+    """Casters in the unit cube and 1 to 8 lights: cube point lights anywhere off the
+    casters, 2D point lights and spots (aimed at the origin) 3 to 6 away, suns."""
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    verts = rng.uniform(-1, 1, (draw(st.integers(4, 24)), 3))  # a silhouette of some width
+    lights, cube = [], []
+    for _ in range(draw(st.integers(1, 8))):
+        kind = draw(st.sampled_from(["cube", "point", "spot", "sun"]))
+        direction = draw(unit_vectors())
+        far_away = direction * draw(st.floats(3.0, 6.0))
+        if kind == "cube":
+            p = rng.uniform(-3, 3, 3)
+            assume(np.abs(verts - p).max(axis=1).min() > 0.05)
+            lights.append(sm.PointLight(p))
+        elif kind == "point":
+            lights.append(sm.PointLight(far_away))
+        elif kind == "spot":
+            angle = draw(st.floats(0.2, 1.2))
+            lights.append(sm.SpotLight(far_away, -far_away, np.array(angle)))
+        else:
+            lights.append(sm.DirectionalLight(direction))
+        cube.append(kind == "cube")
+    return verts, lights, np.array(cube)
+
+
+@given(
+    scene=atlas_scenes(),
+    api=st.sampled_from(GRAPHICS_APIS),
+    reversed_z=st.booleans(),
+    border=st.integers(1, 3),
+    coverage=st.floats(0.05, 1.0),
+)
+def test_fuzz_fit_atlas(scene: Any, api: Any, reversed_z: bool, border: int,
+                        coverage: float) -> None:  # fmt: skip
+    """Every tile's matrices are its light's own fit moved into the tile: a 2D tile's clip
+    matrix is fit_shadow's for its size and border, and every caster it draws samples the
+    tile's inner texels; every caster of a cube light samples, in the face tile that
+    sm.cube_face picks, a texel inside that tile at a depth in [0, 1]."""
+    verts, lights, cube = scene
+    CASES["fit_atlas"] += 1
+    a = sm.allocate_atlas(np.full(len(lights), coverage), atlas_size=2048, cube=cube,
+                          border_texels=border)  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sm.ShadowFitWarning)
+        fit = sm.fit_atlas(lights, verts, a, api=api, reversed_z=reversed_z)
+    assert np.array_equal(fit.viewports, sm.atlas_viewports(a, api=api))
+    assert np.array_equal(fit.viewports[:, 2], a.tile_rect[:, 2])
+    moves = sm.atlas_tile_transforms(a, api=api)
+    A = a.atlas_size
+    for i, light in enumerate(lights):
+        n = int(a.light_size[i])
+        if cube[i]:
+            faces = sm.cube_face(verts - np.asarray(light.position)).face
+            tiles = a.light_tiles[i, faces]
+        else:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", sm.ShadowFitWarning)
+                ref = sm.fit_shadow(light, verts, n, border_texels=border, api=api,
+                                    reversed_z=reversed_z)  # fmt: skip
+            t = a.light_tiles[i, 0]
+            scale = np.abs(ref.blocker_to_clip).max()
+            assert np.allclose(fit.world_to_clip[t], ref.blocker_to_clip, rtol=1e-9,
+                               atol=1e-12 * scale)  # fmt: skip
+            tiles = np.full(len(verts), t)
+            expected = moves[t] @ ref.world_to_texture
+            assert np.allclose(fit.world_to_texture[t], expected, rtol=1e-9,
+                               atol=1e-12 * np.abs(expected).max())  # fmt: skip
+        stq = np.einsum(
+            "vij,vj->vi", fit.world_to_texture[tiles], np.c_[verts, np.ones(len(verts))]
+        )
+        assert np.all(stq[:, 3] > 0)
+        s, t_, r = (stq[:, :3] / stq[:, 3:]).T
+        x, y = a.tile_rect[tiles, 0], a.tile_rect[tiles, 1]
+        inside = np.ones(len(verts), dtype=bool)
+        if isinstance(light, sm.SpotLight):  # the map is clipped to the cone's square
+            axis = -np.asarray(light.position) / np.linalg.norm(light.position)
+            d = verts - np.asarray(light.position)
+            inside = d @ axis >= np.cos(float(light.angle)) * np.linalg.norm(d, axis=1)
+        inner = 0 if cube[i] else border
+        slack = 1e-7 * A
+        col, row = s * A, t_ * A
+        assert np.all(col[inside] >= x[inside] + inner - slack)
+        assert np.all(col[inside] <= x[inside] + n - inner + slack)
+        assert np.all(row[inside] >= y[inside] + inner - slack)
+        assert np.all(row[inside] <= y[inside] + n - inner + slack)
+        assert np.all((r > -1e-9) & (r < 1 + 1e-9))
