@@ -214,25 +214,41 @@ def _light_table(lights: Sequence[AtlasLight], colors: Any) -> _Lights:
         raise ValueError(f"colors: expected ({count}, 3) finite values >= 0, got {rgb.shape}")
     rows = np.zeros((count, 4, 4))
     rows[:, 2, 3] = -2.0
-    for i, light in enumerate(lights):
-        if isinstance(light, sm.DirectionalLight):
-            d = np.asarray(light.direction, dtype=np.float64)
-            rows[i, 0] = [*(d / np.linalg.norm(d)), 0.0]
-        elif isinstance(light, sm.PointLight | sm.SpotLight):
-            rows[i, 0] = [*np.asarray(light.position, dtype=np.float64), 1.0]
-        else:
-            raise ValueError(
-                f"lights[{i}]: expected an sm.PointLight, sm.SpotLight or sm.DirectionalLight, "
-                f"got {type(light).__name__}"
-            )
-        if isinstance(light, sm.SpotLight):
-            axis = np.asarray(light.direction, dtype=np.float64)
-            rows[i, 2] = [*(axis / np.linalg.norm(axis)), np.cos(float(light.angle))]
-        rows[i, 3, 0] = float(isinstance(light, sm.PointLight))
+    with np.errstate(all="ignore"):  # a zero direction's NaNs are refused below
+        for i, light in enumerate(lights):
+            rows[i] = _light_rows(i, light, rows[i])
     rows[:, 1, :3] = rgb
-    if not np.all(np.isfinite(rows)):
-        raise ValueError("lights: positions, directions and angles must be finite and nonzero")
+    bad = np.flatnonzero(~np.isfinite(rows).all(axis=(1, 2)))
+    if bad.size:
+        raise ValueError(
+            f"lights[{bad[0]}]: its position, direction and angle must be finite, the "
+            "direction nonzero"
+        )
     return _Lights(rows.astype(np.float32), rows[:, 3, 0] > 0.5)
+
+
+def _light_rows(i: int, light: Any, rows: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Light ``i``'s shader rows (``rows`` as initialised: the spot row's ``w = -2``)."""
+    if isinstance(light, AtlasLight) and np.shape(light[0]) != (3,):
+        raise ValueError(
+            f"lights[{i}]: expected one light (a (3,) vector), got a batch of shape "
+            f"{np.shape(light[0])}; list its lights one by one"
+        )
+    if isinstance(light, sm.DirectionalLight):
+        d = np.asarray(light.direction, dtype=np.float64)
+        rows[0] = [*(d / np.linalg.norm(d)), 0.0]
+    elif isinstance(light, sm.PointLight | sm.SpotLight):
+        rows[0] = [*np.asarray(light.position, dtype=np.float64), 1.0]
+    else:
+        raise ValueError(
+            f"lights[{i}]: expected an sm.PointLight, sm.SpotLight or sm.DirectionalLight, "
+            f"got {type(light).__name__}"
+        )
+    if isinstance(light, sm.SpotLight):
+        axis = np.asarray(light.direction, dtype=np.float64)
+        rows[2] = [*(axis / np.linalg.norm(axis)), np.cos(float(light.angle))]
+    rows[3, 0] = float(isinstance(light, sm.PointLight))
+    return rows
 
 
 def draw_atlas(

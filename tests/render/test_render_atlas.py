@@ -199,6 +199,15 @@ def test_errors_name_the_argument(gl, kwargs, match):
         render(gl, **kwargs)
 
 
-def test_a_light_of_another_kind_is_refused(gl):
-    with pytest.raises(ValueError, match=r"lights\[1\]"):
-        render_atlas(BODIES, [LIGHTS[0], (1.0, 2.0, 3.0)], VIEW, PROJECTION, ctx=gl)
+@pytest.mark.parametrize(
+    ("light", "match"),
+    [
+        ((1.0, 2.0, 3.0), "expected an sm.PointLight"),
+        (sm.PointLight(np.zeros((2, 3))), "a batch of shape"),
+        (sm.DirectionalLight(np.zeros(3)), "the direction nonzero"),
+        (sm.PointLight(np.array([np.nan, 1.0, 2.0])), "must be finite"),
+    ],
+)
+def test_a_light_that_is_not_one_light_is_refused(gl, light, match):
+    with pytest.raises(ValueError, match=r"lights\[1\]: .*" + match):
+        render_atlas(BODIES, [LIGHTS[0], light], VIEW, PROJECTION, ctx=gl)
