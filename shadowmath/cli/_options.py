@@ -199,19 +199,24 @@ def positive_int(text: str) -> int:
     return value
 
 
-def sample_count(text: str) -> int:
-    """``--samples``: an integer from 1 to :data:`MAX_SAMPLES`."""
-    expected = f"expected an integer from 1 to {MAX_SAMPLES}"
+def _count(text: str, most: int, why: str = "") -> int:
+    """An integer from 1 to ``most``; ``why`` follows the range in the message when out of it."""
+    expected = f"expected an integer from 1 to {most}"
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{expected}, got {text!r}") from None
-    if not 1 <= value <= MAX_SAMPLES:
-        raise argparse.ArgumentTypeError(
-            f"{expected} (each sample draws the scene once more: a depth map with soft, the "
-            f"blocker into each receiver's texture with radiance), got {text!r}"
-        )
+    if not 1 <= value <= most:
+        raise argparse.ArgumentTypeError(f"{expected}{why}, got {text!r}")
     return value
+
+
+def sample_count(text: str) -> int:
+    """``--samples``: an integer from 1 to :data:`MAX_SAMPLES`."""
+    return _count(
+        text, MAX_SAMPLES, " (each sample draws the scene once more: a depth map with soft, "
+        "the blocker into each receiver's texture with radiance)",
+    )  # fmt: skip
 
 
 def non_negative_int(text: str) -> int:
@@ -238,14 +243,7 @@ def finite_float(text: str) -> float:
 
 def light_count(text: str) -> int:
     """``--lights``: an integer from 1 to :data:`MAX_ATLAS_LIGHTS`."""
-    expected = f"expected an integer from 1 to {MAX_ATLAS_LIGHTS}"
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{expected}, got {text!r}") from None
-    if not 1 <= value <= MAX_ATLAS_LIGHTS:
-        raise argparse.ArgumentTypeError(f"{expected}, got {text!r}")
-    return value
+    return _count(text, MAX_ATLAS_LIGHTS)
 
 
 def positive_float(text: str) -> float:

@@ -181,10 +181,11 @@ def render_atlas(
         cube=table.cube, border_texels=sm.pcf_border_texels(k), previous=previous,
         budget=budget,
     )  # fmt: skip
-    points = np.concatenate([b.world_vertices() for b, c in zip(prepared, cast, strict=True) if c])
+    world = [b.world_vertices() for b in prepared]
+    points = np.concatenate([v for v, c in zip(world, cast, strict=True) if c])
     # Every body's triangles hold what the shadows fall on: a ground's corners may lie
     # outside a light's map while its middle is under the casters.
-    surfaces = np.concatenate([b.world_vertices()[b.triangles] for b in prepared])
+    surfaces = np.concatenate([v[b.triangles] for v, b in zip(world, prepared, strict=True)])
     fit = sm.fit_atlas(list(lights), points, atlas, receivers=sm.Triangles(surfaces), pcf_radius=k)
     gl = resolve_context(ctx)
     with GpuScene(gl, prepared, (), [], p @ v, size, (atlas.atlas_size,) * 2) as scene:
@@ -359,17 +360,14 @@ def _frame(
     fit: sm.AtlasFit,
     depths: moderngl.Texture,
 ) -> AtlasFrame:
-    surface = read_texture(scene.surface_tex, 4)
-    normal = read_texture(scene.normal_tex, 4)[..., :3]
-    body = np.rint(surface[..., 3]).astype(np.int32) - 1
-    empty = (body < 0)[..., None]
+    position, normal, body = scene.read_record()
     size = atlas.atlas_size
     stored = np.frombuffer(depths.read(alignment=1), dtype=np.float32).reshape(size, size)
     return AtlasFrame(
         color=np.clip(color, 0.0, 1.0).astype(np.float32),
         shadow=shadow.astype(np.float32),
-        position=np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32),
-        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        position=position,
+        normal=normal,
         body=body,
         atlas=atlas,
         fit=fit,

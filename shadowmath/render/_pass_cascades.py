@@ -239,18 +239,14 @@ def _draw(
     finally:
         maps.release()
         finish(scene)
-    surface = read_texture(scene.surface_tex, 4)
-    normal = read_texture(scene.normal_tex, 4)[..., :3]
-    body = np.rint(surface[..., 3]).astype(np.int32) - 1
-    empty = (body < 0)[..., None]
-    position = np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32)
+    position, normal, body = scene.read_record()
     return CascadeFrame(
         color=np.clip(color, 0.0, 1.0).astype(np.float32),
         cascade_color=None if tinted is None else tinted.astype(np.float32),
         shadow=shadow.astype(np.float32),
         cascade=cascade_index(position, view, np.asarray(fit.splits)),
         position=position,
-        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        normal=normal,
         body=body,
         cascades=fit,
         shadow_maps=depths,

@@ -289,6 +289,18 @@ class GpuScene:
         set_uniform(prog, "surface", 1)
         set_uniform(prog, "body_id", float(body_id))
 
+    def read_record(
+        self,
+    ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.int32]]:
+        """The lit pass's per-pixel record, row 0 at the top: ``(H, W, 3)`` world position and
+        unit face normal (NaN on the background) and ``(H, W)`` body id (``-1`` there)."""
+        surface = read_texture(self.surface_tex, 4)
+        normal = read_texture(self.normal_tex, 4)[..., :3]
+        body = np.rint(surface[..., 3]).astype(np.int32) - 1
+        empty = (body < 0)[..., None]
+        position = np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32)
+        return position, np.where(empty, np.float32(np.nan), normal).astype(np.float32), body
+
     def clear_mask(self) -> None:
         """Clear the mask target for the next light (the shared depth stays)."""
         self.use(self.mask_fbo)

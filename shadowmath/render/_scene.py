@@ -264,15 +264,12 @@ def _draw(
         subtract_light(scene, light, shadowed)
     finish(scene)
     color = read_texture(scene.color_tex, 4)[..., :3]
-    surface = read_texture(scene.surface_tex, 4)
-    normal = read_texture(scene.normal_tex, 4)[..., :3]
-    body = np.rint(surface[..., 3]).astype(np.int32) - 1
-    empty = (body < 0)[..., None]
+    position, normal, body = scene.read_record()
     return Frame(
         color=np.clip(color, 0.0, 1.0).astype(np.float32),
         shadow=np.stack(shadows, axis=-1).astype(np.float32),
-        position=np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32),
-        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        position=position,
+        normal=normal,
         body=body,
         setups=setups,
         shadow_maps=tuple(maps),

@@ -9,6 +9,13 @@ from typing import Any
 import pytest
 
 
+def unavailable(message: str) -> None:
+    """A missing graphics API: a failure under SHADOWMATH_REQUIRE_GL=1 (CI), else a skip."""
+    if os.environ.get("SHADOWMATH_REQUIRE_GL") == "1":
+        pytest.fail(f"SHADOWMATH_REQUIRE_GL=1: {message}")
+    pytest.skip(message)
+
+
 @pytest.fixture(scope="session")
 def gl() -> Any:
     """The shared offscreen moderngl context (EGL; Mesa llvmpipe without a GPU)."""
@@ -23,9 +30,7 @@ def gl() -> Any:
                 "; install the 'render' extra and the Debian packages libegl1, libgl1 and "
                 "libgl1-mesa-dri (apt-get install -y libegl1 libgl1 libgl1-mesa-dri)"
             )
-        if os.environ.get("SHADOWMATH_REQUIRE_GL") == "1":
-            pytest.fail(f"SHADOWMATH_REQUIRE_GL=1: {message}")
-        pytest.skip(message)
+        unavailable(message)
 
 
 @pytest.fixture(scope="session")
@@ -42,6 +47,4 @@ def wgpu_device() -> Any:
                 "; install the 'render' extra (wgpu) and the Debian package "
                 "mesa-vulkan-drivers (apt-get install -y mesa-vulkan-drivers)"
             )
-        if os.environ.get("SHADOWMATH_REQUIRE_GL") == "1":
-            pytest.fail(f"SHADOWMATH_REQUIRE_GL=1: {message}")
-        pytest.skip(message)
+        unavailable(message)

@@ -13,7 +13,6 @@ can fail), and their texels are several times larger on the receivers.
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -25,6 +24,7 @@ import shadowmath as sm
 from shadowmath.groundtruth import segment_hits_triangles
 from shadowmath.meshes import box, grid, torus
 
+from .conftest import unavailable
 from .scenes import edge_band, place, rotation
 
 SIZE = (200, 150)  # the picture, width x height
@@ -34,13 +34,10 @@ DOCS = Path(__file__).resolve().parents[2] / "docs" / "pygfx.md"
 
 
 def _unavailable(err: Exception) -> None:
-    message = (
+    unavailable(
         f"no pygfx offscreen renderer: {err}; install the 'pygfx' extra and the Debian "
         "package mesa-vulkan-drivers (apt-get install -y mesa-vulkan-drivers)"
     )
-    if os.environ.get("SHADOWMATH_REQUIRE_GL") == "1":
-        pytest.fail(f"SHADOWMATH_REQUIRE_GL=1: {message}")
-    pytest.skip(message)
 
 
 @pytest.fixture(scope="session")
