@@ -53,6 +53,8 @@ from ._fits._camera import shadow_camera as shadow_camera
 from ._fits._cascade_splits import cascade_splits as cascade_splits
 from ._fits._cascades import Cascades as Cascades
 from ._fits._cascades import fit_cascades as fit_cascades
+from ._fits._cube_depth import CubeDepthRange as CubeDepthRange
+from ._fits._cube_depth import cube_depth_range as cube_depth_range
 from ._fits._fitting import FrustumFit as FrustumFit
 from ._fits._fitting import optimize_frustum as optimize_frustum
 from ._fits._setup import fit_shadow as fit_shadow
@@ -113,6 +115,7 @@ __all__ = [
     "ApiConvention",
     "AtlasFit",
     "Cascades",
+    "CubeDepthRange",
     "CubeFaceCoords",
     "CubeFaceDepth",
     "DirectionalLight",
@@ -142,6 +145,7 @@ __all__ = [
     "check_finite",
     "column_major_bytes",
     "cross_section_area",
+    "cube_depth_range",
     "cube_face",
     "cube_face_depth",
     "cube_face_direction",

@@ -2387,11 +2387,50 @@ def test_fuzz_shadow_camera(data: st.DataObject) -> None:
         np.testing.assert_allclose(M @ view, np.eye(4), atol=1e-9 * max(1, np.abs(cam.eye).max()))
 
 
+@given(data=st.data())
+def test_fuzz_cube_depth_range(data: st.DataObject) -> None:
+    """Random lights, caster triangles at every scale and border rings: every point of every
+    caster triangle that any face draws (ring included) lies at a view depth in
+    [near, far]; near is k (1 - s) times the exact nearest Chebyshev distance (a linear
+    program per triangle); far holds the receivers' corners."""
+    from .test_cube_depth import lp_min_chebyshev
+
+    CASES["cube_depth_range"] += 1
+    scale = 10.0 ** data.draw(st.integers(-3, 3))
+    light = np.array(data.draw(st.tuples(*[st.floats(-1, 1)] * 3))) * scale
+    count = data.draw(st.integers(1, 4))
+    corners = data.draw(st.lists(st.floats(-5, 5), min_size=9 * count, max_size=9 * count))
+    triangles = light + np.reshape(corners, (count, 3, 3)) * scale
+    nearest = min(lp_min_chebyshev(t, light) for t in triangles)
+    assume(nearest > 1e-6 * scale)  # a caster at the light is refused (tested elsewhere)
+    size = data.draw(st.integers(2, 2048))
+    border = data.draw(st.integers(0, (size - 1) // 2))
+    k = (size - 2 * border) / size
+    floor = light + np.array([[[-9, -9, -7], [9, -9, -7], [0, 9, -7.0]]]) * scale
+    got = sm.cube_depth_range(light, sm.Triangles(triangles), receivers=sm.Triangles(floor),
+                              map_size=size, border_texels=border)  # fmt: skip
+    near, far = float(got.near), float(got.far)
+    assert near == pytest.approx(k * (1 - sm.NEAR_FAR_SLACK) * nearest, rel=1e-7)
+    assert far >= np.abs(np.concatenate([triangles, floor]) - light).max() * (1 + 0.5 / 64)
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    u, v = rng.uniform(0, 1, (2, 400))
+    u, v = np.where(u + v > 1, 1 - u, u), np.where(u + v > 1, 1 - v, v)
+    pick = triangles[rng.integers(0, count, 400)]
+    A, B, C = pick[:, 0], pick[:, 1], pick[:, 2]
+    points = A + u[:, None] * (B - A) + v[:, None] * (C - A)
+    V = np.asarray(sm.cube_face_views(light))
+    view = np.einsum("fij,nj->fni", V, np.c_[points, np.ones(len(points))])
+    depth = -view[..., 2]
+    drawn = (depth > 0) & (np.abs(view[..., 0]) * k <= depth) & (np.abs(view[..., 1]) * k <= depth)
+    assert np.all(depth[drawn] >= near * (1 - 1e-12)) and np.all(depth[drawn] <= far)
+
+
 PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "GRAPHICS_APIS": ("test_fuzz_api_convention", "test_fuzz_fit_shadow_scene_options"),
     "NEAR_FAR_SLACK": ("test_fuzz_fit_shadow_scene_options",),
     "ApiConvention": ("test_fuzz_api_convention",),
     "Cascades": ("test_fuzz_fit_cascades",),
+    "CubeDepthRange": ("test_fuzz_cube_depth_range",),
     "CubeFaceCoords": ("test_fuzz_cube_face", "test_fuzz_cube_jax_eager_jit_vmap"),
     "CubeFaceDepth": ("test_fuzz_cube_face_projection_and_depth",),
     "DirectionalLight": ("test_fuzz_fit_shadow_scene_options",
@@ -2420,6 +2459,7 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "check_finite": ("test_fuzz_check_finite",),
     "column_major_bytes": ("test_fuzz_fit_shadow",),
     "cross_section_area": ("test_fuzz_cross_section_area", "test_fuzz_optimize_frustum"),
+    "cube_depth_range": ("test_fuzz_cube_depth_range",),
     "cube_face": ("test_fuzz_cube_face", "test_fuzz_cube_jax_eager_jit_vmap"),
     "cube_face_depth": ("test_fuzz_cube_face_projection_and_depth",
                         "test_fuzz_cube_jax_eager_jit_vmap"),

@@ -44,11 +44,12 @@ from shadowmath._math._bias import PcfFilter, _check_kernel
 from shadowmath._math._conventions import GraphicsApi, _check_api, _texture_from_clip
 from shadowmath._math._cube import _APIS, _cube_face_views, _depth_row
 from shadowmath._math._frame import stack_matrix
-from shadowmath._math._frustum import NEAR_FAR_SLACK, border_margin
+from shadowmath._math._frustum import border_margin
 from shadowmath._math._pcf import _border_texels
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 
 from . import _compiled
+from ._cube_depth import AT_LIGHT, cube_depth_core
 from ._fit_arrays import Inputs, driver, fit_arrays
 from ._setup import _receiver_kind, _receiver_rows
 from ._spec import FitKey, api_rows
@@ -881,26 +882,16 @@ def _fit_cubes(
     if not bool(xp.all(xp.isfinite(P))):
         bad = int(cubes[np.flatnonzero(~np.isfinite(np.asarray(P)).all(axis=1))[0]])
         raise ValueError(f"lights[{bad}]: {non_finite('light')}")
-    # Components first, (C, 3, N): NumPy reduces a trailing axis of 3 slowly.
-    VT = xp.matrix_transpose(verts[None] if verts.ndim == 2 else verts[cubes])
-    offsets = xp.abs(VT - P[:, :, None])
-    D = xp.maximum(xp.maximum(offsets[:, 0], offsets[:, 1]), offsets[:, 2])  # face depth
-    d_min, d_max = xp.min(D, axis=-1), xp.max(D, axis=-1)
-    if R is not None:  # a triangle's largest D is at a corner (D is convex)
-        corners = xp.reshape(R, (-1, 3))
-        d_max = xp.maximum(d_max, xp.max(xp.abs(corners[None] - P[:, None, :]), axis=(-2, -1)))
     size = atlas.light_size[cubes].astype(np.float64)
     k = xp.asarray((size - 2 * atlas.light_border[cubes]) / size, dtype=ctx.dtype)
-    scale = xp.maximum(xp.max(xp.abs(VT), axis=(-2, -1)), xp.max(xp.abs(P), axis=-1))
-    close = np.asarray(d_min <= 32 * ctx.eps * scale)
-    if close.any():
-        bad = int(cubes[np.flatnonzero(close)[0]])
-        raise ValueError(
-            f"lights[{bad}]: a caster lies at the cube light's position (within rounding); "
-            "no near plane can keep it: move the light or give near="
-        )
-    lo = k * d_min * (1 - NEAR_FAR_SLACK) if n is None else _pick(ctx, n, cubes)
-    hi = d_max * (1 + NEAR_FAR_SLACK) if f is None else _pick(ctx, f, cubes)
+    VT = xp.matrix_transpose(verts[None] if verts.ndim == 2 else verts[cubes])
+    corners = None if R is None else xp.reshape(R, (-1, 3))[None]
+    near, far, ok = cube_depth_core(xp, P, VT, corners, k, ctx.eps)
+    if not bool(np.asarray(ok).all()):
+        bad = int(cubes[np.flatnonzero(~np.asarray(ok))[0]])
+        raise ValueError(f"lights[{bad}]: {AT_LIGHT}, or give near=")
+    lo = near if n is None else _pick(ctx, n, cubes)
+    hi = far if f is None else _pick(ctx, f, cubes)
     ok = np.asarray(xp.isfinite(lo) & xp.isfinite(hi) & (lo > 0) & (hi > lo))
     if not ok.all():
         bad = int(cubes[np.flatnonzero(~ok)[0]])

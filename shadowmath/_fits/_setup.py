@@ -395,13 +395,14 @@ def _points(a: Inputs) -> int:
 ReceiverKind = Literal["points", "triangles", "mesh"]
 
 
-def _receiver_kind(receivers: Any) -> tuple[ReceiverKind, str, Any]:
-    """The receivers' kind (from their type), the name and the array to convert."""
+def _receiver_kind(receivers: Any, name: str = "receivers") -> tuple[ReceiverKind, str, Any]:
+    """The kind of a set of surfaces or points (from its type: receivers, or a cube map's
+    casters), the name to convert it under and the array to convert."""
     if isinstance(receivers, Triangles):
-        return "triangles", "receivers", receivers.corners
+        return "triangles", name, receivers.corners
     if isinstance(receivers, Mesh):
-        return "mesh", "receivers.vertices", receivers.vertices
-    return "points", "receivers", receivers
+        return "mesh", f"{name}.vertices", receivers.vertices
+    return "points", name, receivers
 
 
 def _receiver_rows(ctx: Context, kind: ReceiverKind, R: Array, receivers: Any) -> Array:
@@ -433,20 +434,20 @@ def _receiver_rows(ctx: Context, kind: ReceiverKind, R: Array, receivers: Any) -
 _NO_RECEIVERS = "receivers: no receiver {} (M = 0); pass receivers=None when there are none"
 
 
-def _mesh_corners(ctx: Context, vertices: Array, faces: Any) -> Array:
+def _mesh_corners(ctx: Context, vertices: Array, faces: Any, name: str = "receivers") -> Array:
     """A mesh's triangles' corners ``(*batch, F, 3, 3)``; faces checked (NaN under tracing)."""
     xp = ctx.xp
     F = xp.asarray(faces)
     if F.ndim != 2 or F.shape[-1] != 3:
-        raise shape_error("receivers.faces", "(F, 3)", tuple(F.shape), "three indices per triangle")
+        raise shape_error(f"{name}.faces", "(F, 3)", tuple(F.shape), "three indices per triangle")
     if not np.issubdtype(np.dtype(F.dtype), np.integer):
-        raise TypeError(f"receivers.faces: expected integer indices, got dtype {F.dtype}")
+        raise TypeError(f"{name}.faces: expected integer indices, got dtype {F.dtype}")
     count = vertices.shape[-2]
     if not (ctx.lazy and is_tracer(F)):
         f = np.asarray(F)
         if f.size and (f.min() < 0 or f.max() >= count):
             raise ValueError(
-                f"receivers.faces: indices must lie in [0, {count}) (the mesh has {count} "
+                f"{name}.faces: indices must lie in [0, {count}) (the mesh has {count} "
                 f"vertices); got {int(f.min())} to {int(f.max())}"
             )
     if ctx.is_jax:  # a traced index out of range fills NaN instead of clamping silently

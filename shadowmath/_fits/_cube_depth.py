@@ -1,0 +1,255 @@
+r"""The depth range of a point light's cube shadow map: :func:`cube_depth_range`.
+
+A cube map's faces are fixed 90-degree frustums (:func:`cube_face_views`); what a fit
+can choose is only ``near`` and ``far``. Face ``i`` sees a point ``p`` at the depth
+``D = max(|r_x|, |r_y|, |r_z|)`` of ``r = p - L`` (the selected face's axis), so the
+range that keeps every caster and every receiver comes from ``D``'s extremes. The same
+core fits the cube lights of :func:`fit_atlas`.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+from shadowmath._boundary._validate import (
+    Array,
+    Checks,
+    Context,
+    batch_shape,
+    convert,
+    non_finite,
+    require_last,
+    require_vertices,
+    shape_error,
+)
+from shadowmath._math._frustum import NEAR_FAR_SLACK
+
+from ._setup import _mesh_corners, _receiver_kind, _receiver_rows
+
+
+class CubeDepthRange(NamedTuple):
+    """``near`` and ``far`` of a cube shadow map's faces, each ``(*batch,)``: the
+    distances along a face's axis to give :func:`cube_face_projection` and
+    :func:`cube_face_depth`."""
+
+    near: Array
+    far: Array
+
+
+#: A caster this close to the light (relative to the coordinates' size) is "at" it.
+_AT_LIGHT_ULPS = 32
+
+AT_LIGHT = (
+    "a caster lies at the cube light's position (within rounding); no near plane can keep "
+    "it: move the light or the caster"
+)
+
+
+def cube_depth_core(
+    xp: Any,
+    light: Array,
+    vertices_t: Array,
+    corners: Array | None,
+    k: Any,
+    eps: float,
+    triangles: Array | None = None,
+) -> tuple[Array, Array, Array]:
+    """``(near, far, ok)`` for trusted arrays: ``light (*b, 3)``, the casters' points
+    ``vertices_t (*b, 3, N)`` (components first: NumPy reduces a trailing axis of 3
+    slowly), receiver points ``corners (*b, M, 3)`` or None, the window scale ``k`` of the
+    border ring, and the casters' triangles ``(*b, T, 3, 3)`` when they are surfaces (their
+    corners are the points); ``ok`` is False where the nearest caster is within rounding
+    of the light."""
+    offsets = xp.abs(vertices_t - light[..., :, None])
+    D = xp.maximum(xp.maximum(offsets[..., 0, :], offsets[..., 1, :]), offsets[..., 2, :])
+    d_max = xp.max(D, axis=-1)
+    if triangles is None:
+        d_min = xp.min(D, axis=-1)
+    else:  # a triangle may pass nearer the light than its corners
+        d_min = xp.min(triangle_min_chebyshev(xp, triangles - light[..., None, None, :]), axis=-1)
+    if corners is not None:  # a triangle's largest D is at a corner (D is convex)
+        d_max = xp.maximum(d_max, xp.max(xp.abs(corners - light[..., None, :]), axis=(-2, -1)))
+    scale = xp.maximum(xp.max(xp.abs(vertices_t), axis=(-2, -1)), xp.max(xp.abs(light), axis=-1))
+    ok = d_min > _AT_LIGHT_ULPS * eps * scale
+    return k * d_min * (1 - NEAR_FAR_SLACK), d_max * (1 + NEAR_FAR_SLACK), ok
+
+
+def _chebyshev(xp: Any, r: Array) -> Array:
+    a = xp.abs(r)
+    return xp.maximum(xp.maximum(a[..., 0], a[..., 1]), a[..., 2])
+
+
+def _safe_divide(xp: Any, num: Array, den: Array, ok: Array) -> Array:
+    """``num / den`` where ``ok``, 0 elsewhere, with finite gradients on both sides."""
+    return xp.where(ok, num / xp.where(ok, den, xp.ones_like(den)), xp.zeros_like(num))
+
+
+#: The eight diagonal directions (+-1, +-1, +-1): where three faces' depths are equal.
+_DIAGONALS = [(sx, sy, sz) for sx in (1.0, -1.0) for sy in (1.0, -1.0) for sz in (1.0, -1.0)]
+
+
+def triangle_min_chebyshev(xp: Any, T: Array) -> Array:
+    r"""``min D`` over each triangle ``T (..., 3, 3)`` (corners relative to the light), with
+    ``D(r) = max(|r_x|, |r_y|, |r_z|)``.
+
+    ``D`` is convex and linear on each region where one signed coordinate is the largest,
+    so its minimum over a triangle lies at a vertex of those regions inside it: a corner,
+    an edge crossing a plane ``r_i = +-r_j``, or the triangle crossing a diagonal line
+    ``r = t (+-1, +-1, +-1)`` (there ``D = t``). The candidates outside the triangle are
+    dropped (``inf``); the minimum of the others is exact.
+    """
+    A, B, C = T[..., 0, :], T[..., 1, :], T[..., 2, :]
+    inf = xp.full(A.shape[:-1], xp.inf, dtype=A.dtype)
+    best = xp.minimum(xp.minimum(_chebyshev(xp, A), _chebyshev(xp, B)), _chebyshev(xp, C))
+    for P, Q in ((A, B), (B, C), (C, A)):
+        d = Q - P
+        for i, j in ((0, 1), (0, 2), (1, 2)):
+            for sign in (1.0, -1.0):  # P_i + s d_i = sign (P_j + s d_j)
+                den = d[..., i] - sign * d[..., j]
+                ok = den != 0
+                s = _safe_divide(xp, sign * P[..., j] - P[..., i], den, ok)
+                inside = ok & (s >= 0) & (s <= 1)
+                D = _chebyshev(xp, P + s[..., None] * d)
+                best = xp.minimum(best, xp.where(inside, D, inf))
+    n = xp.linalg.cross(B - A, C - A)
+    for diagonal in _DIAGONALS:
+        sigma = xp.asarray(diagonal, dtype=A.dtype)
+        den = xp.sum(n * sigma, axis=-1)
+        ok = den != 0
+        t = _safe_divide(xp, xp.sum(n * A, axis=-1), den, ok)  # n . (t sigma - A) = 0
+        p = t[..., None] * sigma
+        inside = ok & (t > 0)
+        for P, Q in ((A, B), (B, C), (C, A)):  # p on the inner side of every edge
+            inside = inside & (xp.sum(n * xp.linalg.cross(Q - P, p - P), axis=-1) >= 0)
+        best = xp.minimum(best, xp.where(inside, t, inf))
+    return best
+
+
+def border_scale(map_size: int | None, border_texels: int) -> float:
+    """``k = (N - 2b) / N`` of a face with a border ring (1 without one), checked."""
+    for name, value in (("map_size", map_size), ("border_texels", border_texels)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int)):
+            raise ValueError(f"{name}: expected an integer, got {value!r}")
+    if border_texels < 0:
+        raise ValueError(f"border_texels: must be >= 0, got {border_texels}")
+    if border_texels == 0:
+        return 1.0
+    if map_size is None:
+        raise ValueError("map_size: a border ring of border_texels > 0 needs the face's map_size")
+    if map_size - 2 * border_texels < 1:
+        raise ValueError(
+            f"border_texels: a border of {border_texels} texels on each side leaves no inner "
+            f"texel of a {map_size}-texel face (need 2 * border_texels < map_size)"
+        )
+    return (map_size - 2 * border_texels) / map_size
+
+
+def cube_depth_range(
+    light_position: Any,
+    casters: Any,
+    *,
+    receivers: Any = None,
+    map_size: int | None = None,
+    border_texels: int = 0,
+) -> CubeDepthRange:
+    r"""Fit ``near`` and ``far`` of a point light's cube shadow map to its casters.
+
+    With ``D(p) = max(|p_x - L_x|, |p_y - L_y|, |p_z - L_z|)``, the depth of ``p`` along
+    the axis of the face that sees it, and ``k = (N - 2b) / N`` for a border ring of
+    ``b`` texels (:func:`cube_face_projection`; ``k = 1`` without one):
+
+    .. math::
+
+        n = k \min_{\text{casters}} D \,(1 - s), \qquad
+        f = \max_{\text{casters, receivers}} D \,(1 + s), \qquad s = 1/64
+        \ (\texttt{NEAR\_FAR\_SLACK}).
+
+    A face's ring shows its neighbours' directions, where a caster's depth along this
+    face's axis can drop to ``k D``: ``k`` keeps those casters too. ``D`` is convex, so
+    its largest value over a triangle is at a corner but its smallest may lie inside
+    (a wall beside the light): casters given as :class:`Triangles` or a :class:`Mesh`
+    count their whole surface (exactly: the minimum lies at a corner, where an edge
+    crosses a plane ``r_i = +-r_j``, or where the triangle crosses a diagonal
+    ``r = t (+-1, +-1, +-1)``); casters given as points count those points. Receivers only
+    push ``far``: a receiver nearer the light than every caster is never in shadow. Every
+    caster drawn then lies in ``[near, far]`` with room for float32 rounding.
+
+    Arguments:
+        light_position: ``(*batch, 3)`` the point light.
+        casters: ``(*batch, N, 3)`` points (a mesh's vertices: exact unless a triangle
+            passes nearer the light than its corners), :class:`Triangles`
+            ``(*batch, M, 3, 3)`` or a :class:`Mesh`.
+        receivers: what the shadows fall on: ``(*batch, M, 3)`` points,
+            :class:`Triangles` ``(*batch, M, 3, 3)`` or a :class:`Mesh`; None: the
+            casters only.
+        map_size: texels per face side; needed with ``border_texels``.
+        border_texels: the border ring of :func:`cube_face_projection`.
+
+    Returns:
+        :class:`CubeDepthRange` ``(near, far)``, each ``(*batch,)``.
+
+    Raises:
+        ValueError: wrong shapes; non-finite values; a caster at the light's position
+            (within rounding: no near plane keeps it); a border that leaves no inner
+            texel. Under JAX transformations the affected entries (and their gradients)
+            are NaN.
+
+    Example:
+        >>> import numpy as np, shadowmath as sm
+        >>> box = np.array([[x, y, z] for x in (1, 2) for y in (-1, 1) for z in (-1, 1)], float)
+        >>> near, far = cube_depth_range([0.0, 0.0, 0.0], box)
+        >>> float(near), float(far)  # D from 1 to 2, with 1/64 of slack
+        (0.984375, 2.03125)
+        >>> float(cube_depth_range([0.0, 0.0, 0.0], box, map_size=64, border_texels=2).near)
+        0.9228515625
+        >>> wall = sm.Triangles(np.array([[[1.0, -5, -5], [1, 5, -5], [1, 0, 5]]]))
+        >>> float(cube_depth_range([0.0, 0.0, 0.0], wall).near)  # its corners are 5 away
+        0.984375
+    """
+    k = border_scale(map_size, border_texels)
+    c_kind, c_name, c_array = _receiver_kind(casters, "casters")
+    r_kind, r_name, r_array = _receiver_kind(receivers)
+    ctx, (light, C, R) = convert(
+        light_position=light_position, **{c_name: c_array}, **{r_name: r_array}
+    )
+    xp = ctx.xp
+    require_last("light_position", light, 3, hint="a point light is (x, y, z)")
+    triangles = _caster_triangles(ctx, c_kind, C, casters)
+    points = C if triangles is None else xp.reshape(triangles, (*triangles.shape[:-3], -1, 3))
+    shapes = [tuple(light.shape[:-1]), tuple(points.shape[:-2])]
+    corners = None
+    if R is not None:
+        R = _receiver_rows(ctx, r_kind, R, receivers)
+        corners = xp.reshape(R, (*R.shape[:-2], -1, 3))  # triangles' rows of 9: 3 corners
+        shapes.append(tuple(R.shape[:-2]))
+    names = ("light_position", "casters", "receivers")[: len(shapes)]
+    shape = batch_shape(*shapes, names=names)
+    checks = Checks(ctx)
+    checks.require(xp.all(xp.isfinite(light), axis=-1), non_finite("light_position"))
+    checks.require(xp.all(xp.isfinite(points), axis=(-2, -1)), non_finite("casters"))
+    if corners is not None:
+        checks.require(xp.all(xp.isfinite(corners), axis=(-2, -1)), non_finite("receivers"))
+    near, far, ok = cube_depth_core(
+        xp, light, xp.matrix_transpose(points), corners, k, ctx.eps, triangles
+    )
+    checks.require(ok, f"casters: {AT_LIGHT}")
+    near, far = xp.broadcast_to(near, shape), xp.broadcast_to(far, shape)
+    return CubeDepthRange(checks.poison(near, 0), checks.poison(far, 0))
+
+
+def _caster_triangles(ctx: Context, kind: str, C: Array, casters: Any) -> Array | None:
+    """The casters' triangles ``(*batch, M, 3, 3)``, or None for points (shape-checked)."""
+    if kind == "points":
+        require_vertices("casters", C)
+        return None
+    if kind == "triangles":
+        if C.ndim < 3 or tuple(C.shape[-2:]) != (3, 3):
+            hint = "sm.Triangles holds M triangles of three corners (x, y, z)"
+            raise shape_error("casters", "(*batch, M, 3, 3)", tuple(C.shape), hint)
+        T = C
+    else:
+        require_vertices("casters.vertices", C)
+        T = _mesh_corners(ctx, C, casters.faces, name="casters")
+    if T.shape[-3] == 0:
+        raise ValueError("casters: no caster triangles (M = 0); a cube map needs casters")
+    return T
