@@ -7,7 +7,8 @@ adapter; Mesa's llvmpipe Vulkan driver is enough):
 
 Renders the scenes of ``tests/render/test_pygfx.py`` with pygfx (offscreen, 400x300, its
 default anti-aliasing), once with pygfx's own shadow cameras and once after
-``shadowmath.integrations.pygfx.set_shadow_camera``, side by side, one row per scene.
+``shadowmath.integrations.pygfx.set_shadow_camera``, side by side, one row per scene
+(a sun, a spot light, and a point light whose shadow falls toward +Y).
 Prints the texel-size table of ``docs/pygfx.md`` (the median world size of a shadow-map
 texel on the shadowed receiver points, measured as in the test). Writes
 ``docs/figures/pygfx.png``.
@@ -26,11 +27,11 @@ from rendercanvas.offscreen import RenderCanvas
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from tests.render.test_pygfx import SCENES, pygfx_scene, texel_sizes  # noqa: E402
+from tests.render.test_pygfx import FRUSTUM_SCENES, SCENES, fit, pygfx_scene, texel_sizes  # noqa: E402
 
 FIGURE = ROOT / "docs" / "figures" / "pygfx.png"
 SIZE = (400, 300)
-ROWS = ["torus, sun", "box, spot"]
+ROWS = ["torus, sun", "box, spot", "box, point toward +y"]
 COLORS = ["#b8c4d0", "#d07040"]  # floor, caster
 
 
@@ -57,13 +58,19 @@ def main() -> None:
     renderer = gfx.renderers.WgpuRenderer(canvas, pixel_scale=1)
     figure = Image.new("RGB", (2 * SIZE[0] + 6, len(ROWS) * (SIZE[1] + 6) - 6), "white")
     for row, name in enumerate(ROWS):
-        default, fitted = texel_sizes(SCENES[name])
+        if SCENES[name].kind == "point":  # the texels are pygfx's; the faces and range differ
+            near = float(fit(SCENES[name]).near)
+            what = [("pygfx default", "near 0.5, +Y face aimed down -Z"),
+                    ("shadowmath fit", f"near {near:.3g}, +Y face turned")]  # fmt: skip
+        else:
+            sizes = texel_sizes(SCENES[name])
+            what = [
+                (w, f"texel {size:.3g}")
+                for w, size in zip(("pygfx default", "shadowmath fit"), sizes, strict=True)
+            ]
         panels = [
-            label(render(canvas, renderer, name, fit), f"{name}: {what}, texel {size:.3g}")
-            for fit, what, size in (
-                (False, "pygfx default", default),
-                (True, "shadowmath fit", fitted),
-            )
+            label(render(canvas, renderer, name, fitted), f"{name}: {who}, {detail}")
+            for fitted, (who, detail) in zip((False, True), what, strict=True)
         ]
         for col, panel in enumerate(panels):
             figure.paste(panel, (col * (SIZE[0] + 6), row * (SIZE[1] + 6)))
@@ -71,7 +78,7 @@ def main() -> None:
     print(f"wrote {FIGURE.relative_to(ROOT)}")
     print("| scene | pygfx default | shadowmath fit | sharper |")
     print("| --- | ---: | ---: | ---: |")
-    for name in SCENES:
+    for name in FRUSTUM_SCENES:
         default, fitted = texel_sizes(SCENES[name])
         print(f"| {name} | {default:.4g} | {fitted:.4g} | {default / fitted:.1f}x |")
 

@@ -21,9 +21,16 @@ pygfx draws and samples exactly the fitted map (its clip matrix is the fit's
   object, by pygfx's base ``LightShadow._update_matrix`` aimed along the fitted
   ``forward``. That skips only ``SpotLightShadow``'s rebuild of the field of view from
   ``light.angle``; the camera still follows the light's position every frame.
-* **point**: refused. pygfx samples a point light's cube map through six fixed
-  90-degree faces whose orientation its shader hard-codes (``uv_to_direction``), so no
-  fitted frustum can replace them. Use a spot light aimed at the casters.
+* **point**: pygfx samples a point light's cube map through six fixed 90-degree faces
+  whose orientation its shader hard-codes (``uv_to_direction``), so only the depth range
+  can be fitted: :func:`shadowmath.cube_depth_range` of the light's position and the
+  casters (and receivers) instead of pygfx's default ``(0.5, 100000)``, whose near plane
+  clips every caster within 0.5 units of the light. pygfx resets the range every frame
+  from ``light.distance`` when that is nonzero, so the shadow object's ``_update_matrix``
+  is wrapped, on that one light, to run with a cutoff distance of 0 (the light's
+  attenuation keeps its ``distance``) and then to aim the +Y face right: pygfx 0.17's
+  ``look_at`` of a direction parallel to the camera's up (0, 1, 0) leaves that face
+  looking down -Z, which loses every shadow cast toward +Y.
 
 The map size is one module-level constant in pygfx's private renderer code, the same
 for every light; fit with ``map_size=PYGFX_SHADOW_MAP_SIZE`` and ``pcf_radius=2``
@@ -41,11 +48,12 @@ from typing import Any, Final
 
 import numpy as np
 
-from shadowmath import ShadowCamera, ShadowSetup, shadow_camera
+from shadowmath import CubeDepthRange, ShadowCamera, ShadowSetup, shadow_camera
 
 try:
     import pygfx as gfx
     from pygfx.objects._lights import LightShadow as _LightShadow
+    from pygfx.objects._lights import PointLightShadow as _PointLightShadow
 except ImportError as err:  # pragma: no cover - the extra is part of `dev`
     raise ImportError(
         "shadowmath.integrations.pygfx needs pygfx: pip install 'shadowmath[pygfx]'"
@@ -66,12 +74,16 @@ _MIN_HALF_TAN: Final = math.tan(math.radians(0.5))
 _MAX_HALF_TAN: Final = math.tan(math.radians(89.5))
 
 
-def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera) -> Any:
+def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRange) -> Any:
     r"""Make a pygfx light draw and sample the shadow map of a fit.
 
-    Sets, on ``light`` and its ``light.shadow.camera``: the light's position to the
-    camera's eye (and a directional light's target to ``eye + forward``), the camera's
-    ``reference_up`` to ``up``, its depth range to ``(near, far)`` and its window. A
+    A point light takes the :class:`~shadowmath.CubeDepthRange` of
+    :func:`shadowmath.cube_depth_range` fitted at its position: its shadow camera's depth
+    range becomes ``(near, far)`` (its six faces are fixed; see the module docstring).
+    A directional or spot light takes a fit, and this sets, on ``light`` and its
+    ``light.shadow.camera``: the light's position to the camera's eye (and a directional
+    light's target to ``eye + forward``), the camera's ``reference_up`` to ``up``, its
+    depth range to ``(near, far)`` and its window. A
     perspective window ``[l, r] x [b, t]`` (tangents) is cut out of the symmetric frustum
     of half-extents :math:`X = \max(-l, r)`, :math:`Y = \max(-b, t)`, whose field of view
     pygfx reads as
@@ -85,25 +97,28 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera) -> Any:
 
     Arguments:
         light: a ``pygfx.DirectionalLight`` (with an orthographic fit: ``sm.fit_shadow``
-            of an ``sm.DirectionalLight``) or a ``pygfx.SpotLight`` (with a perspective
+            of an ``sm.DirectionalLight``), a ``pygfx.SpotLight`` (with a perspective
             fit: an ``sm.SpotLight``, whose frame's ``Z`` is the cone's axis, or an
             ``sm.PointLight``), not parented to a camera (pygfx then aims it along the
-            camera, ignoring the fit).
+            camera, ignoring the fit), or a ``pygfx.PointLight``.
         fit: one light's :class:`ShadowSetup` (from :func:`shadowmath.fit_shadow`, no
-            batch) or :class:`ShadowCamera` (from :func:`shadowmath.shadow_camera`).
+            batch) or :class:`ShadowCamera` (from :func:`shadowmath.shadow_camera`); for
+            a point light, one :class:`CubeDepthRange` (scalar ``near`` and ``far``).
 
     Returns:
         ``light.shadow.camera``, the pygfx camera now placed as the fit's: its
-        ``camera_matrix`` is the fit's world-to-clip matrix for ``api="webgpu"``.
+        ``camera_matrix`` is the fit's world-to-clip matrix for ``api="webgpu"`` (for a
+        point light, the camera pygfx turns to each face, with the fitted depth range).
 
     Raises:
-        ValueError: a light that is not a pygfx directional or spot light (a point
-            light: see the module docstring), a light parented to a camera, a fit that
-            is not a ``ShadowSetup`` or ``ShadowCamera``, a batch of fits, an orthographic
+        ValueError: a light that is not a pygfx directional, spot or point light, a light
+            parented to a camera, a fit that is not a ``ShadowSetup`` or ``ShadowCamera``
+            (a ``CubeDepthRange`` for a point light), a batch of fits, an orthographic
             fit for a spot light or a perspective one for a directional light, non-finite
-            fields, a field of view wider than pygfx's 179 degrees.
-        RuntimeError: pygfx lacks the private ``LightShadow._update_matrix`` the spot
-            light's override replaces.
+            fields, a field of view wider than pygfx's 179 degrees, a depth range without
+            ``0 < near < far``.
+        RuntimeError: pygfx lacks the private ``_update_matrix`` methods the spot and
+            point lights' overrides call.
 
     Example:
         >>> import numpy as np, pygfx as gfx, shadowmath as sm
@@ -120,6 +135,8 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera) -> Any:
     """
     _check_pygfx()
     kind = _light_kind(light)
+    if kind == "point":
+        return _set_cube_depth(light, fit)
     cam = _one_camera(fit)
     if cam.orthographic != (kind == "directional"):
         wanted = "an orthographic" if kind == "directional" else "a perspective"
@@ -159,12 +176,13 @@ class _Camera:
 
 
 def _check_pygfx() -> None:
-    if not callable(getattr(_LightShadow, "_update_matrix", None)):
-        raise RuntimeError(
-            f"pygfx {gfx.__version__} has no LightShadow._update_matrix, which "
-            "shadowmath.integrations.pygfx overrides for spot lights; tested with pygfx "
-            f"{_versions()}"
-        )
+    for owner in (_LightShadow, _PointLightShadow):
+        if not callable(getattr(owner, "_update_matrix", None)):
+            raise RuntimeError(
+                f"pygfx {gfx.__version__} has no {owner.__name__}._update_matrix, which "
+                "shadowmath.integrations.pygfx calls for spot and point lights; tested with "
+                f"pygfx {_versions()}"
+            )
     version = tuple(gfx.version_info[:2])
     if not TESTED_PYGFX[0] <= version < TESTED_PYGFX[1]:
         warnings.warn(
@@ -181,19 +199,16 @@ def _versions() -> str:
 
 
 def _light_kind(light: Any) -> str:
-    if isinstance(light, gfx.PointLight):
-        raise ValueError(
-            "light: pygfx samples a PointLight's cube map through six fixed 90-degree "
-            "faces (its shader's uv_to_direction), which no fitted frustum can replace; "
-            "use a pygfx.SpotLight aimed at the casters and fit an sm.SpotLight"
-        )
     if isinstance(light, gfx.DirectionalLight):
         kind = "directional"
     elif isinstance(light, gfx.SpotLight):
         kind = "spot"
+    elif isinstance(light, gfx.PointLight):
+        kind = "point"
     else:
         raise ValueError(
-            f"light: expected a pygfx DirectionalLight or SpotLight, got {type(light).__name__}"
+            "light: expected a pygfx DirectionalLight, SpotLight or PointLight, got "
+            f"{type(light).__name__}"
         )
     if isinstance(light.parent, gfx.Camera):
         raise ValueError(
@@ -203,7 +218,12 @@ def _light_kind(light: Any) -> str:
     return kind
 
 
-def _one_camera(fit: ShadowSetup | ShadowCamera) -> _Camera:
+def _one_camera(fit: ShadowSetup | ShadowCamera | CubeDepthRange) -> _Camera:
+    if isinstance(fit, CubeDepthRange):
+        raise ValueError(
+            "fit: a CubeDepthRange is a point light's; a pygfx directional or spot light "
+            "needs a ShadowSetup (sm.fit_shadow) or ShadowCamera"
+        )
     if isinstance(fit, ShadowSetup):
         fit = shadow_camera(fit)
     elif not isinstance(fit, ShadowCamera):
@@ -263,3 +283,63 @@ def _aim_spot_shadow(shadow: Any, forward: np.ndarray) -> None:
             light.target = cone_target
 
     shadow._update_matrix = update_matrix
+
+
+def _set_cube_depth(light: Any, fit: Any) -> Any:
+    """A point light's fitted depth range, kept by a wrapped ``_update_matrix``."""
+    if not isinstance(fit, CubeDepthRange):
+        raise ValueError(
+            "fit: a pygfx PointLight's six cube faces are fixed; pass its depth range, "
+            f"sm.cube_depth_range(light position, casters), got {type(fit).__name__}"
+        )
+    if np.shape(fit.near) != () or np.shape(fit.far) != ():
+        raise ValueError(
+            f"fit: expected one light's depth range (scalar near and far), got shapes "
+            f"{np.shape(fit.near)} and {np.shape(fit.far)}"
+        )
+    near, far = float(fit.near), float(fit.far)
+    if not (math.isfinite(near) and math.isfinite(far) and 0 < near < far):
+        raise ValueError(f"fit: expected finite 0 < near < far, got near {near}, far {far}")
+    shadow = light.shadow
+    shadow.camera.depth_range = (near, far)
+
+    def update_matrix(light: Any) -> None:
+        _PointLightShadow._update_matrix(shadow, _WithoutCutoff(light))
+        _turn_up_face(shadow, light)
+
+    shadow._update_matrix = update_matrix
+    return shadow.camera
+
+
+def _turn_up_face(shadow: Any, light: Any) -> None:
+    """Face 2 (+Y) as the shader samples it: face 3 (-Y) turned half a turn about X.
+
+    pygfx 0.17 aims each face with ``look_at``; for +Y that direction is parallel to the
+    camera's ``reference_up`` (0, 1, 0), and the degenerate case leaves the face looking
+    elsewhere (down -Z from a new light), so every shadow cast toward +Y is lost. The
+    shader reads face 2 as the direction ``(x_ndc, 1, -y_ndc)`` and face 3 as
+    ``(x_ndc, -1, y_ndc)``: the half turn ``(x, y, z) -> (x, -y, -z)`` about the light
+    maps one onto the other and keeps the triangles' winding (pygfx culls front faces).
+    """
+    p = np.asarray(light.world.position, dtype=np.float64)
+    to_light, back = np.eye(4), np.eye(4)
+    to_light[:3, 3], back[:3, 3] = -p, p
+    half_turn = back @ np.diag([1.0, -1.0, -1.0, 1.0]) @ to_light
+    stored = light.uniform_buffer.data["light_view_proj_matrix"]  # each face's matrix.T
+    up = (np.asarray(stored[3], dtype=np.float64).T @ half_turn).T
+    stored[2] = up
+    shadow._gfx_matrix_buffer[2].data["light_view_proj_matrix"] = up
+    shadow._gfx_matrix_buffer[2].update_full()
+
+
+class _WithoutCutoff:
+    """The light as ``PointLightShadow._update_matrix`` reads it, with ``distance = 0``:
+    pygfx then keeps the camera's depth range instead of ``(distance / 1e5, 10 distance)``."""
+
+    distance = 0.0
+
+    def __init__(self, light: Any) -> None:
+        self._light = light
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._light, name)

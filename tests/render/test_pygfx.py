@@ -13,6 +13,7 @@ can fail), and their texels are several times larger on the receivers.
 
 from __future__ import annotations
 
+import itertools
 import re
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -95,8 +96,8 @@ def body(mesh: sm.Mesh, to_world: np.ndarray, *, cast: bool) -> Body:
 
 class Scene(NamedTuple):
     bodies: list[Body]
-    kind: str  # "directional" or "spot"
-    light: np.ndarray  # toward the light (directional) or its position (spot)
+    kind: str  # "directional", "spot" or "point"
+    light: np.ndarray  # toward the light (directional) or its position (spot, point)
     aim: np.ndarray  # the spot's target (and the default directional light's target)
     angle: float  # the spot's half-angle in radians
     eye: tuple[float, float, float]  # the viewing camera
@@ -104,6 +105,9 @@ class Scene(NamedTuple):
 
     def casters(self) -> np.ndarray:
         return np.concatenate([b.vertices for b in self.bodies if b.cast])
+
+    def receivers(self) -> sm.Triangles:
+        return sm.Triangles(np.concatenate([b.vertices[b.triangles] for b in self.bodies]))
 
     def sm_light(self) -> Any:
         if self.kind == "directional":
@@ -118,6 +122,10 @@ TORUS = body(
     place(rotation((1.0, 0.5, 0.0), 80.0), (0.0, 0.0, 1.6)),
     cast=True,
 )
+#: A desk lamp: a 0.2-unit box under a point light 0.45 above the floor, every caster
+#: within pygfx's default near plane (0.5) of it.
+SMALL_FLOOR = body(grid((4.0, 4.0), segments=(2, 2)), place(), cast=False)
+SMALL_BOX = body(box((0.2, 0.2, 0.2)), place(rotation((0, 0, 1), 20), (0, 0, 0.1)), cast=True)
 SCENES = {
     "box, sun": Scene(
         [FLOOR, BOX], "directional", np.array([-3.0, -1.5, 3.5]), np.zeros(3), 0.0,
@@ -135,12 +143,33 @@ SCENES = {
         [FLOOR, TORUS], "spot", np.array([4.0, 1.0, 3.5]), np.array([0.0, 0.0, 1.2]), 0.75,
         (2.0, -5.5, 4.5), (0.0, 0.0, 1.0),
     ),
+    "torus, point": Scene(
+        [FLOOR, TORUS], "point", np.array([2.0, 0.5, 4.0]), np.zeros(3), 0.0,
+        (2.0, -5.5, 4.5), (0.0, 0.0, 1.0),
+    ),
+    "box, lamp": Scene(
+        [SMALL_FLOOR, SMALL_BOX], "point", np.array([0.25, 0.1, 0.45]), np.zeros(3), 0.0,
+        (0.6, -1.6, 1.3), (-0.2, 0.0, 0.05),
+    ),
 }  # fmt: skip
+#: A box beside a point light along +Y (a wall behind it): the cube face pygfx 0.17 aims
+#: wrong by itself.
+SCENES["box, point toward +y"] = Scene(
+    [body(grid((12.0, 12.0), segments=(2, 2)), place(rotation((1, 0, 0), 90), (0, 3, 0)),
+          cast=False),
+     body(box((0.6, 0.6, 0.6)), place(rotation((0, 0, 1), 20), (0.2, 1.5, 0.3)), cast=True)],
+    "point", np.zeros(3), np.zeros(3), 0.0, (1.0, -2.0, 1.0), (0.0, 3.0, 0.0),
+)  # fmt: skip
+#: The scenes whose fit is a frustum (directional and spot lights).
+FRUSTUM_SCENES = [name for name, scene in SCENES.items() if scene.kind != "point"]
 
 
-def fit(scene: Scene) -> sm.ShadowSetup:
+def fit(scene: Scene) -> Any:
+    """The light's fit: a ShadowSetup, or a point light's CubeDepthRange."""
     from shadowmath.integrations.pygfx import PYGFX_SHADOW_MAP_SIZE
 
+    if scene.kind == "point":
+        return sm.cube_depth_range(scene.light, scene.casters(), receivers=scene.receivers())
     return sm.fit_shadow(
         scene.sm_light(), scene.casters(), PYGFX_SHADOW_MAP_SIZE, pcf_radius=2, api="webgpu"
     )
@@ -168,11 +197,16 @@ def pygfx_scene(scene: Scene, *, fitted: bool) -> tuple[Any, Any, Any]:
     if scene.kind == "directional":
         light = gfx.DirectionalLight(intensity=8.0, cast_shadow=True)
         light.local.position = scene.aim + 10.0 * scene.light / np.linalg.norm(scene.light)
-    else:
+    elif scene.kind == "spot":
         light = gfx.SpotLight(intensity=8.0, cast_shadow=True, angle=scene.angle)
         light.local.position = scene.light
-    light.target.local.position = scene.aim
-    world.add(light, light.target)
+    else:  # pygfx's default decay 0: no fall-off, lit like the spot
+        light = gfx.PointLight(intensity=8.0, cast_shadow=True)
+        light.local.position = scene.light
+    if scene.kind != "point":
+        light.target.local.position = scene.aim
+        world.add(light.target)
+    world.add(light)
     if fitted:
         set_shadow_camera(light, fit(scene))
     camera = gfx.PerspectiveCamera(45, SIZE[0] / SIZE[1])
@@ -279,6 +313,9 @@ def ground_truth(scene: Scene, camera: Any) -> Truth:
     if scene.kind == "directional":
         to_light, light = np.broadcast_to(scene.light, p.shape), np.append(scene.light, 0.0)
         inside = np.ones(len(p), dtype=bool)
+    elif scene.kind == "point":
+        to_light, light = scene.light - p, np.append(scene.light, 1.0)
+        inside = np.ones(len(p), dtype=bool)
     else:
         to_light, light = scene.light - p, np.append(scene.light, 1.0)
         axis = (scene.aim - scene.light) / np.linalg.norm(scene.aim - scene.light)
@@ -324,7 +361,7 @@ def compare(picture: Picture, truth: Truth) -> Count:
 # ---- the integration: exact matrices, pictures, resolution ----------------------------------
 
 
-@pytest.mark.parametrize("name", list(SCENES))
+@pytest.mark.parametrize("name", FRUSTUM_SCENES)
 def test_pygfx_draws_with_the_fitted_matrix(gfx, name):
     """What pygfx uploads each frame (its private update, run here) is the fit's matrix."""
     scene = SCENES[name]
@@ -373,6 +410,70 @@ def test_pygfx_default_directional_camera_loses_shadow_pixels(pygfx_canvas, name
     assert count.lost > 0.5 * count.shadowed, count
 
 
+#: Face i of a cube map: the axis it looks along (+X, -X, +Y, -Y, +Z, -Z).
+FACE_AXES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
+
+
+def face_errors(light: Any, position: np.ndarray, near: float, far: float) -> np.ndarray:
+    """Per face, the largest error of the uploaded matrix against a 90-degree frustum along
+    the face's axis: the point ``D (axis + a t1 + b t2)`` lands at NDC ``(+-a, +-b)`` or
+    ``(+-b, +-a)`` (pygfx's shader reads each face's texels back with its own roll), at
+    depth 0 for ``D = near`` and 1 for ``D = far``. The shader picks the face from the
+    direction's major axis, so a face looking elsewhere loses that face's shadows."""
+    faces = light.uniform_buffer.data["light_view_proj_matrix"].transpose(0, 2, 1)
+    ab = np.random.default_rng(0).uniform(-0.9, 0.9, (20, 2))
+    errors = []
+    for M, axis in zip(faces.astype(np.float64), FACE_AXES, strict=True):
+        t1, t2 = np.eye(3)[np.flatnonzero(axis == 0)]
+        worst = 0.0
+        for (a, b), (D, depth) in itertools.product(ab, ((near, 0.0), (far, 1.0))):
+            clip = M @ np.append(position + D * (axis + a * t1 + b * t2), 1.0)
+            if not clip[3] > 0:
+                worst = np.inf
+                continue
+            ndc = clip[:3] / clip[3]
+            xy = np.sort(np.abs(ndc[:2])) - np.sort(np.abs([a, b]))
+            worst = max(worst, float(np.abs(xy).max()), abs(float(ndc[2]) - depth))
+        errors.append(worst)
+    return np.array(errors)
+
+
+def test_pygfx_point_light_faces_as_the_shader_reads_them(gfx):
+    """Each face's uploaded matrix maps the directions the shader samples to their NDC,
+    with the fitted near plane at depth 0 and far at 1, also with a cutoff distance (from
+    which pygfx alone resets the range). pygfx alone aims its +Y face wrong."""
+    scene = SCENES["box, lamp"]
+    depth_range = fit(scene)
+    near, far = float(depth_range.near), float(depth_range.far)
+    _, _, light = pygfx_scene(scene, fitted=True)
+    light.distance = 5.0  # pygfx alone: depth_range (5e-5, 50) every frame
+    light.shadow._gfx_update_uniform_buffer(light)
+    assert light.shadow.camera.depth_range == (near, far)
+    assert np.all(face_errors(light, scene.light, near, far) < 1e-5)
+    # Without the integration: pygfx's range from the distance, and its +Y face looks away.
+    _, _, plain = pygfx_scene(scene, fitted=False)
+    plain.distance = 5.0
+    plain.shadow._gfx_update_uniform_buffer(plain)
+    assert plain.shadow.camera.depth_range == pytest.approx((5e-5, 50.0))
+    errors = face_errors(plain, scene.light, *plain.shadow.camera.depth_range)
+    # (float32 depth of a 1e6 depth ratio: 1e-3)
+    assert errors[2] > 0.1 and np.all(np.delete(errors, 2) < 1e-3), errors
+
+
+@pytest.mark.parametrize("name", ["box, lamp", "box, point toward +y"])
+def test_pygfx_default_point_light_loses_shadows(pygfx_canvas, name):
+    """The comparison can fail: pygfx's default cube depth range (0.5, 100000) clips every
+    caster within 0.5 units of the light, so the lamp's box casts no shadow at all; and
+    its +Y face looks away, so every shadow cast toward +Y is lost."""
+    scene = SCENES[name]
+    picture = render(pygfx_canvas, scene, fitted=False)
+    truth = ground_truth(scene, picture.camera)
+    count = compare(picture, truth)
+    off_band = int((truth.on & truth.reached & ~truth.band & truth.shadow).sum())
+    print(f"{name}, pygfx default: {count}, {off_band} shadow pixels off the band")
+    assert off_band > 200 and count.lost == off_band, count
+
+
 def test_pygfx_wrong_roll_loses_shadow_pixels(pygfx_canvas):
     """The up vector matters: the scene's up (0, 0, 1) instead of the fit's rolls the fitted
     box (twice as wide as high here) off the torus."""
@@ -414,7 +515,7 @@ def texel_sizes(scene: Scene, canvas_renderer: Any = None) -> tuple[float, float
     return sizes[0], sizes[1]
 
 
-@pytest.mark.parametrize("name", list(SCENES))
+@pytest.mark.parametrize("name", FRUSTUM_SCENES)
 def test_pygfx_fit_makes_sharper_texels_than_the_defaults(gfx, name):
     default, fitted = texel_sizes(SCENES[name])
     print(f"{name}: texel {default:.4g} (pygfx default) vs {fitted:.4g} (fit), "
@@ -444,6 +545,9 @@ def test_docs_example_runs(pygfx_canvas, tmp_path, monkeypatch):
     assert np.allclose(uploaded @ placement, setup.blocker_to_clip, atol=1e-6)
     spot = namespace["spot"]
     assert spot.shadow.camera.fov < np.degrees(2 * 0.7) / 2  # the cube, not the cone
+    lamp, depth_range = namespace["lamp"], namespace["depth_range"]
+    assert lamp.shadow.camera.depth_range == (float(depth_range.near), float(depth_range.far))
+    assert 0.3 < float(depth_range.near) < 0.6  # the cube's nearest face, 0.6 from the lamp
 
 
 # ---- arguments -------------------------------------------------------------------------------
@@ -454,10 +558,17 @@ def test_pygfx_bad_arguments(gfx):
 
     directional = fit(SCENES["box, sun"])
     spot = fit(SCENES["box, spot"])
-    with pytest.raises(ValueError, match="PointLight's cube map"):
+    with pytest.raises(ValueError, match="PointLight's six cube faces are fixed"):
         set_shadow_camera(gfx.PointLight(), spot)
-    with pytest.raises(ValueError, match="DirectionalLight or SpotLight"):
+    with pytest.raises(ValueError, match="DirectionalLight, SpotLight or PointLight"):
         set_shadow_camera(gfx.AmbientLight(), spot)
+    cube = fit(SCENES["box, lamp"])
+    with pytest.raises(ValueError, match="CubeDepthRange is a point light's"):
+        set_shadow_camera(gfx.SpotLight(), cube)
+    with pytest.raises(ValueError, match=r"one light's depth range .* \(2,\)"):
+        set_shadow_camera(gfx.PointLight(), sm.CubeDepthRange(np.ones(2), np.full(2, 3.0)))
+    with pytest.raises(ValueError, match=r"finite 0 < near < far, got near 2\.0, far 1\.0"):
+        set_shadow_camera(gfx.PointLight(), sm.CubeDepthRange(np.float64(2), np.float64(1)))
     with pytest.raises(ValueError, match="orthographic fit"):
         set_shadow_camera(gfx.DirectionalLight(), spot)
     with pytest.raises(ValueError, match="perspective fit"):
