@@ -288,3 +288,25 @@ def test_each_kind_of_nearest_point():
     assert float(sm.cube_depth_range(light, sm.Triangles(cases["diagonal"][None])).near) == (
         pytest.approx(1 - SLACK, rel=1e-14)
     )
+
+
+def test_the_atlas_counts_caster_triangles_near_its_cube_lights():
+    """A wall beside a cube light, nearer than its corners: the atlas's faces keep it when
+    the casters come as surfaces (the same near as cube_depth_range), not as points; its
+    2D lights fit the same matrices either way (their projections hold the corners' hull)."""
+    wall = np.array(
+        [[[1.0, -5, -5], [1, 5, -5], [1, 0, 5]], [[3.0, -1, -1], [3, 1, -1], [3, 0, 2]]]
+    )
+    lights = [sm.PointLight(np.zeros(3)), sm.PointLight(np.array([0.0, 0.0, -20.0]))]
+    atlas = sm.allocate_atlas([0.5, 0.5], atlas_size=2048, cube=[True, False], border_texels=2)
+    surfaces = sm.fit_atlas(lights, sm.Triangles(wall), atlas)
+    points = sm.fit_atlas(lights, wall.reshape(-1, 3), atlas)
+    mesh = sm.fit_atlas(lights, sm.Mesh(wall.reshape(-1, 3), np.arange(6).reshape(2, 3)), atlas)
+    size = int(atlas.light_size[0])
+    want = sm.cube_depth_range(np.zeros(3), sm.Triangles(wall), map_size=size, border_texels=2)
+    cube_tiles = atlas.light_tiles[0]
+    np.testing.assert_array_equal(surfaces.near[cube_tiles], float(want.near))
+    np.testing.assert_array_equal(mesh.near[cube_tiles], float(want.near))
+    assert float(want.near) < 1.0 < float(points.near[cube_tiles[0]])  # corners: D >= 3
+    flat = atlas.light_tiles[1, 0]
+    np.testing.assert_array_equal(surfaces.world_to_clip[flat], points.world_to_clip[flat])

@@ -49,7 +49,7 @@ from shadowmath._math._pcf import _border_texels
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 
 from . import _compiled
-from ._cube_depth import AT_LIGHT, cube_depth_core
+from ._cube_depth import AT_LIGHT, caster_triangles, cube_depth_core
 from ._fit_arrays import Inputs, driver, fit_arrays
 from ._setup import _receiver_kind, _receiver_rows
 from ._spec import FitKey, api_rows
@@ -527,12 +527,15 @@ def fit_atlas(
     * **cube light**: face ``i``'s ``world_to_clip = P V_i`` with ``V_i`` of
       :func:`cube_face_views` and ``P`` of :func:`cube_face_projection` with the
       border ring ``b`` (scale ``k = (n - 2b) / n``); ``world_to_texture =
-      T_tile @ T_api @ P V_i`` (``T_api`` the API's ``clip_to_texture``). ``near =
-      k D_min (1 - 1/64)`` and ``far = D_max (1 + 1/64)`` over the casters (and the
-      receivers for ``far``), ``D`` the largest absolute coordinate of ``p - light``:
-      every caster drawn in a face, ring included, lies at a face depth
-      ``>= k D``. A renderer picks the face with :func:`cube_face`'s rule (the
-      major axis of ``p - light``) and samples ``light_tiles[l, face]``.
+      T_tile @ T_api @ P V_i`` (``T_api`` the API's ``clip_to_texture``). ``near`` and
+      ``far`` are :func:`cube_depth_range`'s: ``near = k D_min (1 - 1/64)`` and
+      ``far = D_max (1 + 1/64)`` over the casters (and the receivers for ``far``), ``D``
+      the largest absolute coordinate of ``p - light``: every caster drawn in a face,
+      ring included, lies at a face depth ``>= k D``. ``D_min`` is over the casters'
+      whole triangles when they are given as :class:`Triangles` or a :class:`Mesh` (a
+      triangle can pass nearer the light than its corners), over the points otherwise.
+      A renderer picks the face with :func:`cube_face`'s rule (the major axis of
+      ``p - light``) and samples ``light_tiles[l, face]``.
 
     Arguments:
         lights: a sequence of ``L`` lights, each a :class:`PointLight`,
@@ -540,7 +543,9 @@ def fit_atlas(
             its entries are consecutive lights); or an ``(L, 4)`` homogeneous array
             (``w = 0`` directional); or an ``(L, 3)`` array of point lights. Cube
             tiles need point lights.
-        blocker_vertices: ``(N, 3)`` casters shared by every light, or ``(L, N, 3)``.
+        blocker_vertices: ``(N, 3)`` casters shared by every light, or ``(L, N, 3)``; or
+            their surfaces, :class:`Triangles` ``([L,] M, 3, 3)`` or a :class:`Mesh`
+            (the 2D fits use the corners; the cube faces' ``near`` the whole triangles).
         atlas: the :class:`ShadowAtlas` of these lights (``L`` entries).
         receivers: what the shadows fall on, shared by every light, as in
             :func:`fit_shadow`: ``(M, 3)`` points, :class:`Triangles` ``(M, 3, 3)`` or a
@@ -587,11 +592,16 @@ def fit_atlas(
                 f"with border_texels=sm.pcf_border_texels({pcf_radius}, {pcf_filter!r}))"
             )
     kinds, data = _read_lights(lights, count)
+    c_kind, c_name, c_array = _receiver_kind(blocker_vertices, "blocker_vertices")
     r_kind, r_name, r_array = _receiver_kind(receivers)
     ctx, (data, verts, R, n, f) = convert(
-        lights=data, blocker_vertices=blocker_vertices, **{r_name: r_array}, near=near, far=far
+        lights=data, **{c_name: c_array}, **{r_name: r_array}, near=near, far=far
     )
     xp = ctx.xp
+    tris = None  # surfaces: a cube face's near counts their insides; the 2D fits, corners
+    if c_kind != "points":
+        tris = caster_triangles(ctx, c_kind, verts, blocker_vertices, "blocker_vertices")
+        verts = xp.reshape(tris, (*tris.shape[:-3], -1, 3))
     if R is not None:
         R = _receiver_rows(ctx, r_kind, R, receivers)
     _check_arrays(verts, R, n, f, count)
@@ -606,7 +616,7 @@ def fit_atlas(
     parts.extend(flat)
     cubes = np.flatnonzero(atlas.light_cube & (atlas.light_size > 0))
     if cubes.size:
-        parts.append(_fit_cubes(ctx, atlas, cubes, data, verts, R, n, f, api, reversed_z))
+        parts.append(_fit_cubes(ctx, atlas, cubes, data, verts, tris, R, n, f, api, reversed_z))
     T = xp.asarray(_tile_transforms(atlas.tile_rect, atlas.atlas_size), dtype=ctx.dtype)
     clip, tex, lo, hi = _gather(ctx, parts, atlas.tile_light.shape[0])
     return AtlasFit(clip, T @ tex, atlas_viewports(atlas), atlas.tile_clamp, lo, hi)
@@ -873,8 +883,9 @@ def _raise_for(light: int, status: Array, finite: bool) -> None:
 
 
 def _fit_cubes(
-    ctx: Context, atlas: ShadowAtlas, cubes: Ints, data: Array, verts: Array, R: Array | None,
-    n: Array | None, f: Array | None, api: str, reversed_z: bool,
+    ctx: Context, atlas: ShadowAtlas, cubes: Ints, data: Array, verts: Array,
+    tris: Array | None, R: Array | None, n: Array | None, f: Array | None, api: str,
+    reversed_z: bool,
 ) -> tuple[Ints, Array, Array, Array, Array]:  # fmt: skip
     """The six faces of every cube light at once: ``(tiles, clip, texture, near, far)``."""
     xp = ctx.xp
@@ -886,7 +897,8 @@ def _fit_cubes(
     k = xp.asarray((size - 2 * atlas.light_border[cubes]) / size, dtype=ctx.dtype)
     VT = xp.matrix_transpose(verts[None] if verts.ndim == 2 else verts[cubes])
     corners = None if R is None else xp.reshape(R, (-1, 3))[None]
-    near, far, ok = cube_depth_core(xp, P, VT, corners, k, ctx.eps)
+    T = None if tris is None else (tris[None] if tris.ndim == 3 else tris[cubes])
+    near, far, ok = cube_depth_core(xp, P, VT, corners, k, ctx.eps, T)
     if not bool(np.asarray(ok).all()):
         bad = int(cubes[np.flatnonzero(~np.asarray(ok))[0]])
         raise ValueError(f"lights[{bad}]: {AT_LIGHT}, or give near=")

@@ -214,7 +214,11 @@ def cube_depth_range(
     )
     xp = ctx.xp
     require_last("light_position", light, 3, hint="a point light is (x, y, z)")
-    triangles = _caster_triangles(ctx, c_kind, C, casters)
+    triangles = None
+    if c_kind == "points":
+        require_vertices("casters", C)
+    else:
+        triangles = caster_triangles(ctx, c_kind, C, casters, "casters")
     points = C if triangles is None else xp.reshape(triangles, (*triangles.shape[:-3], -1, 3))
     shapes = [tuple(light.shape[:-1]), tuple(points.shape[:-2])]
     corners = None
@@ -237,19 +241,17 @@ def cube_depth_range(
     return CubeDepthRange(checks.poison(near, 0), checks.poison(far, 0))
 
 
-def _caster_triangles(ctx: Context, kind: str, C: Array, casters: Any) -> Array | None:
-    """The casters' triangles ``(*batch, M, 3, 3)``, or None for points (shape-checked)."""
-    if kind == "points":
-        require_vertices("casters", C)
-        return None
+def caster_triangles(ctx: Context, kind: str, C: Array, casters: Any, name: str) -> Array:
+    """Casters given as surfaces (``kind`` "triangles" or "mesh") as their triangles
+    ``(*batch, M, 3, 3)``, shape-checked."""
     if kind == "triangles":
         if C.ndim < 3 or tuple(C.shape[-2:]) != (3, 3):
             hint = "sm.Triangles holds M triangles of three corners (x, y, z)"
-            raise shape_error("casters", "(*batch, M, 3, 3)", tuple(C.shape), hint)
+            raise shape_error(name, "(*batch, M, 3, 3)", tuple(C.shape), hint)
         T = C
     else:
-        require_vertices("casters.vertices", C)
-        T = _mesh_corners(ctx, C, casters.faces, name="casters")
+        require_vertices(f"{name}.vertices", C)
+        T = _mesh_corners(ctx, C, casters.faces, name=name)
     if T.shape[-3] == 0:
-        raise ValueError("casters: no caster triangles (M = 0); a cube map needs casters")
+        raise ValueError(f"{name}: no caster triangles (M = 0); a shadow needs casters")
     return T

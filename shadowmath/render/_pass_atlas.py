@@ -102,9 +102,9 @@ def render_atlas(
     1. :func:`shadowmath.allocate_atlas` (``coverage``, ``atlas_size``, ``budget``,
        ``previous``; point lights are cube maps of six face tiles, the border
        :func:`shadowmath.pcf_border_texels` of the kernel), then
-       :func:`shadowmath.fit_atlas` of the casters' world vertices, every body's
-       triangles as receivers (:class:`shadowmath.Triangles`: they push ``far``),
-       OpenGL conventions.
+       :func:`shadowmath.fit_atlas` of the casters' world triangles
+       (:class:`shadowmath.Triangles`: a cube face's near counts their whole surfaces),
+       every body's triangles as receivers (they push ``far``), OpenGL conventions.
     2. One depth texture of ``atlas_size``\ ² texels, cleared to 1: per tile ``t``, the
        viewport and scissor ``viewports[t]``, every caster through ``world_to_clip[t]``
        with ``glPolygonOffset(*depth_bias)``.
@@ -181,12 +181,13 @@ def render_atlas(
         cube=table.cube, border_texels=sm.pcf_border_texels(k), previous=previous,
         budget=budget,
     )  # fmt: skip
-    world = [b.world_vertices() for b in prepared]
-    points = np.concatenate([v for v, c in zip(world, cast, strict=True) if c])
-    # Every body's triangles hold what the shadows fall on: a ground's corners may lie
-    # outside a light's map while its middle is under the casters.
-    surfaces = np.concatenate([v[b.triangles] for v, b in zip(world, prepared, strict=True)])
-    fit = sm.fit_atlas(list(lights), points, atlas, receivers=sm.Triangles(surfaces), pcf_radius=k)
+    world = [b.world_vertices()[b.triangles] for b in prepared]  # (T, 3, 3) each
+    # The casters as surfaces: a cube light's near counts a triangle passing nearer the
+    # light than its corners. Every body's triangles hold what the shadows fall on: a
+    # ground's corners may lie outside a light's map while its middle is under the casters.
+    casting = sm.Triangles(np.concatenate([t for t, c in zip(world, cast, strict=True) if c]))
+    surfaces = sm.Triangles(np.concatenate(world))
+    fit = sm.fit_atlas(list(lights), casting, atlas, receivers=surfaces, pcf_radius=k)
     gl = resolve_context(ctx)
     with GpuScene(gl, prepared, (), [], p @ v, size, (atlas.atlas_size,) * 2) as scene:
         depths = draw_atlas(scene, fit, atlas.atlas_size, cast, bias)
