@@ -22,6 +22,7 @@ from shadowmath._boundary._validate import (
     require_vertices,
     shape_error,
 )
+from shadowmath._math._cube import _int_arg, face_scale
 from shadowmath._math._frustum import NEAR_FAR_SLACK
 
 from ._setup import _mesh_corners, _receiver_kind, _receiver_rows
@@ -126,22 +127,12 @@ def triangle_min_chebyshev(xp: Any, T: Array) -> Array:
 
 
 def border_scale(map_size: int | None, border_texels: int) -> float:
-    """``k = (N - 2b) / N`` of a face with a border ring (1 without one), checked."""
-    for name, value in (("map_size", map_size), ("border_texels", border_texels)):
-        if value is not None and (isinstance(value, bool) or not isinstance(value, int)):
-            raise ValueError(f"{name}: expected an integer, got {value!r}")
-    if border_texels < 0:
-        raise ValueError(f"border_texels: must be >= 0, got {border_texels}")
-    if border_texels == 0:
-        return 1.0
+    """``k`` of :func:`face_scale`; 1 without a ring, where ``map_size`` may be None."""
     if map_size is None:
+        if _int_arg("border_texels", border_texels, 0) == 0:
+            return 1.0
         raise ValueError("map_size: a border ring of border_texels > 0 needs the face's map_size")
-    if map_size - 2 * border_texels < 1:
-        raise ValueError(
-            f"border_texels: a border of {border_texels} texels on each side leaves no inner "
-            f"texel of a {map_size}-texel face (need 2 * border_texels < map_size)"
-        )
-    return (map_size - 2 * border_texels) / map_size
+    return face_scale(map_size, border_texels)
 
 
 def cube_depth_range(

@@ -426,14 +426,7 @@ def cube_face_projection(
     """
     _check_api(api, reversed_z)
     zero_to_one, flip_y = _APIS[api]
-    size = _int_arg("map_size", map_size, 1)
-    border = _int_arg("border_texels", border_texels, 0)
-    if size - 2 * border < 1:
-        raise ValueError(
-            f"border_texels: a border of {border} texels on each side leaves no inner "
-            f"texel of a {size}-texel face (need 2 * border_texels < map_size)"
-        )
-    scale = (size - 2 * border) / size
+    scale = face_scale(map_size, border_texels)
     n, f = _numpy_scalar(near), _numpy_scalar(far)
     if n is not None and type(n) is type(f) and math.isfinite(n) and math.isfinite(f) and 0 < n < f:
         # One light's NumPy scalars that pass the checks below: no conversion to
@@ -448,6 +441,18 @@ def cube_face_projection(
     _check_near_far(checks, xp, n, f)
     P = _cube_face_projection(xp, n, f, scale, zero_to_one, flip_y, reversed_z)
     return checks.poison(P, 2)
+
+
+def face_scale(map_size: object, border_texels: object) -> float:
+    """``k = (N - 2b) / N``, the window scale of a face with a border ring, both checked."""
+    size = _int_arg("map_size", map_size, 1)
+    border = _int_arg("border_texels", border_texels, 0)
+    if size - 2 * border < 1:
+        raise ValueError(
+            f"border_texels: a border of {border} texels on each side leaves no inner "
+            f"texel of a {size}-texel face (need 2 * border_texels < map_size)"
+        )
+    return (size - 2 * border) / size
 
 
 def _int_arg(name: str, value: object, minimum: int) -> int:
