@@ -164,6 +164,34 @@ def test_scene_bounds_without_the_caster_lose_its_shadow(gl):
     assert count.differ_off_band > 200, count
 
 
+def test_without_bias_the_surfaces_shadow_themselves(gl):
+    """The test can fail: with neither the normal offset nor the slope-scaled bias the lit
+    faces are covered in acne (shadow pixels off the band, where the ray caster sees light)."""
+    _, _, count = shadows("horizon", ctx=gl, depth_bias=(0.0, 0.0), normal_offset=0.0)
+    print(f"no bias: {count}")
+    assert count.acne > 1000, count
+
+
+def test_wrong_splits_lose_shadows(gl, monkeypatch):
+    """The test can fail: the shader picks the cascade by view depth against ``splits``; with
+    the inner splits moved three times further out (capped before the last), points are looked
+    up in cascades fitted to nearer slices, outside their maps, and drawn lit."""
+    import shadowmath as sm
+
+    fit = sm.fit_cascades
+
+    def wrong_splits(*args, **kwargs):
+        c = fit(*args, **kwargs)
+        s = np.asarray(c.splits)
+        return c._replace(splits=np.r_[s[0], np.minimum(3 * s[1:-1], 0.99 * s[-1]), s[-1]])
+
+    monkeypatch.setattr(sm, "fit_cascades", wrong_splits)
+    frame, truth, count = shadows("down", ctx=gl)
+    lost = truth.shadow & (frame.shadow <= 0.5) & ~truth.band
+    print(f"wrong splits: {count}, {int(lost.sum())} shadow pixels lost")
+    assert lost.sum() > 300, count
+
+
 def test_the_debug_view_colours_each_cascade(gl):
     frame, _, _ = shadows("horizon", ctx=gl, cascade_colors=True)
     assert frame.cascade_color is not None
