@@ -25,7 +25,16 @@ from ._context import check_matrix, program, resolve_context, set_matrix, set_un
 from ._context import image_size as _image_size
 from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
 from ._pass_lit import draw_lit, finish, subtract_light
-from ._resources import Body, GpuScene, Light, Prepared, prepare_body, prepare_light, read_texture
+from ._resources import (
+    Body,
+    GpuScene,
+    Light,
+    Prepared,
+    PreparedLight,
+    prepare_body,
+    prepare_light,
+    read_texture,
+)
 
 #: The most cascades the shader takes (its uniform arrays' size).
 MAX_CASCADES = 8
@@ -181,36 +190,92 @@ def render_cascades(
         >>> frame.shadow.shape, frame.cascades.world_to_clip.shape
         ((64, 64), (4, 4, 4))
     """
+    options = cascade_options(
+        layout=layout, pcf_radius=pcf_radius, depth_bias=depth_bias,
+        normal_offset=normal_offset, ambient=ambient, background=background,
+        cascade_colors=cascade_colors,
+    )  # fmt: skip
+    fit_options = {
+        "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
+        "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
+        "stable": stable,
+    }  # fmt: skip
+    scene = prepare_cascades(bodies, light, view, projection, options, fit_options)
+    size = _image_size("image_size", image_size)
+    texels = _image_size("map_size", map_size)
+    gl = resolve_context(ctx)
+    v, p = scene.view, scene.projection
+    with GpuScene(gl, scene.bodies, (), [scene.sun], p @ v, size, texels) as gpu:
+        return _draw(gpu, v, scene.fit, options)
+
+
+class CascadeScene(NamedTuple):
+    """The checked bodies, sun and camera of a cascades pass, and the fitted cascades."""
+
+    bodies: list[Prepared]
+    sun: PreparedLight
+    view: NDArray[np.float64]
+    projection: NDArray[np.float64]
+    fit: sm.Cascades
+
+
+def cascade_options(
+    *,
+    layout: Literal["layers", "atlas"],
+    pcf_radius: int,
+    depth_bias: tuple[float, float] | None,
+    normal_offset: float,
+    ambient: float = 0.15,
+    background: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    cascade_colors: bool = False,
+) -> CascadeOptions:
+    """The options of a cascades pass, checked; ``depth_bias`` defaults to ``(2 k + 1, 2)``,
+    :func:`shadowmath.slope_scaled_bias`'s derived minimum for a box PCF of radius ``k``."""
+    if layout not in ("layers", "atlas"):
+        raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
+    k = pcf_radius_option(pcf_radius)
+    if not (np.isfinite(normal_offset) and normal_offset >= 0):
+        raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
+    if not (np.isfinite(ambient) and ambient >= 0):
+        raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
+    bias = (2 * k + 1.0, 2.0) if depth_bias is None else depth_bias_option(depth_bias, k)
+    return CascadeOptions(layout, k, bias, float(normal_offset), float(ambient), background,
+                          cascade_colors)  # fmt: skip
+
+
+def prepare_cascades(
+    bodies: Sequence[Body],
+    light: Light,
+    view: Any,
+    projection: Any,
+    options: CascadeOptions,
+    fit_options: dict[str, Any],
+    *,
+    api: Literal["opengl", "webgpu"] = "opengl",
+) -> CascadeScene:
+    """Check the bodies, the sun and the camera (OpenGL conventions); fit the cascades with
+    :func:`shadowmath.fit_cascades` in ``api``'s conventions, given the projection in
+    ``api``'s (``fit_options``: its keywords, ``scene_bounds`` defaulting to the bodies'
+    box)."""
     prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
     if not prepared:
         raise ValueError("bodies: expected at least one body")
     sun = prepare_light("light", light)
     if not sun.directional:
         raise ValueError("light: cascades need a directional light, Light(direction=...)")
-    if layout not in ("layers", "atlas"):
-        raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
-    k = pcf_radius_option(pcf_radius)
-    if not (np.isfinite(normal_offset) and normal_offset >= 0):
-        raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
-    bias = (2 * k + 1.0, 2.0) if depth_bias is None else depth_bias_option(depth_bias, k)
-    options = CascadeOptions(layout, k, bias, float(normal_offset),
-                             float(ambient), background, cascade_colors)  # fmt: skip
-    if not (np.isfinite(options.ambient) and options.ambient >= 0):
-        raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
     v, p = check_matrix("view", view), check_matrix("projection", projection)
-    bounds = _bounds(prepared) if scene_bounds is None else scene_bounds
-    fit = sm.fit_cascades(
-        sun.position, v, p, bounds, map_size, count=count, splits=splits, scheme=scheme,
-        lam=lam, max_distance=max_distance, overlap=overlap, stable=stable,
-        pcf_radius=k, layout=layout,
-    )  # fmt: skip
+    fit_options = dict(fit_options)
+    bounds = fit_options.pop("scene_bounds")
+    bounds = _bounds(prepared) if bounds is None else bounds
+    map_size = fit_options.pop("map_size")
+    # The projection in api's own clip conventions, as that API's renderer holds it.
+    camera = sm.api_convention(api=api).gl_clip_to_clip @ p
+    fit = sm.fit_cascades(sun.position, v, camera, bounds, map_size, api=api,
+                          pcf_radius=options.pcf_radius, layout=options.layout,
+                          **fit_options)  # fmt: skip
     if fit.splits.shape[-1] - 1 > MAX_CASCADES:
         raise ValueError(f"count: at most {MAX_CASCADES} cascades, got {fit.splits.shape[-1] - 1}")
-    size = _image_size("image_size", image_size)
-    texels = _image_size("map_size", map_size)
-    gl = resolve_context(ctx)
-    with GpuScene(gl, prepared, (), [sun], p @ v, size, texels) as scene:
-        return _draw(scene, v, fit, options)
+    return CascadeScene(prepared, sun, v, p, fit)
 
 
 def _bounds(bodies: Sequence[Prepared]) -> NDArray[np.float64]:

@@ -23,7 +23,7 @@ from shadowmath import ShadowSetup, api_convention, column_major_bytes
 from ._context import check_matrix
 from ._context import image_size as _image_size
 from ._pass_depth import DepthPass, fit_depth, world_to_light_clip
-from ._resources import Body, Light, prepare_body, prepare_light, vertex_data
+from ._resources import Body, Light, Prepared, prepare_body, prepare_light, vertex_data
 
 #: Debian packages that provide a Vulkan driver without a GPU (Mesa's lavapipe/llvmpipe).
 VULKAN_DEBIAN_PACKAGES = ("mesa-vulkan-drivers",)
@@ -102,12 +102,12 @@ def adapter_description() -> str:
     return str(info.get("device", "")) or str(info)
 
 
-def _shader(device: Any, name: str) -> Any:
+def wgsl_module(device: Any, name: str) -> Any:
     code = (resources.files("shadowmath.render") / "shaders" / name).read_text(encoding="utf-8")
     return device.create_shader_module(label=name, code=code)
 
 
-def _uniform(device: Any, data: bytes) -> Any:
+def uniform_buffer(device: Any, data: bytes) -> Any:
     usage = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
     return device.create_buffer_with_data(data=data, usage=usage)
 
@@ -134,10 +134,92 @@ def _scene_uniforms(
     return mats + bytes(tail_bytes)
 
 
-def _read(device: Any, texture: Any, size: tuple[int, int], components: int) -> NDArray[Any]:
+#: The vertex buffers' layout (:func:`vertex_data`): position at 0, face normal at 1.
+VERTEX_LAYOUT: dict[str, Any] = {
+    "array_stride": 36,
+    "step_mode": "vertex",
+    "attributes": [
+        {"format": "float32x3", "offset": 0, "shader_location": 0},
+        {"format": "float32x3", "offset": 24, "shader_location": 1},
+    ],
+}
+
+
+def vertex_buffers(device: Any, bodies: Sequence[Prepared]) -> list[tuple[Any, int]]:
+    """Each body's un-indexed vertex buffer and its vertex count."""
+    usage = wgpu.BufferUsage.VERTEX
+    return [
+        (device.create_buffer_with_data(data=vertex_data(b.vertices, b.triangles), usage=usage),
+         3 * len(b.triangles))
+        for b in bodies
+    ]  # fmt: skip
+
+
+def depth_pipeline(device: Any, bias: tuple[float, float] = (0.0, 0.0)) -> Any:
+    """Depth only through ``depth_map.wgsl`` into ``depth32float``, test ``less``, both
+    faces, WebGPU's polygon offset ``bias = (factor, units)`` (``units`` rounded)."""
+    return device.create_render_pipeline(
+        layout="auto",
+        vertex={
+            "module": wgsl_module(device, "depth_map.wgsl"),
+            "entry_point": "vs_main",
+            "buffers": [{**VERTEX_LAYOUT, "attributes": VERTEX_LAYOUT["attributes"][:1]}],
+        },
+        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        depth_stencil={
+            "format": "depth32float",
+            "depth_write_enabled": True,
+            "depth_compare": "less",
+            "depth_bias": round(bias[1]),  # an integer in WebGPU
+            "depth_bias_slope_scale": float(bias[0]),
+            "depth_bias_clamp": 0.0,
+        },
+        fragment=None,
+    )
+
+
+def draw_depth(
+    device: Any,
+    pipeline: Any,
+    target: Any,
+    draws: Sequence[tuple[NDArray[np.float64], Any, int]],
+    viewport: tuple[int, int, int, int] | None = None,
+) -> None:
+    """Clear the depth view ``target`` to 1 (or only draw, with ``viewport``: a tile of it
+    already cleared) and draw each ``(body_to_clip, vertex buffer, count)``."""
+    encoder = device.create_command_encoder()
+    rp = encoder.begin_render_pass(
+        color_attachments=[],
+        depth_stencil_attachment={
+            "view": target,
+            "depth_clear_value": 1.0,
+            "depth_load_op": "clear" if viewport is None else "load",
+            "depth_store_op": "store",
+        },
+    )
+    rp.set_pipeline(pipeline)
+    if viewport is not None:
+        rp.set_viewport(*viewport, 0.0, 1.0)
+    layout = pipeline.get_bind_group_layout(0)
+    for body_to_clip, vbo, count in draws:
+        buf = uniform_buffer(device, column_major_bytes(body_to_clip))
+        group = device.create_bind_group(
+            layout=layout, entries=[{"binding": 0, "resource": {"buffer": buf}}]
+        )
+        rp.set_bind_group(0, group)
+        rp.set_vertex_buffer(0, vbo)
+        rp.draw(count)
+    rp.end()
+    device.queue.submit([encoder.finish()])
+
+
+def read_wgpu_texture(
+    device: Any, texture: Any, size: tuple[int, int], components: int, layer: int = 0
+) -> NDArray[Any]:
+    """``(h, w, components)`` float32 of a texture's ``layer``, row 0 its first row."""
     w, h = size
     data = device.queue.read_texture(
-        {"texture": texture, "mip_level": 0, "origin": (0, 0, 0)},
+        {"texture": texture, "mip_level": 0, "origin": (0, 0, layer)},
         {"offset": 0, "bytes_per_row": 4 * components * w},
         (w, h, 1),
     )
@@ -207,21 +289,10 @@ def render_depth_wgpu(
     world_to_texture = conv.gl_clip_to_texture @ light_clip
     camera_clip = conv.gl_clip_to_clip @ camera
 
-    vbos = [
-        device.create_buffer_with_data(
-            data=vertex_data(b.vertices, b.triangles), usage=wgpu.BufferUsage.VERTEX
-        )
-        for b in bodies
-    ]
-    counts = [3 * len(b.triangles) for b in bodies]
-    layout: dict[str, Any] = {
-        "array_stride": 36,
-        "step_mode": "vertex",
-        "attributes": [
-            {"format": "float32x3", "offset": 0, "shader_location": 0},
-            {"format": "float32x3", "offset": 24, "shader_location": 1},
-        ],
-    }
+    buffers = vertex_buffers(device, bodies)
+    vbos = [vbo for vbo, _ in buffers]
+    counts = [count for _, count in buffers]
+    layout = VERTEX_LAYOUT
 
     # Pass 1: the depth map.
     depth_tex = device.create_texture(
@@ -231,47 +302,10 @@ def render_depth_wgpu(
         | wgpu.TextureUsage.TEXTURE_BINDING
         | wgpu.TextureUsage.COPY_SRC,
     )
-    map_shader = _shader(device, "depth_map.wgsl")
-    map_pipeline = device.create_render_pipeline(
-        layout="auto",
-        vertex={
-            "module": map_shader,
-            "entry_point": "vs_main",
-            "buffers": [{**layout, "attributes": layout["attributes"][:1]}],
-        },
-        primitive={"topology": "triangle-list", "cull_mode": "none"},
-        depth_stencil={
-            "format": "depth32float",
-            "depth_write_enabled": True,
-            "depth_compare": "less",
-            "depth_bias": round(units),  # an integer in WebGPU
-            "depth_bias_slope_scale": float(factor),
-            "depth_bias_clamp": 0.0,
-        },
-        fragment=None,
-    )
-    encoder = device.create_command_encoder()
-    rp = encoder.begin_render_pass(
-        color_attachments=[],
-        depth_stencil_attachment={
-            "view": depth_tex.create_view(),
-            "depth_clear_value": 1.0,
-            "depth_load_op": "clear",
-            "depth_store_op": "store",
-        },
-    )
-    rp.set_pipeline(map_pipeline)
-    for b, vbo, count in zip(bodies, vbos, counts, strict=True):
-        buf = _uniform(device, column_major_bytes(light_to_clip @ b.to_world))
-        group = device.create_bind_group(
-            layout=map_pipeline.get_bind_group_layout(0),
-            entries=[{"binding": 0, "resource": {"buffer": buf}}],
-        )
-        rp.set_bind_group(0, group)
-        rp.set_vertex_buffer(0, vbo)
-        rp.draw(count)
-    rp.end()
-    device.queue.submit([encoder.finish()])
+    draws = [
+        (light_to_clip @ b.to_world, vbo, n) for b, (vbo, n) in zip(bodies, buffers, strict=True)
+    ]
+    draw_depth(device, depth_pipeline(device, (factor, units)), depth_tex.create_view(), draws)
 
     # Pass 2: the bodies from the camera, compared with the map.
     w, h = size
@@ -283,7 +317,7 @@ def render_depth_wgpu(
     camera_depth = device.create_texture(
         size=(w, h, 1), format="depth32float", usage=wgpu.TextureUsage.RENDER_ATTACHMENT
     )
-    scene_shader = _shader(device, "depth_scene.wgsl")
+    scene_shader = wgsl_module(device, "depth_scene.wgsl")
     scene_pipeline = device.create_render_pipeline(
         layout="auto",
         vertex={"module": scene_shader, "entry_point": "vs_main", "buffers": [layout]},
@@ -333,7 +367,7 @@ def render_depth_wgpu(
         group = device.create_bind_group(
             layout=scene_pipeline.get_bind_group_layout(0),
             entries=[
-                {"binding": 0, "resource": {"buffer": _uniform(device, data)}},
+                {"binding": 0, "resource": {"buffer": uniform_buffer(device, data)}},
                 {"binding": 1, "resource": depth_view},
                 {"binding": 2, "resource": sampler},
             ],
@@ -344,10 +378,10 @@ def render_depth_wgpu(
     rp.end()
     device.queue.submit([encoder.finish()])
 
-    mask = _read(device, targets[0], size, 1)[..., 0]
-    surface = _read(device, targets[1], size, 4)
-    normal = _read(device, targets[2], size, 4)[..., :3]
-    depth_map = _read(device, depth_tex, map_texels, 1)[..., 0]
+    mask = read_wgpu_texture(device, targets[0], size, 1)[..., 0]
+    surface = read_wgpu_texture(device, targets[1], size, 4)
+    normal = read_wgpu_texture(device, targets[2], size, 4)[..., :3]
+    depth_map = read_wgpu_texture(device, depth_tex, map_texels, 1)[..., 0]
     body = np.rint(surface[..., 3]).astype(np.int32) - 1
     empty = (body < 0)[..., None]
     return WgpuFrame(

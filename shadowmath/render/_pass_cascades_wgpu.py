@@ -1,0 +1,270 @@
+"""Cascaded shadow maps on WebGPU (``wgpu``): :func:`render_cascades_wgpu`.
+
+The WebGPU counterpart of :func:`render_cascades`, a client of the public API:
+:func:`shadowmath.fit_cascades` with ``api="webgpu"`` gives every matrix and viewport in
+WebGPU's conventions (clip depth ``0..w``, texture and viewport origin at the first row
+in memory); each cascade's depth is drawn into a layer of a ``depth32float`` texture
+array (or a tile of one atlas layer, through ``viewports[i]``) with no depth bias, and the
+camera pass ``shaders/cascades.wgsl`` picks, blends, biases and filters as
+``shaders/cascades.frag`` does.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, Literal, NamedTuple
+
+import numpy as np
+import wgpu
+from numpy.typing import NDArray
+
+import shadowmath as sm
+from shadowmath import api_convention, column_major_bytes
+
+from ._context import image_size as _image_size
+from ._pass_cascades import (
+    MAX_CASCADES,
+    NORMAL_OFFSET,
+    CascadeOptions,
+    CascadeScene,
+    cascade_index,
+    cascade_options,
+    prepare_cascades,
+)
+from ._pass_wgpu import (
+    VERTEX_LAYOUT,
+    adapter_description,
+    depth_pipeline,
+    draw_depth,
+    read_wgpu_texture,
+    uniform_buffer,
+    vertex_buffers,
+    wgpu_device,
+    wgsl_module,
+)
+from ._resources import Body, Light
+
+#: The resolution ``r_min`` of a ``depth32float`` buffer near depth 1 (as
+#: :func:`shadowmath.slope_scaled_bias` with ``depth_bits=None``): ``depth_bias``'s unit.
+FLOAT_DEPTH_RESOLUTION = 2.0**-24
+
+
+class WgpuCascadeFrame(NamedTuple):
+    """What :func:`render_cascades_wgpu` returns; images have row 0 at the *top*.
+
+    Attributes:
+        shadow: ``(H, W)`` float32 shadow mask (1 shadowed, 0 lit; PCF and the blend
+            bands give fractions; 0 on the background).
+        cascade: ``(H, W)`` int32, the cascade serving each pixel's view depth (``-1``
+            on the background and beyond the last split).
+        position: ``(H, W, 3)`` float32 world position of the visible surface (NaN on
+            the background).
+        normal: ``(H, W, 3)`` float32 unit face normal (NaN on the background).
+        body: ``(H, W)`` int32, which body is visible (``-1`` the background).
+        cascades: the :class:`shadowmath.Cascades` (``api="webgpu"``) drawn and sampled.
+        shadow_maps: ``(layers, h, w)`` float32 depths, row 0 is WebGPU's ``t = 0``: one
+            layer per cascade, or the whole atlas as one layer.
+        adapter: the adapter's description.
+    """
+
+    shadow: NDArray[np.float32]
+    cascade: NDArray[np.int32]
+    position: NDArray[np.float32]
+    normal: NDArray[np.float32]
+    body: NDArray[np.int32]
+    cascades: sm.Cascades
+    shadow_maps: NDArray[np.float32]
+    adapter: str
+
+
+def render_cascades_wgpu(
+    bodies: Sequence[Body],
+    light: Light,
+    view: Any,
+    projection: Any,
+    *,
+    scene_bounds: Any = None,
+    image_size: int | tuple[int, int] = (512, 384),
+    map_size: int | tuple[int, int] = 1024,
+    count: int = 4,
+    splits: Any = None,
+    scheme: Literal["uniform", "log", "practical"] = "practical",
+    lam: float = 0.5,
+    max_distance: float | None = None,
+    overlap: float = 0.1,
+    stable: bool = False,
+    layout: Literal["layers", "atlas"] = "layers",
+    pcf_radius: int = 0,
+    depth_bias: tuple[float, float] | None = None,
+    normal_offset: float = NORMAL_OFFSET,
+) -> WgpuCascadeFrame:
+    """Render bodies under a sun with cascaded shadow maps, in WebGPU.
+
+    :func:`render_cascades` on a second graphics API: the same arguments (``view`` and
+    ``projection`` in OpenGL's conventions, as :func:`look_at` and :func:`perspective`
+    give them), the cascades fitted with ``api="webgpu"``, the camera converted by
+    ``api_convention(api="webgpu").gl_clip_to_clip``. Every body casts and receives.
+
+    Arguments:
+        bodies: every body casts and receives.
+        light: a directional :class:`Light` (``Light(direction=...)``, toward the sun).
+        view, projection: the camera, in OpenGL's conventions, as in :func:`render_cascades`.
+        scene_bounds, image_size, map_size: as in :func:`render_cascades`.
+        count, splits, scheme, lam, max_distance, overlap, stable, layout: as in
+            :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades).
+        pcf_radius, normal_offset: as in :func:`render_cascades`.
+        depth_bias: as in :func:`render_cascades`, ``units`` counting
+            :data:`FLOAT_DEPTH_RESOLUTION` (``depth32float`` maps).
+
+    Returns:
+        :class:`WgpuCascadeFrame`.
+
+    Raises:
+        ValueError: as :func:`render_cascades`.
+        WgpuUnavailableError: no WebGPU adapter.
+    """
+    options = cascade_options(layout=layout, pcf_radius=pcf_radius, depth_bias=depth_bias,
+                              normal_offset=normal_offset)  # fmt: skip
+    fit_options = {
+        "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
+        "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
+        "stable": stable,
+    }  # fmt: skip
+    scene = prepare_cascades(bodies, light, view, projection, options, fit_options, api="webgpu")
+    size = _image_size("image_size", image_size)
+    device = wgpu_device()
+    buffers = vertex_buffers(device, scene.bodies)
+    maps, depths = _draw_maps(device, scene, buffers, atlas=options.layout == "atlas")
+    shadow, surface, normal = _draw_camera(device, scene, options, buffers, maps, size)
+    body = np.rint(surface[..., 3]).astype(np.int32) - 1
+    empty = (body < 0)[..., None]
+    position = np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32)
+    return WgpuCascadeFrame(
+        shadow=shadow.astype(np.float32),
+        cascade=cascade_index(position, scene.view, np.asarray(scene.fit.splits)),
+        position=position,
+        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        body=body,
+        cascades=scene.fit,
+        shadow_maps=depths,
+        adapter=adapter_description(),
+    )
+
+
+def _draw_maps(
+    device: Any, scene: CascadeScene, buffers: Sequence[tuple[Any, int]], *, atlas: bool
+) -> tuple[Any, NDArray[np.float32]]:
+    """Every body's depth into each cascade's map: a ``depth32float`` texture array of one
+    layer per cascade, or of one atlas layer with each cascade in its viewport; the
+    texture and its ``(layers, h, w)`` depths read back."""
+    fit = scene.fit
+    ports = np.asarray(fit.viewports, dtype=np.int64)
+    clip = np.asarray(fit.world_to_clip, dtype=np.float64)
+    if atlas:
+        w, h = int((ports[:, 0] + ports[:, 2]).max()), int((ports[:, 1] + ports[:, 3]).max())
+    else:
+        w, h = int(ports[0, 2]), int(ports[0, 3])
+    layers = 1 if atlas else len(ports)
+    usage = wgpu.TextureUsage
+    texture = device.create_texture(
+        size=(w, h, layers), format="depth32float",
+        usage=usage.RENDER_ATTACHMENT | usage.TEXTURE_BINDING | usage.COPY_SRC,
+    )  # fmt: skip
+    pipeline = depth_pipeline(device)
+    for i, port in enumerate(ports):
+        draws = [(clip[i] @ b.to_world, vbo, n)
+                 for b, (vbo, n) in zip(scene.bodies, buffers, strict=True)]  # fmt: skip
+        layer = 0 if atlas else i
+        target = texture.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
+        if not atlas or i == 0:
+            draw_depth(device, pipeline, target, [])  # clear the layer
+        x, y, tw, th = (int(c) for c in port)
+        draw_depth(device, pipeline, target, draws, (x, y, tw, th))
+    depths = np.stack(
+        [read_wgpu_texture(device, texture, (w, h), 1, layer)[..., 0] for layer in range(layers)]
+    )
+    return texture, depths.astype(np.float32)
+
+
+def _frame_uniforms(scene: CascadeScene, options: CascadeOptions) -> bytes:
+    """``struct Frame`` of cascades.wgsl (896 bytes)."""
+    fit = scene.fit
+    conv = api_convention(api="webgpu")
+    camera = conv.gl_clip_to_clip @ scene.projection @ scene.view
+    head = np.zeros(16, dtype=np.float32)
+    head[:4] = -scene.view[2]
+    head[4:8] = scene.sun.homogeneous
+    ints = np.array([len(fit.viewports), options.pcf_radius, options.layout == "atlas"], np.int32)
+    floats = np.array([options.normal_offset, *options.bias], dtype=np.float32)
+    floats[2] *= FLOAT_DEPTH_RESOLUTION  # constant_bias in depth units
+    data = column_major_bytes(camera) + head[:8].tobytes() + ints.tobytes() + floats.tobytes()
+    data += bytes(128 - len(data))
+    splits = np.asarray(fit.splits, dtype=np.float32)
+    band = np.asarray(fit.band_end, dtype=np.float32)
+    for i, port in enumerate(np.asarray(fit.viewports, dtype=np.int32)):
+        tail = np.array([splits[i], splits[i + 1], band[i], 0.0], dtype=np.float32)
+        data += column_major_bytes(fit.world_to_texture[i]) + port.tobytes() + tail.tobytes()
+    return data + bytes(96 * (MAX_CASCADES - len(fit.viewports)))
+
+
+def _body_uniforms(body_to_world: NDArray[np.float64], body_id: int) -> bytes:
+    """``struct Body`` of cascades.wgsl: two mat4x4 and the id (144 bytes)."""
+    normal = np.eye(4)
+    normal[:3, :3] = np.linalg.inv(body_to_world[:3, :3]).T
+    tail = np.array([body_id, 0, 0, 0], dtype=np.float32)
+    return column_major_bytes(body_to_world) + column_major_bytes(normal) + tail.tobytes()
+
+
+def _draw_camera(
+    device: Any,
+    scene: CascadeScene,
+    options: CascadeOptions,
+    buffers: Sequence[tuple[Any, int]],
+    maps: Any,
+    size: tuple[int, int],
+) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
+    """Every body from the camera through cascades.wgsl: the shadow, the position record
+    (w = body id + 1) and the normals, read back."""
+    w, h = size
+    usage = wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC
+    formats = ("r32float", "rgba32float", "rgba32float")
+    targets = [device.create_texture(size=(w, h, 1), format=f, usage=usage) for f in formats]
+    depth = device.create_texture(size=(w, h, 1), format="depth32float",
+                                  usage=wgpu.TextureUsage.RENDER_ATTACHMENT)  # fmt: skip
+    shader = wgsl_module(device, "cascades.wgsl")
+    pipeline = device.create_render_pipeline(
+        layout="auto",
+        vertex={"module": shader, "entry_point": "vs_main", "buffers": [VERTEX_LAYOUT]},
+        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        depth_stencil={"format": "depth32float", "depth_write_enabled": True,
+                       "depth_compare": "less"},
+        fragment={"module": shader, "entry_point": "fs_main",
+                  "targets": [{"format": f} for f in formats]},
+    )  # fmt: skip
+    encoder = device.create_command_encoder()
+    rp = encoder.begin_render_pass(
+        color_attachments=[{"view": t.create_view(), "clear_value": (0.0, 0.0, 0.0, 0.0),
+                            "load_op": "clear", "store_op": "store"} for t in targets],
+        depth_stencil_attachment={"view": depth.create_view(), "depth_clear_value": 1.0,
+                                  "depth_load_op": "clear", "depth_store_op": "store"},
+    )  # fmt: skip
+    rp.set_pipeline(pipeline)
+    frame = uniform_buffer(device, _frame_uniforms(scene, options))
+    maps_view = maps.create_view(dimension="2d-array")
+    for i, (body, (vbo, n)) in enumerate(zip(scene.bodies, buffers, strict=True)):
+        buffer = uniform_buffer(device, _body_uniforms(body.to_world, i))
+        entries = [{"binding": 0, "resource": {"buffer": frame}},
+                   {"binding": 1, "resource": maps_view},
+                   {"binding": 2, "resource": {"buffer": buffer}}]  # fmt: skip
+        group = device.create_bind_group(layout=pipeline.get_bind_group_layout(0), entries=entries)
+        rp.set_bind_group(0, group)
+        rp.set_vertex_buffer(0, vbo)
+        rp.draw(n)
+    rp.end()
+    device.queue.submit([encoder.finish()])
+    shadow = read_wgpu_texture(device, targets[0], size, 1)[..., 0]
+    return (
+        shadow,
+        read_wgpu_texture(device, targets[1], size, 4),
+        read_wgpu_texture(device, targets[2], size, 4)[..., :3],
+    )
