@@ -36,6 +36,8 @@ from ._pass_wgpu import (
     adapter_description,
     depth_pipeline,
     draw_depth,
+    normal_to_world,
+    read_record,
     read_wgpu_texture,
     uniform_buffer,
     vertex_buffers,
@@ -122,6 +124,19 @@ def render_cascades_wgpu(
     Raises:
         ValueError: as :func:`render_cascades`.
         WgpuUnavailableError: no WebGPU adapter.
+
+    Example:
+        >>> from shadowmath.meshes import box, grid
+        >>> from shadowmath.render import Body, Light, look_at, perspective
+        >>> ground = Body(*grid((100.0, 100.0), segments=(1, 1)))
+        >>> tower = Body(*box((2.0, 2.0, 8.0)), to_world=np.array(
+        ...     [[1, 0, 0, 5], [0, 1, 0, 20], [0, 0, 1, 4], [0, 0, 0, 1.0]]))
+        >>> view = look_at([0, -40, 3], [0, 0, 1], [0, 0, 1])
+        >>> frame = render_cascades_wgpu([ground, tower], Light(direction=(1, 1, 2)), view,
+        ...                              perspective(50.0, 1.0, 0.5, 100.0), image_size=64,
+        ...                              map_size=256, layout="atlas")
+        >>> frame.shadow.shape, frame.shadow_maps.shape
+        ((64, 64), (1, 512, 512))
     """
     options = cascade_options(layout=layout, pcf_radius=pcf_radius, depth_bias=depth_bias,
                               normal_offset=normal_offset)  # fmt: skip
@@ -135,15 +150,13 @@ def render_cascades_wgpu(
     device = wgpu_device()
     buffers = vertex_buffers(device, scene.bodies)
     maps, depths = _draw_maps(device, scene, buffers, atlas=options.layout == "atlas")
-    shadow, surface, normal = _draw_camera(device, scene, options, buffers, maps, size)
-    body = np.rint(surface[..., 3]).astype(np.int32) - 1
-    empty = (body < 0)[..., None]
-    position = np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32)
+    targets = _draw_camera(device, scene, options, buffers, maps, size)
+    shadow, position, normal, body = read_record(device, targets, size)
     return WgpuCascadeFrame(
-        shadow=shadow.astype(np.float32),
+        shadow=shadow,
         cascade=cascade_index(position, scene.view, np.asarray(scene.fit.splits)),
         position=position,
-        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        normal=normal,
         body=body,
         cascades=scene.fit,
         shadow_maps=depths,
@@ -209,10 +222,9 @@ def _frame_uniforms(scene: CascadeScene, options: CascadeOptions) -> bytes:
 
 def _body_uniforms(body_to_world: NDArray[np.float64], body_id: int) -> bytes:
     """``struct Body`` of cascades.wgsl: two mat4x4 and the id (144 bytes)."""
-    normal = np.eye(4)
-    normal[:3, :3] = np.linalg.inv(body_to_world[:3, :3]).T
+    normal = column_major_bytes(normal_to_world(body_to_world))
     tail = np.array([body_id, 0, 0, 0], dtype=np.float32)
-    return column_major_bytes(body_to_world) + column_major_bytes(normal) + tail.tobytes()
+    return column_major_bytes(body_to_world) + normal + tail.tobytes()
 
 
 def _draw_camera(
@@ -222,9 +234,9 @@ def _draw_camera(
     buffers: Sequence[tuple[Any, int]],
     maps: Any,
     size: tuple[int, int],
-) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
-    """Every body from the camera through cascades.wgsl: the shadow, the position record
-    (w = body id + 1) and the normals, read back."""
+) -> list[Any]:
+    """Every body from the camera through cascades.wgsl, into the shadow, position (w =
+    body id + 1) and normal targets (:func:`read_record`)."""
     w, h = size
     usage = wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC
     formats = ("r32float", "rgba32float", "rgba32float")
@@ -262,9 +274,4 @@ def _draw_camera(
         rp.draw(n)
     rp.end()
     device.queue.submit([encoder.finish()])
-    shadow = read_wgpu_texture(device, targets[0], size, 1)[..., 0]
-    return (
-        shadow,
-        read_wgpu_texture(device, targets[1], size, 4),
-        read_wgpu_texture(device, targets[2], size, 4)[..., :3],
-    )
+    return targets

@@ -112,6 +112,13 @@ def uniform_buffer(device: Any, data: bytes) -> Any:
     return device.create_buffer_with_data(data=data, usage=usage)
 
 
+def normal_to_world(body_to_world: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(4, 4)`` the inverse transpose of ``body_to_world``'s 3x3: normals to world."""
+    normal = np.eye(4)
+    normal[:3, :3] = np.linalg.inv(body_to_world[:3, :3]).T
+    return normal
+
+
 def _scene_uniforms(
     world_to_clip: NDArray[np.float64],
     body_to_world: NDArray[np.float64],
@@ -121,8 +128,7 @@ def _scene_uniforms(
     pcf_radius: int,
 ) -> bytes:
     """``struct Body`` of depth_scene.wgsl: four mat4x4 (column-major), vec3 + f32, i32."""
-    normal = np.eye(4)
-    normal[:3, :3] = np.linalg.inv(body_to_world[:3, :3]).T
+    normal = normal_to_world(body_to_world)
     mats = b"".join(
         column_major_bytes(m) for m in (world_to_clip, body_to_world, normal, body_to_texture)
     )
@@ -211,6 +217,21 @@ def draw_depth(
         rp.draw(count)
     rp.end()
     device.queue.submit([encoder.finish()])
+
+
+def read_record(
+    device: Any, targets: Sequence[Any], size: tuple[int, int]
+) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.int32]]:
+    """The camera pass's ``r32float`` shadow and ``rgba32float`` position (w = body id + 1)
+    and normal targets, read back: shadow ``(H, W)``, position and normal ``(H, W, 3)``
+    (NaN on the background), body ``(H, W)`` (``-1`` the background)."""
+    shadow = read_wgpu_texture(device, targets[0], size, 1)[..., 0].astype(np.float32)
+    surface = read_wgpu_texture(device, targets[1], size, 4)
+    normal = read_wgpu_texture(device, targets[2], size, 4)[..., :3]
+    body = np.rint(surface[..., 3]).astype(np.int32) - 1
+    empty = (body < 0)[..., None]
+    position = np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32)
+    return shadow, position, np.where(empty, np.float32(np.nan), normal).astype(np.float32), body
 
 
 def read_wgpu_texture(
@@ -378,16 +399,12 @@ def render_depth_wgpu(
     rp.end()
     device.queue.submit([encoder.finish()])
 
-    mask = read_wgpu_texture(device, targets[0], size, 1)[..., 0]
-    surface = read_wgpu_texture(device, targets[1], size, 4)
-    normal = read_wgpu_texture(device, targets[2], size, 4)[..., :3]
+    mask, position, normal, body = read_record(device, targets, size)
     depth_map = read_wgpu_texture(device, depth_tex, map_texels, 1)[..., 0]
-    body = np.rint(surface[..., 3]).astype(np.int32) - 1
-    empty = (body < 0)[..., None]
     return WgpuFrame(
-        shadow=mask.astype(np.float32),
-        position=np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32),
-        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        shadow=mask,
+        position=position,
+        normal=normal,
         body=body,
         setup=setup,
         depth_map=depth_map.astype(np.float32),
