@@ -32,9 +32,9 @@ from ._pass_cascades import (
     prepare_cascades,
 )
 from ._pass_wgpu import (
-    VERTEX_LAYOUT,
     adapter_description,
     depth_pipeline,
+    draw_camera,
     draw_depth,
     normal_to_world,
     read_record,
@@ -42,7 +42,6 @@ from ._pass_wgpu import (
     uniform_buffer,
     vertex_buffers,
     wgpu_device,
-    wgsl_module,
 )
 from ._resources import Body, Light
 
@@ -235,43 +234,14 @@ def _draw_camera(
     maps: Any,
     size: tuple[int, int],
 ) -> list[Any]:
-    """Every body from the camera through cascades.wgsl, into the shadow, position (w =
-    body id + 1) and normal targets (:func:`read_record`)."""
-    w, h = size
-    usage = wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC
-    formats = ("r32float", "rgba32float", "rgba32float")
-    targets = [device.create_texture(size=(w, h, 1), format=f, usage=usage) for f in formats]
-    depth = device.create_texture(size=(w, h, 1), format="depth32float",
-                                  usage=wgpu.TextureUsage.RENDER_ATTACHMENT)  # fmt: skip
-    shader = wgsl_module(device, "cascades.wgsl")
-    pipeline = device.create_render_pipeline(
-        layout="auto",
-        vertex={"module": shader, "entry_point": "vs_main", "buffers": [VERTEX_LAYOUT]},
-        primitive={"topology": "triangle-list", "cull_mode": "none"},
-        depth_stencil={"format": "depth32float", "depth_write_enabled": True,
-                       "depth_compare": "less"},
-        fragment={"module": shader, "entry_point": "fs_main",
-                  "targets": [{"format": f} for f in formats]},
-    )  # fmt: skip
-    encoder = device.create_command_encoder()
-    rp = encoder.begin_render_pass(
-        color_attachments=[{"view": t.create_view(), "clear_value": (0.0, 0.0, 0.0, 0.0),
-                            "load_op": "clear", "store_op": "store"} for t in targets],
-        depth_stencil_attachment={"view": depth.create_view(), "depth_clear_value": 1.0,
-                                  "depth_load_op": "clear", "depth_store_op": "store"},
-    )  # fmt: skip
-    rp.set_pipeline(pipeline)
+    """Every body from the camera through cascades.wgsl (:func:`draw_camera`)."""
     frame = uniform_buffer(device, _frame_uniforms(scene, options))
     maps_view = maps.create_view(dimension="2d-array")
+    draws = []
     for i, (body, (vbo, n)) in enumerate(zip(scene.bodies, buffers, strict=True)):
         buffer = uniform_buffer(device, _body_uniforms(body.to_world, i))
         entries = [{"binding": 0, "resource": {"buffer": frame}},
                    {"binding": 1, "resource": maps_view},
                    {"binding": 2, "resource": {"buffer": buffer}}]  # fmt: skip
-        group = device.create_bind_group(layout=pipeline.get_bind_group_layout(0), entries=entries)
-        rp.set_bind_group(0, group)
-        rp.set_vertex_buffer(0, vbo)
-        rp.draw(n)
-    rp.end()
-    device.queue.submit([encoder.finish()])
-    return targets
+        draws.append((entries, vbo, n))
+    return draw_camera(device, "cascades.wgsl", size, draws)

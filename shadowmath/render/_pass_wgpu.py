@@ -219,6 +219,49 @@ def draw_depth(
     device.queue.submit([encoder.finish()])
 
 
+#: The camera passes' targets: the shadow, the position (w = body id + 1), the normal.
+CAMERA_TARGETS = ("r32float", "rgba32float", "rgba32float")
+
+
+def draw_camera(
+    device: Any, shader: str, size: tuple[int, int], draws: Sequence[tuple[list[Any], Any, int]]
+) -> list[Any]:
+    """Each ``(bind group 0 entries, vertex buffer, count)`` through ``shader``'s ``vs_main``
+    and ``fs_main`` with a depth test, into cleared :data:`CAMERA_TARGETS` of ``size``
+    (returned, for :func:`read_record`)."""
+    w, h = size
+    usage = wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC
+    targets = [device.create_texture(size=(w, h, 1), format=f, usage=usage) for f in CAMERA_TARGETS]
+    depth = device.create_texture(size=(w, h, 1), format="depth32float",
+                                  usage=wgpu.TextureUsage.RENDER_ATTACHMENT)  # fmt: skip
+    module = wgsl_module(device, shader)
+    pipeline = device.create_render_pipeline(
+        layout="auto",
+        vertex={"module": module, "entry_point": "vs_main", "buffers": [VERTEX_LAYOUT]},
+        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        depth_stencil={"format": "depth32float", "depth_write_enabled": True,
+                       "depth_compare": "less"},
+        fragment={"module": module, "entry_point": "fs_main",
+                  "targets": [{"format": f} for f in CAMERA_TARGETS]},
+    )  # fmt: skip
+    encoder = device.create_command_encoder()
+    rp = encoder.begin_render_pass(
+        color_attachments=[{"view": t.create_view(), "clear_value": (0.0, 0.0, 0.0, 0.0),
+                            "load_op": "clear", "store_op": "store"} for t in targets],
+        depth_stencil_attachment={"view": depth.create_view(), "depth_clear_value": 1.0,
+                                  "depth_load_op": "clear", "depth_store_op": "store"},
+    )  # fmt: skip
+    rp.set_pipeline(pipeline)
+    for entries, vbo, count in draws:
+        layout = pipeline.get_bind_group_layout(0)
+        rp.set_bind_group(0, device.create_bind_group(layout=layout, entries=entries))
+        rp.set_vertex_buffer(0, vbo)
+        rp.draw(count)
+    rp.end()
+    device.queue.submit([encoder.finish()])
+    return targets
+
+
 def read_record(
     device: Any, targets: Sequence[Any], size: tuple[int, int]
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.int32]]:
@@ -313,7 +356,6 @@ def render_depth_wgpu(
     buffers = vertex_buffers(device, bodies)
     vbos = [vbo for vbo, _ in buffers]
     counts = [count for _, count in buffers]
-    layout = VERTEX_LAYOUT
 
     # Pass 1: the depth map.
     depth_tex = device.create_texture(
@@ -329,31 +371,6 @@ def render_depth_wgpu(
     draw_depth(device, depth_pipeline(device, (factor, units)), depth_tex.create_view(), draws)
 
     # Pass 2: the bodies from the camera, compared with the map.
-    w, h = size
-    usage = wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC
-    targets = [
-        device.create_texture(size=(w, h, 1), format=fmt, usage=usage)
-        for fmt in ("r32float", "rgba32float", "rgba32float")
-    ]
-    camera_depth = device.create_texture(
-        size=(w, h, 1), format="depth32float", usage=wgpu.TextureUsage.RENDER_ATTACHMENT
-    )
-    scene_shader = wgsl_module(device, "depth_scene.wgsl")
-    scene_pipeline = device.create_render_pipeline(
-        layout="auto",
-        vertex={"module": scene_shader, "entry_point": "vs_main", "buffers": [layout]},
-        primitive={"topology": "triangle-list", "cull_mode": "none"},
-        depth_stencil={
-            "format": "depth32float",
-            "depth_write_enabled": True,
-            "depth_compare": "less",
-        },
-        fragment={
-            "module": scene_shader,
-            "entry_point": "fs_main",
-            "targets": [{"format": t.format} for t in targets],
-        },
-    )
     sampler = device.create_sampler(
         compare="less-equal",
         mag_filter="nearest",
@@ -361,43 +378,19 @@ def render_depth_wgpu(
         address_mode_u="clamp-to-edge",
         address_mode_v="clamp-to-edge",
     )
-    encoder = device.create_command_encoder()
-    rp = encoder.begin_render_pass(
-        color_attachments=[
-            {
-                "view": t.create_view(),
-                "clear_value": (0.0, 0.0, 0.0, 0.0),
-                "load_op": "clear",
-                "store_op": "store",
-            }
-            for t in targets
-        ],
-        depth_stencil_attachment={
-            "view": camera_depth.create_view(),
-            "depth_clear_value": 1.0,
-            "depth_load_op": "clear",
-            "depth_store_op": "store",
-        },
-    )
-    rp.set_pipeline(scene_pipeline)
     depth_view = depth_tex.create_view()
+    draws = []
     for i, (b, vbo, count) in enumerate(zip(bodies, vbos, counts, strict=True)):
         data = _scene_uniforms(
             camera_clip, b.to_world, world_to_texture @ b.to_world, lit.position, i, k
         )
-        group = device.create_bind_group(
-            layout=scene_pipeline.get_bind_group_layout(0),
-            entries=[
-                {"binding": 0, "resource": {"buffer": uniform_buffer(device, data)}},
-                {"binding": 1, "resource": depth_view},
-                {"binding": 2, "resource": sampler},
-            ],
-        )
-        rp.set_bind_group(0, group)
-        rp.set_vertex_buffer(0, vbo)
-        rp.draw(count)
-    rp.end()
-    device.queue.submit([encoder.finish()])
+        entries = [
+            {"binding": 0, "resource": {"buffer": uniform_buffer(device, data)}},
+            {"binding": 1, "resource": depth_view},
+            {"binding": 2, "resource": sampler},
+        ]
+        draws.append((entries, vbo, count))
+    targets = draw_camera(device, "depth_scene.wgsl", size, draws)
 
     mask, position, normal, body = read_record(device, targets, size)
     depth_map = read_wgpu_texture(device, depth_tex, map_texels, 1)[..., 0]
