@@ -1,8 +1,8 @@
 """The docs read completely as raw Markdown, and list everything they claim to list.
 
 A code host shows ``docs/*.md`` raw: include lines (pymdownx.snippets' ``--8<--``)
-show as themselves there, so the renderer guide carries the shaders' text
-inline, and this test keeps each copy equal to its file.
+show as themselves there, so the renderer guide and the cascades page carry the
+shaders' text inline, and this test keeps each copy equal to its file.
 """
 
 from __future__ import annotations
@@ -28,12 +28,30 @@ def test_renderer_guide_has_no_include_lines():
     assert "--8<--" not in text
 
 
-def test_renderer_guide_shaders_equal_the_shader_files():
-    shaders = {
+def _shader_copies(page: Path) -> dict[str, str]:
+    """The page's titled code blocks of shadowmath/render/shaders/ files: path to text."""
+    return {
         path: body
-        for _, path, body in TITLED.findall(GUIDE.read_text(encoding="utf-8"))
+        for _, path, body in TITLED.findall(page.read_text(encoding="utf-8"))
         if path.startswith("shadowmath/render/shaders/")
     }
+
+
+def test_cascades_page_shows_both_tested_shaders_as_they_are():
+    """The cascades page carries the complete camera passes that tests/render/
+    test_render_cascades.py draws with (GLSL and WGSL), equal to their files."""
+    shaders = _shader_copies(DOCS / "cascades.md")
+    assert set(shaders) == {
+        "shadowmath/render/shaders/cascades.frag",
+        "shadowmath/render/shaders/cascades.wgsl",
+    }
+    for path, body in shaders.items():
+        assert body == (ROOT / path).read_text(encoding="utf-8"), path
+    assert "--8<--" not in (DOCS / "cascades.md").read_text(encoding="utf-8")
+
+
+def test_renderer_guide_shaders_equal_the_shader_files():
+    shaders = _shader_copies(GUIDE)
     # The shaders of the passes the guide walks through (the lit pass only shades).
     passes = {
         f"shadowmath/render/shaders/{name}"

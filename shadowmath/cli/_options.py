@@ -349,7 +349,8 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="the depth map's polygon offset against shadow acne, glPolygonOffset(FACTOR, "
         "UNITS): FACTOR times each caster triangle's depth slope plus UNITS depth steps; "
-        "--method depth, omni, soft, cascades or atlas (WebGPU rounds UNITS to an integer) "
+        "--method depth, omni, soft, cascades or atlas (WebGPU rounds UNITS to an integer; "
+        "cascades apply the same FACTOR and UNITS to each receiver's slope in the shader) "
         f"(default: {DEFAULT_DEPTH_BIAS[0]:g}+2K {DEFAULT_DEPTH_BIAS[1]:g}, "
         "K the --pcf radius)",
     )

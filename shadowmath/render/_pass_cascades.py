@@ -3,10 +3,11 @@
 A client of the public API like any user's renderer: :func:`shadowmath.fit_cascades`
 fits the cascades to the camera's ``view`` and ``projection`` and the scene's box;
 every body's depth is drawn into each cascade's map (a layer of a texture array, or a
-tile of an atlas) with ``world_to_clip[i]`` and a polygon offset; the camera-view pass
-picks the cascade by the fragment's view depth, blends across the band and compares
-with PCF (``shaders/cascades.frag``). Every body casts and receives, as with
-``render_scene(..., method="depth")``, whose lit and subtractive passes it shares.
+tile of an atlas) with ``world_to_clip[i]``; the camera-view pass picks the cascade by
+the fragment's view depth, blends across the band, biases with shadowmath's normal
+offset and slope-scaled bias and compares with PCF (``shaders/cascades.frag``). Every
+body casts and receives, as with ``render_scene(..., method="depth")``, whose lit and
+subtractive passes it shares.
 """
 
 from __future__ import annotations
@@ -24,13 +25,25 @@ from ._context import check_matrix, program, resolve_context, set_matrix, set_un
 from ._context import image_size as _image_size
 from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
 from ._pass_lit import draw_lit, finish, subtract_light
-from ._resources import Body, GpuScene, Light, Prepared, prepare_body, prepare_light, read_texture
+from ._resources import (
+    Body,
+    GpuScene,
+    Light,
+    Prepared,
+    PreparedLight,
+    prepare_body,
+    prepare_light,
+    read_texture,
+)
 
 #: The most cascades the shader takes (its uniform arrays' size).
 MAX_CASCADES = 8
 
-#: The default normal-offset bias, in texels of each cascade (:func:`render_cascades`).
-NORMAL_OFFSET = 0.5
+#: The default scale of the normal offset (:func:`shadowmath.normal_offset`'s derived minimum).
+NORMAL_OFFSET = 1.0
+
+#: The resolution ``r_min`` of a 24-bit depth buffer, the unit of ``depth_bias``'s constant.
+DEPTH_RESOLUTION = 1.0 / (2**24 - 1)
 
 #: The debug view's cascade colours, multiplied into the picture (cascade ``i`` takes
 #: ``CASCADE_COLORS[i % len]``): red, green, blue, yellow, magenta, cyan, orange, violet.
@@ -119,15 +132,15 @@ def render_cascades(
     1. :func:`shadowmath.fit_cascades` (``light.direction``, ``view``, ``projection``,
        ``scene_bounds``, ``map_size`` and the split, band, stability, layout and
        ``pcf_radius`` options, OpenGL conventions).
-    2. Per cascade ``i``: every body's depth through ``world_to_clip[i]`` with
-       ``glPolygonOffset(*depth_bias)``, into layer ``i`` of an ``(n, h, w)`` float
-       texture array (``layout="layers"``), or into tile ``viewports[i]`` of one
-       atlas.
+    2. Per cascade ``i``: every body's depth through ``world_to_clip[i]`` (no polygon
+       offset), into layer ``i`` of an ``(n, h, w)`` float texture array
+       (``layout="layers"``), or into tile ``viewports[i]`` of one atlas.
     3. The lit pass, then the mask: each visible point's view depth
        ``d = -(view @ p)_z`` picks cascade ``i`` with ``splits[i] <= d < splits[i+1]``;
-       ``world_to_texture[i] @ p = (s, t, r, 1)`` (``p`` moved off its face by the
-       normal offset) is compared with the map over a
-       ``(2k + 1)^2`` box of texels (``r <= stored``: lit), and for ``d <=
+       ``world_to_texture[i] @ p = (s, t, r, 1)`` (``p`` moved off its face by
+       :func:`shadowmath.normal_offset`'s offset) is compared with the map over a
+       ``(2k + 1)^2`` box of texels clamped to the tile (``r - b <= stored``: lit, ``b``
+       :func:`shadowmath.slope_scaled_bias`'s bias), and for ``d <=
        band_end[i - 1]`` the comparison in cascade ``i - 1`` is mixed in with weight
        ``(band_end[i-1] - d) / (band_end[i-1] - splits[i])``; then the subtractive pass.
        With ``cascade_colors`` a second picture multiplies each pixel by its
@@ -146,10 +159,12 @@ def render_cascades(
         count, splits, scheme, lam, max_distance, overlap, stable, layout: as in
             :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades).
         pcf_radius: the PCF kernel's radius ``k`` (also the maps' border).
-        depth_bias: ``(factor, units)`` polygon offset; default ``(2.5 + 2 k, 4.0)``.
-        normal_offset: the normal-offset bias in texels: each point is looked up in
-            cascade ``i`` moved along its face normal by ``normal_offset *
-            max(texel_size[i])`` (:data:`NORMAL_OFFSET` by default, 0 for none).
+        depth_bias: ``(factor, units)`` of the slope-scaled bias ``b = units r_min +
+            factor m`` (:func:`shadowmath.slope_scaled_bias`'s formula, computed per
+            fragment in the shader; ``m`` the receiver's depth slope per texel, ``r_min``
+            :data:`DEPTH_RESOLUTION`); default ``(2 k + 1, 2)``, the derived minimum.
+        normal_offset: the scale of :func:`shadowmath.normal_offset`'s offset (computed
+            per fragment in the shader; :data:`NORMAL_OFFSET` by default, 0 for none).
         cascade_colors: also render the cascade-coloured picture.
         ambient, background: shading as in :func:`render_scene`.
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
@@ -175,35 +190,92 @@ def render_cascades(
         >>> frame.shadow.shape, frame.cascades.world_to_clip.shape
         ((64, 64), (4, 4, 4))
     """
+    options = cascade_options(
+        layout=layout, pcf_radius=pcf_radius, depth_bias=depth_bias,
+        normal_offset=normal_offset, ambient=ambient, background=background,
+        cascade_colors=cascade_colors,
+    )  # fmt: skip
+    fit_options = {
+        "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
+        "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
+        "stable": stable,
+    }  # fmt: skip
+    scene = prepare_cascades(bodies, light, view, projection, options, fit_options)
+    size = _image_size("image_size", image_size)
+    texels = _image_size("map_size", map_size)
+    gl = resolve_context(ctx)
+    v, p = scene.view, scene.projection
+    with GpuScene(gl, scene.bodies, (), [scene.sun], p @ v, size, texels) as gpu:
+        return _draw(gpu, v, scene.fit, options)
+
+
+class CascadeScene(NamedTuple):
+    """The checked bodies, sun and camera of a cascades pass, and the fitted cascades."""
+
+    bodies: list[Prepared]
+    sun: PreparedLight
+    view: NDArray[np.float64]
+    projection: NDArray[np.float64]
+    fit: sm.Cascades
+
+
+def cascade_options(
+    *,
+    layout: Literal["layers", "atlas"],
+    pcf_radius: int,
+    depth_bias: tuple[float, float] | None,
+    normal_offset: float,
+    ambient: float = 0.15,
+    background: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    cascade_colors: bool = False,
+) -> CascadeOptions:
+    """The options of a cascades pass, checked; ``depth_bias`` defaults to ``(2 k + 1, 2)``,
+    :func:`shadowmath.slope_scaled_bias`'s derived minimum for a box PCF of radius ``k``."""
+    if layout not in ("layers", "atlas"):
+        raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
+    k = pcf_radius_option(pcf_radius)
+    if not (np.isfinite(normal_offset) and normal_offset >= 0):
+        raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
+    if not (np.isfinite(ambient) and ambient >= 0):
+        raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
+    bias = (2 * k + 1.0, 2.0) if depth_bias is None else depth_bias_option(depth_bias, k)
+    return CascadeOptions(layout, k, bias, float(normal_offset), float(ambient), background,
+                          cascade_colors)  # fmt: skip
+
+
+def prepare_cascades(
+    bodies: Sequence[Body],
+    light: Light,
+    view: Any,
+    projection: Any,
+    options: CascadeOptions,
+    fit_options: dict[str, Any],
+    *,
+    api: Literal["opengl", "webgpu"] = "opengl",
+) -> CascadeScene:
+    """Check the bodies, the sun and the camera (OpenGL conventions); fit the cascades with
+    :func:`shadowmath.fit_cascades` in ``api``'s conventions, given the projection in
+    ``api``'s (``fit_options``: its keywords, ``scene_bounds`` defaulting to the bodies'
+    box)."""
     prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
     if not prepared:
         raise ValueError("bodies: expected at least one body")
     sun = prepare_light("light", light)
     if not sun.directional:
         raise ValueError("light: cascades need a directional light, Light(direction=...)")
-    if layout not in ("layers", "atlas"):
-        raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
-    k = pcf_radius_option(pcf_radius)
-    if not (np.isfinite(normal_offset) and normal_offset >= 0):
-        raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
-    options = CascadeOptions(layout, k, depth_bias_option(depth_bias, k), float(normal_offset),
-                             float(ambient), background, cascade_colors)  # fmt: skip
-    if not (np.isfinite(options.ambient) and options.ambient >= 0):
-        raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
     v, p = check_matrix("view", view), check_matrix("projection", projection)
-    bounds = _bounds(prepared) if scene_bounds is None else scene_bounds
-    fit = sm.fit_cascades(
-        sun.position, v, p, bounds, map_size, count=count, splits=splits, scheme=scheme,
-        lam=lam, max_distance=max_distance, overlap=overlap, stable=stable,
-        pcf_radius=k, layout=layout,
-    )  # fmt: skip
+    fit_options = dict(fit_options)
+    bounds = fit_options.pop("scene_bounds")
+    bounds = _bounds(prepared) if bounds is None else bounds
+    map_size = fit_options.pop("map_size")
+    # The projection in api's own clip conventions, as that API's renderer holds it.
+    camera = sm.api_convention(api=api).gl_clip_to_clip @ p
+    fit = sm.fit_cascades(sun.position, v, camera, bounds, map_size, api=api,
+                          pcf_radius=options.pcf_radius, layout=options.layout,
+                          **fit_options)  # fmt: skip
     if fit.splits.shape[-1] - 1 > MAX_CASCADES:
         raise ValueError(f"count: at most {MAX_CASCADES} cascades, got {fit.splits.shape[-1] - 1}")
-    size = _image_size("image_size", image_size)
-    texels = _image_size("map_size", map_size)
-    gl = resolve_context(ctx)
-    with GpuScene(gl, prepared, (), [sun], p @ v, size, texels) as scene:
-        return _draw(scene, v, fit, options)
+    return CascadeScene(prepared, sun, v, p, fit)
 
 
 def _bounds(bodies: Sequence[Prepared]) -> NDArray[np.float64]:
@@ -218,7 +290,7 @@ def _draw(
     """The maps, the lit pass, the mask and subtractive passes, the debug tint; read back."""
     (sun,) = scene.lights
     draw_lit(scene, options.ambient, options.background)
-    depths = draw_cascade_maps(scene, fit, options.layout == "atlas", options.bias)
+    depths = draw_cascade_maps(scene, fit, options.layout == "atlas")
     maps = _depth_array(scene.ctx, depths)
     try:
         scene.clear_mask()
@@ -266,11 +338,10 @@ def cascade_index(
     return np.where(valid, index, -1).astype(np.int32)
 
 
-def draw_cascade_maps(
-    scene: GpuScene, fit: sm.Cascades, atlas: bool, bias: tuple[float, float]
-) -> NDArray[np.float32]:
+def draw_cascade_maps(scene: GpuScene, fit: sm.Cascades, atlas: bool) -> NDArray[np.float32]:
     """Every body's depth into each cascade's map: ``(n, h, w)`` layers, or ``(1, H, W)``
-    the atlas (each cascade in its viewport), window depths, row 0 ``t = 0``."""
+    the atlas (each cascade in its viewport), window depths, row 0 ``t = 0``; no polygon
+    offset (``cascades.frag`` biases each receiver)."""
     gl = scene.ctx
     ports = np.asarray(fit.viewports, dtype=np.int64)
     clip = np.asarray(fit.world_to_clip, dtype=np.float64)
@@ -286,7 +357,7 @@ def draw_cascade_maps(
         tex = gl.depth_texture(size)
         fbo = gl.framebuffer(depth_attachment=tex)
         try:
-            begin_depth_pass(gl, fbo, bias)
+            begin_depth_pass(gl, fbo, (0.0, 0.0))
             for i in group:
                 x, y, w, h = (int(c) for c in ports[i])
                 fbo.viewport = (x, y, w, h)
@@ -340,11 +411,12 @@ def _shade(
     uniform(prog, "world_to_texture").write(
         b"".join(sm.column_major_bytes(m) for m in textures) + bytes(64 * pad)
     )
-    uniform(prog, "viewport").write(np.pad(ports, ((0, pad), (0, 0))).tobytes())
+    uniform(prog, "viewports").write(np.pad(ports, ((0, pad), (0, 0))).tobytes())
     set_uniform(prog, "atlas", int(options.layout == "atlas"))
     set_uniform(prog, "pcf_radius", options.pcf_radius)
-    offsets = options.normal_offset * np.max(np.asarray(fit.texel_size), axis=-1)
-    uniform(prog, "normal_offset").write(np.pad(offsets, (0, pad)).astype(np.float32).tobytes())
+    set_uniform(prog, "normal_offset", options.normal_offset)
+    set_uniform(prog, "slope_factor", options.bias[0])
+    set_uniform(prog, "constant_bias", options.bias[1] * DEPTH_RESOLUTION)
     set_uniform(prog, "mode", mode)
     uniform(prog, "colors").write(colors.astype(np.float32).tobytes())
     maps.use(location=0)

@@ -23,7 +23,7 @@ from shadowmath import ShadowSetup, api_convention, column_major_bytes
 from ._context import check_matrix
 from ._context import image_size as _image_size
 from ._pass_depth import DepthPass, fit_depth, world_to_light_clip
-from ._resources import Body, Light, prepare_body, prepare_light, vertex_data
+from ._resources import Body, Light, Prepared, prepare_body, prepare_light, vertex_data
 
 #: Debian packages that provide a Vulkan driver without a GPU (Mesa's lavapipe/llvmpipe).
 VULKAN_DEBIAN_PACKAGES = ("mesa-vulkan-drivers",)
@@ -102,14 +102,21 @@ def adapter_description() -> str:
     return str(info.get("device", "")) or str(info)
 
 
-def _shader(device: Any, name: str) -> Any:
+def wgsl_module(device: Any, name: str) -> Any:
     code = (resources.files("shadowmath.render") / "shaders" / name).read_text(encoding="utf-8")
     return device.create_shader_module(label=name, code=code)
 
 
-def _uniform(device: Any, data: bytes) -> Any:
+def uniform_buffer(device: Any, data: bytes) -> Any:
     usage = wgpu.BufferUsage.UNIFORM | wgpu.BufferUsage.COPY_DST
     return device.create_buffer_with_data(data=data, usage=usage)
+
+
+def normal_to_world(body_to_world: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(4, 4)`` the inverse transpose of ``body_to_world``'s 3x3: normals to world."""
+    normal = np.eye(4)
+    normal[:3, :3] = np.linalg.inv(body_to_world[:3, :3]).T
+    return normal
 
 
 def _scene_uniforms(
@@ -121,8 +128,7 @@ def _scene_uniforms(
     pcf_radius: int,
 ) -> bytes:
     """``struct Body`` of depth_scene.wgsl: four mat4x4 (column-major), vec3 + f32, i32."""
-    normal = np.eye(4)
-    normal[:3, :3] = np.linalg.inv(body_to_world[:3, :3]).T
+    normal = normal_to_world(body_to_world)
     mats = b"".join(
         column_major_bytes(m) for m in (world_to_clip, body_to_world, normal, body_to_texture)
     )
@@ -134,10 +140,150 @@ def _scene_uniforms(
     return mats + bytes(tail_bytes)
 
 
-def _read(device: Any, texture: Any, size: tuple[int, int], components: int) -> NDArray[Any]:
+#: The vertex buffers' layout (:func:`vertex_data`): position at 0, face normal at 1.
+VERTEX_LAYOUT: dict[str, Any] = {
+    "array_stride": 36,
+    "step_mode": "vertex",
+    "attributes": [
+        {"format": "float32x3", "offset": 0, "shader_location": 0},
+        {"format": "float32x3", "offset": 24, "shader_location": 1},
+    ],
+}
+
+
+def vertex_buffers(device: Any, bodies: Sequence[Prepared]) -> list[tuple[Any, int]]:
+    """Each body's un-indexed vertex buffer and its vertex count."""
+    usage = wgpu.BufferUsage.VERTEX
+    return [
+        (device.create_buffer_with_data(data=vertex_data(b.vertices, b.triangles), usage=usage),
+         3 * len(b.triangles))
+        for b in bodies
+    ]  # fmt: skip
+
+
+def depth_pipeline(device: Any, bias: tuple[float, float] = (0.0, 0.0)) -> Any:
+    """Depth only through ``depth_map.wgsl`` into ``depth32float``, test ``less``, both
+    faces, WebGPU's polygon offset ``bias = (factor, units)`` (``units`` rounded)."""
+    return device.create_render_pipeline(
+        layout="auto",
+        vertex={
+            "module": wgsl_module(device, "depth_map.wgsl"),
+            "entry_point": "vs_main",
+            "buffers": [{**VERTEX_LAYOUT, "attributes": VERTEX_LAYOUT["attributes"][:1]}],
+        },
+        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        depth_stencil={
+            "format": "depth32float",
+            "depth_write_enabled": True,
+            "depth_compare": "less",
+            "depth_bias": round(bias[1]),  # an integer in WebGPU
+            "depth_bias_slope_scale": float(bias[0]),
+            "depth_bias_clamp": 0.0,
+        },
+        fragment=None,
+    )
+
+
+def draw_depth(
+    device: Any,
+    pipeline: Any,
+    target: Any,
+    draws: Sequence[tuple[NDArray[np.float64], Any, int]],
+    viewport: tuple[int, int, int, int] | None = None,
+) -> None:
+    """Clear the depth view ``target`` to 1 (or only draw, with ``viewport``: a tile of it
+    already cleared) and draw each ``(body_to_clip, vertex buffer, count)``."""
+    encoder = device.create_command_encoder()
+    rp = encoder.begin_render_pass(
+        color_attachments=[],
+        depth_stencil_attachment={
+            "view": target,
+            "depth_clear_value": 1.0,
+            "depth_load_op": "clear" if viewport is None else "load",
+            "depth_store_op": "store",
+        },
+    )
+    rp.set_pipeline(pipeline)
+    if viewport is not None:
+        rp.set_viewport(*viewport, 0.0, 1.0)
+    layout = pipeline.get_bind_group_layout(0)
+    for body_to_clip, vbo, count in draws:
+        buf = uniform_buffer(device, column_major_bytes(body_to_clip))
+        group = device.create_bind_group(
+            layout=layout, entries=[{"binding": 0, "resource": {"buffer": buf}}]
+        )
+        rp.set_bind_group(0, group)
+        rp.set_vertex_buffer(0, vbo)
+        rp.draw(count)
+    rp.end()
+    device.queue.submit([encoder.finish()])
+
+
+#: The camera passes' targets: the shadow, the position (w = body id + 1), the normal.
+CAMERA_TARGETS = ("r32float", "rgba32float", "rgba32float")
+
+
+def draw_camera(
+    device: Any, shader: str, size: tuple[int, int], draws: Sequence[tuple[list[Any], Any, int]]
+) -> list[Any]:
+    """Each ``(bind group 0 entries, vertex buffer, count)`` through ``shader``'s ``vs_main``
+    and ``fs_main`` with a depth test, into cleared :data:`CAMERA_TARGETS` of ``size``
+    (returned, for :func:`read_record`)."""
+    w, h = size
+    usage = wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC
+    targets = [device.create_texture(size=(w, h, 1), format=f, usage=usage) for f in CAMERA_TARGETS]
+    depth = device.create_texture(size=(w, h, 1), format="depth32float",
+                                  usage=wgpu.TextureUsage.RENDER_ATTACHMENT)  # fmt: skip
+    module = wgsl_module(device, shader)
+    pipeline = device.create_render_pipeline(
+        layout="auto",
+        vertex={"module": module, "entry_point": "vs_main", "buffers": [VERTEX_LAYOUT]},
+        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        depth_stencil={"format": "depth32float", "depth_write_enabled": True,
+                       "depth_compare": "less"},
+        fragment={"module": module, "entry_point": "fs_main",
+                  "targets": [{"format": f} for f in CAMERA_TARGETS]},
+    )  # fmt: skip
+    encoder = device.create_command_encoder()
+    rp = encoder.begin_render_pass(
+        color_attachments=[{"view": t.create_view(), "clear_value": (0.0, 0.0, 0.0, 0.0),
+                            "load_op": "clear", "store_op": "store"} for t in targets],
+        depth_stencil_attachment={"view": depth.create_view(), "depth_clear_value": 1.0,
+                                  "depth_load_op": "clear", "depth_store_op": "store"},
+    )  # fmt: skip
+    rp.set_pipeline(pipeline)
+    for entries, vbo, count in draws:
+        layout = pipeline.get_bind_group_layout(0)
+        rp.set_bind_group(0, device.create_bind_group(layout=layout, entries=entries))
+        rp.set_vertex_buffer(0, vbo)
+        rp.draw(count)
+    rp.end()
+    device.queue.submit([encoder.finish()])
+    return targets
+
+
+def read_record(
+    device: Any, targets: Sequence[Any], size: tuple[int, int]
+) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.int32]]:
+    """The camera pass's ``r32float`` shadow and ``rgba32float`` position (w = body id + 1)
+    and normal targets, read back: shadow ``(H, W)``, position and normal ``(H, W, 3)``
+    (NaN on the background), body ``(H, W)`` (``-1`` the background)."""
+    shadow = read_wgpu_texture(device, targets[0], size, 1)[..., 0].astype(np.float32)
+    surface = read_wgpu_texture(device, targets[1], size, 4)
+    normal = read_wgpu_texture(device, targets[2], size, 4)[..., :3]
+    body = np.rint(surface[..., 3]).astype(np.int32) - 1
+    empty = (body < 0)[..., None]
+    position = np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32)
+    return shadow, position, np.where(empty, np.float32(np.nan), normal).astype(np.float32), body
+
+
+def read_wgpu_texture(
+    device: Any, texture: Any, size: tuple[int, int], components: int, layer: int = 0
+) -> NDArray[Any]:
+    """``(h, w, components)`` float32 of a texture's ``layer``, row 0 its first row."""
     w, h = size
     data = device.queue.read_texture(
-        {"texture": texture, "mip_level": 0, "origin": (0, 0, 0)},
+        {"texture": texture, "mip_level": 0, "origin": (0, 0, layer)},
         {"offset": 0, "bytes_per_row": 4 * components * w},
         (w, h, 1),
     )
@@ -207,21 +353,9 @@ def render_depth_wgpu(
     world_to_texture = conv.gl_clip_to_texture @ light_clip
     camera_clip = conv.gl_clip_to_clip @ camera
 
-    vbos = [
-        device.create_buffer_with_data(
-            data=vertex_data(b.vertices, b.triangles), usage=wgpu.BufferUsage.VERTEX
-        )
-        for b in bodies
-    ]
-    counts = [3 * len(b.triangles) for b in bodies]
-    layout: dict[str, Any] = {
-        "array_stride": 36,
-        "step_mode": "vertex",
-        "attributes": [
-            {"format": "float32x3", "offset": 0, "shader_location": 0},
-            {"format": "float32x3", "offset": 24, "shader_location": 1},
-        ],
-    }
+    buffers = vertex_buffers(device, bodies)
+    vbos = [vbo for vbo, _ in buffers]
+    counts = [count for _, count in buffers]
 
     # Pass 1: the depth map.
     depth_tex = device.create_texture(
@@ -231,74 +365,12 @@ def render_depth_wgpu(
         | wgpu.TextureUsage.TEXTURE_BINDING
         | wgpu.TextureUsage.COPY_SRC,
     )
-    map_shader = _shader(device, "depth_map.wgsl")
-    map_pipeline = device.create_render_pipeline(
-        layout="auto",
-        vertex={
-            "module": map_shader,
-            "entry_point": "vs_main",
-            "buffers": [{**layout, "attributes": layout["attributes"][:1]}],
-        },
-        primitive={"topology": "triangle-list", "cull_mode": "none"},
-        depth_stencil={
-            "format": "depth32float",
-            "depth_write_enabled": True,
-            "depth_compare": "less",
-            "depth_bias": round(units),  # an integer in WebGPU
-            "depth_bias_slope_scale": float(factor),
-            "depth_bias_clamp": 0.0,
-        },
-        fragment=None,
-    )
-    encoder = device.create_command_encoder()
-    rp = encoder.begin_render_pass(
-        color_attachments=[],
-        depth_stencil_attachment={
-            "view": depth_tex.create_view(),
-            "depth_clear_value": 1.0,
-            "depth_load_op": "clear",
-            "depth_store_op": "store",
-        },
-    )
-    rp.set_pipeline(map_pipeline)
-    for b, vbo, count in zip(bodies, vbos, counts, strict=True):
-        buf = _uniform(device, column_major_bytes(light_to_clip @ b.to_world))
-        group = device.create_bind_group(
-            layout=map_pipeline.get_bind_group_layout(0),
-            entries=[{"binding": 0, "resource": {"buffer": buf}}],
-        )
-        rp.set_bind_group(0, group)
-        rp.set_vertex_buffer(0, vbo)
-        rp.draw(count)
-    rp.end()
-    device.queue.submit([encoder.finish()])
+    draws = [
+        (light_to_clip @ b.to_world, vbo, n) for b, (vbo, n) in zip(bodies, buffers, strict=True)
+    ]
+    draw_depth(device, depth_pipeline(device, (factor, units)), depth_tex.create_view(), draws)
 
     # Pass 2: the bodies from the camera, compared with the map.
-    w, h = size
-    usage = wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC
-    targets = [
-        device.create_texture(size=(w, h, 1), format=fmt, usage=usage)
-        for fmt in ("r32float", "rgba32float", "rgba32float")
-    ]
-    camera_depth = device.create_texture(
-        size=(w, h, 1), format="depth32float", usage=wgpu.TextureUsage.RENDER_ATTACHMENT
-    )
-    scene_shader = _shader(device, "depth_scene.wgsl")
-    scene_pipeline = device.create_render_pipeline(
-        layout="auto",
-        vertex={"module": scene_shader, "entry_point": "vs_main", "buffers": [layout]},
-        primitive={"topology": "triangle-list", "cull_mode": "none"},
-        depth_stencil={
-            "format": "depth32float",
-            "depth_write_enabled": True,
-            "depth_compare": "less",
-        },
-        fragment={
-            "module": scene_shader,
-            "entry_point": "fs_main",
-            "targets": [{"format": t.format} for t in targets],
-        },
-    )
     sampler = device.create_sampler(
         compare="less-equal",
         mag_filter="nearest",
@@ -306,54 +378,26 @@ def render_depth_wgpu(
         address_mode_u="clamp-to-edge",
         address_mode_v="clamp-to-edge",
     )
-    encoder = device.create_command_encoder()
-    rp = encoder.begin_render_pass(
-        color_attachments=[
-            {
-                "view": t.create_view(),
-                "clear_value": (0.0, 0.0, 0.0, 0.0),
-                "load_op": "clear",
-                "store_op": "store",
-            }
-            for t in targets
-        ],
-        depth_stencil_attachment={
-            "view": camera_depth.create_view(),
-            "depth_clear_value": 1.0,
-            "depth_load_op": "clear",
-            "depth_store_op": "store",
-        },
-    )
-    rp.set_pipeline(scene_pipeline)
     depth_view = depth_tex.create_view()
+    draws = []
     for i, (b, vbo, count) in enumerate(zip(bodies, vbos, counts, strict=True)):
         data = _scene_uniforms(
             camera_clip, b.to_world, world_to_texture @ b.to_world, lit.position, i, k
         )
-        group = device.create_bind_group(
-            layout=scene_pipeline.get_bind_group_layout(0),
-            entries=[
-                {"binding": 0, "resource": {"buffer": _uniform(device, data)}},
-                {"binding": 1, "resource": depth_view},
-                {"binding": 2, "resource": sampler},
-            ],
-        )
-        rp.set_bind_group(0, group)
-        rp.set_vertex_buffer(0, vbo)
-        rp.draw(count)
-    rp.end()
-    device.queue.submit([encoder.finish()])
+        entries = [
+            {"binding": 0, "resource": {"buffer": uniform_buffer(device, data)}},
+            {"binding": 1, "resource": depth_view},
+            {"binding": 2, "resource": sampler},
+        ]
+        draws.append((entries, vbo, count))
+    targets = draw_camera(device, "depth_scene.wgsl", size, draws)
 
-    mask = _read(device, targets[0], size, 1)[..., 0]
-    surface = _read(device, targets[1], size, 4)
-    normal = _read(device, targets[2], size, 4)[..., :3]
-    depth_map = _read(device, depth_tex, map_texels, 1)[..., 0]
-    body = np.rint(surface[..., 3]).astype(np.int32) - 1
-    empty = (body < 0)[..., None]
+    mask, position, normal, body = read_record(device, targets, size)
+    depth_map = read_wgpu_texture(device, depth_tex, map_texels, 1)[..., 0]
     return WgpuFrame(
-        shadow=mask.astype(np.float32),
-        position=np.where(empty, np.float32(np.nan), surface[..., :3]).astype(np.float32),
-        normal=np.where(empty, np.float32(np.nan), normal).astype(np.float32),
+        shadow=mask,
+        position=position,
+        normal=normal,
         body=body,
         setup=setup,
         depth_map=depth_map.astype(np.float32),

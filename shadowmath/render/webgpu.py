@@ -4,9 +4,13 @@ Importing this module imports ``wgpu`` (in the ``render`` extra); on a machine
 without a GPU it runs on Mesa's software Vulkan driver (Debian:
 ``mesa-vulkan-drivers``). :func:`render_depth_wgpu` draws the scene of
 ``render_scene(..., method="depth")`` with WebGPU's conventions
-(:func:`shadowmath.api_convention` ``api="webgpu"``).
+(:func:`shadowmath.api_convention` ``api="webgpu"``), :func:`render_cascades_wgpu` the
+cascades of ``render_cascades`` (``shaders/cascades.wgsl``).
 """
 
+from ._pass_cascades_wgpu import FLOAT_DEPTH_RESOLUTION as FLOAT_DEPTH_RESOLUTION
+from ._pass_cascades_wgpu import WgpuCascadeFrame as WgpuCascadeFrame
+from ._pass_cascades_wgpu import render_cascades_wgpu as render_cascades_wgpu
 from ._pass_wgpu import VULKAN_DEBIAN_PACKAGES as VULKAN_DEBIAN_PACKAGES
 from ._pass_wgpu import WgpuFrame as WgpuFrame
 from ._pass_wgpu import WgpuUnavailableError as WgpuUnavailableError
@@ -15,10 +19,13 @@ from ._pass_wgpu import render_depth_wgpu as render_depth_wgpu
 from ._pass_wgpu import wgpu_device as wgpu_device
 
 __all__ = [
+    "FLOAT_DEPTH_RESOLUTION",
     "VULKAN_DEBIAN_PACKAGES",
+    "WgpuCascadeFrame",
     "WgpuFrame",
     "WgpuUnavailableError",
     "adapter_description",
+    "render_cascades_wgpu",
     "render_depth_wgpu",
     "wgpu_device",
 ]

@@ -6,10 +6,14 @@ ray caster only in the band of BAND pixels around the edges of the shadow and of
 region (as for method="depth"), and nowhere off it: across a camera near the ground
 looking to the horizon, a camera looking down, and a tower behind the camera whose
 shadow reaches into the view. The test can fail: with scene bounds that leave out that
-tower, its shadow is lost.
+tower, its shadow is lost; without bias the faces shadow themselves; with wrong splits
+shadows are lost. Each runs on OpenGL (render_cascades, cascades.frag) and on WebGPU
+(render_cascades_wgpu, cascades.wgsl), and the two agree pixel for pixel.
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 import pytest
@@ -60,11 +64,23 @@ CAMERAS = {
 PROJECTION = perspective(45.0, SIZE[0] / SIZE[1], NEAR, FAR)
 
 
-def shadows(camera, **kwargs):
-    """Render the scene from ``camera``; the frame and its counts against the ray caster."""
+@pytest.fixture(params=["opengl", "webgpu"])
+def render(request):
+    """``render_cascades`` on the shared GL context, or ``render_cascades_wgpu``."""
+    if request.param == "opengl":
+        return functools.partial(render_cascades, ctx=request.getfixturevalue("gl"))
+    request.getfixturevalue("wgpu_device")
+    from shadowmath.render.webgpu import render_cascades_wgpu
+
+    return render_cascades_wgpu
+
+
+def shadows(camera, render=render_cascades, **kwargs):
+    """Render the scene from ``camera`` (with ``render_cascades`` or ``render_cascades_wgpu``);
+    the frame and its counts against the ray caster."""
     view = CAMERAS[camera]
     kwargs.setdefault("map_size", MAP)
-    frame = render_cascades(BODIES, SUN, view, PROJECTION, image_size=SIZE, **kwargs)
+    frame = render(BODIES, SUN, view, PROJECTION, image_size=SIZE, **kwargs)
     scene = DepthScene(BODIES, len(BODIES) - 1, SUN, PROJECTION @ view)
     truth = ray_cast(frame.body, frame.position, frame.normal, scene)
     # An edge just outside the picture leaves no change of value inside it to put a band
@@ -113,8 +129,8 @@ VARIANTS = {
 
 @pytest.mark.parametrize("variant", list(VARIANTS))
 @pytest.mark.parametrize("camera", list(CAMERAS))
-def test_cascades_agree_with_the_ray_caster(gl, camera, variant):
-    frame, truth, count = shadows(camera, ctx=gl, **VARIANTS[variant])
+def test_cascades_agree_with_the_ray_caster(render, camera, variant):
+    frame, truth, count = shadows(camera, render, **VARIANTS[variant])
     print(f"{camera} {variant}: {count}, cascades used {np.unique(frame.cascade)}")
     assert count.shadowed > 1500, "the view must show sizeable shadows to test anything"
     used = np.unique(frame.cascade[frame.body >= 0])
@@ -123,10 +139,10 @@ def test_cascades_agree_with_the_ray_caster(gl, camera, variant):
     assert count.differ <= MAX_ALL * truth.on.sum(), count
 
 
-def test_every_cascade_has_a_band_where_both_agree(gl):
+def test_every_cascade_has_a_band_where_both_agree(render):
     """In the blend bands both cascades must hold the shadow: the bands' pixels (view depths
     in ``[splits[i + 1], band_end[i]]``) are compared like the others and must be there."""
-    frame, truth, _ = shadows("horizon", ctx=gl)
+    frame, truth, _ = shadows("horizon", render)
     c = frame.cascades
     view = CAMERAS["horizon"]
     p = frame.position.astype(np.float64)
@@ -162,6 +178,52 @@ def test_scene_bounds_without_the_caster_lose_its_shadow(gl):
     # lost, but for the pixels that another block shadows too
     assert lost.sum() > 0.8 * behind.sum()
     assert count.differ_off_band > 200, count
+
+
+def test_without_bias_the_surfaces_shadow_themselves(render):
+    """The test can fail: with neither the normal offset nor the slope-scaled bias the lit
+    faces are covered in acne (shadow pixels off the band, where the ray caster sees light)."""
+    _, _, count = shadows("horizon", render, depth_bias=(0.0, 0.0), normal_offset=0.0)
+    print(f"no bias: {count}")
+    assert count.acne > 1000, count
+
+
+def test_wrong_splits_lose_shadows(render, monkeypatch):
+    """The test can fail: the shader picks the cascade by view depth against ``splits``; with
+    the inner splits moved three times further out (capped before the last), points are looked
+    up in cascades fitted to nearer slices, outside their maps, and drawn lit."""
+    import shadowmath as sm
+
+    fit = sm.fit_cascades
+
+    def wrong_splits(*args, **kwargs):
+        c = fit(*args, **kwargs)
+        s = np.asarray(c.splits)
+        return c._replace(splits=np.r_[s[0], np.minimum(3 * s[1:-1], 0.99 * s[-1]), s[-1]])
+
+    monkeypatch.setattr(sm, "fit_cascades", wrong_splits)
+    frame, truth, count = shadows("down", render)
+    lost = truth.shadow & (frame.shadow <= 0.5) & ~truth.band
+    print(f"wrong splits: {count}, {int(lost.sum())} shadow pixels lost")
+    assert lost.sum() > 300, count
+
+
+def test_webgpu_agrees_with_opengl(gl, wgpu_device):
+    """The same pixels show the same points and shadows in both APIs; each WebGPU map is
+    OpenGL's upside down (t = 0 is the first row in memory in both: the top of the light's
+    view in WebGPU, its bottom in OpenGL), but for texels whose centre lies on an edge (the
+    rasterizers' tie rules)."""
+    from shadowmath.render.webgpu import render_cascades_wgpu
+
+    web, truth, _ = shadows("horizon", render_cascades_wgpu)
+    ogl, _, _ = shadows("horizon", ctx=gl)
+    assert np.array_equal(web.body, ogl.body)
+    np.testing.assert_allclose(web.position, ogl.position, atol=1e-3)
+    assert (((web.shadow > 0.5) != (ogl.shadow > 0.5)) & ~truth.band).sum() == 0
+    error = np.abs(web.shadow_maps[:, ::-1] - ogl.shadow_maps)
+    print(f"{web.adapter}: {int((error > 1e-4).sum())} of {error.size} depth texels differ")
+    assert (error > 1e-4).sum() <= 0.001 * error.size
+    assert float(np.abs(web.shadow_maps - ogl.shadow_maps).max()) > 0.1  # a real flip
 
 
 def test_the_debug_view_colours_each_cascade(gl):
