@@ -44,22 +44,42 @@ from __future__ import annotations
 
 import math
 import warnings
-from typing import Any, Final
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 
-from shadowmath import CubeDepthRange, ShadowCamera, ShadowSetup, shadow_camera
+from shadowmath import (
+    CubeDepthRange,
+    DirectionalLight,
+    Mesh,
+    ShadowCamera,
+    ShadowSetup,
+    SpotLight,
+    cube_depth_range,
+    fit_shadow,
+    gather_meshes,
+    shadow_camera,
+)
 
 try:
     import pygfx as gfx
     from pygfx.objects._lights import LightShadow as _LightShadow
     from pygfx.objects._lights import PointLightShadow as _PointLightShadow
+    from pygfx.objects._lights import get_pos_from_camera_parent_or_target as _aimed_at
 except ImportError as err:  # pragma: no cover - the extra is part of `dev`
     raise ImportError(
         "shadowmath.integrations.pygfx needs pygfx: pip install 'shadowmath[pygfx]'"
     ) from err
 
-__all__ = ["PYGFX_SHADOW_MAP_SIZE", "TESTED_PYGFX", "set_shadow_camera"]
+__all__ = [
+    "PYGFX_SHADOW_MAP_SIZE",
+    "TESTED_PYGFX",
+    "LightFit",
+    "SceneSurfaces",
+    "fit_scene_shadows",
+    "gather_scene",
+    "set_shadow_camera",
+]
 
 #: Texels along each side of every pygfx shadow map (``LightRenderState.shadow_map_size``
 #: in pygfx 0.17, not configurable): the ``map_size`` to fit with.
@@ -133,7 +153,7 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
         >>> bool(np.allclose(camera.camera_matrix, world_to_clip, atol=1e-6))
         True
     """
-    _check_pygfx()
+    _check_pygfx(light)
     kind = _light_kind(light)
     if kind == "point":
         return _set_cube_depth(light, fit)
@@ -145,21 +165,193 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
             f"{'DirectionalLight' if kind == 'directional' else 'SpotLight or sm.PointLight'})"
         )
     camera = light.shadow.camera
-    eye, forward, up = cam.eye, cam.forward, cam.up
-    light.world.position = eye
-    if kind == "directional":
-        light.target.world.position = eye + forward
-    else:
-        _aim_spot_shadow(light.shadow, forward)
-    camera.world.reference_up = up
-    # The same look-at pygfx does each frame, done now so that camera_matrix is right.
-    camera.world.position = eye
-    camera.look_at(eye + forward)
+    _set_window(camera, cam)  # first: it refuses a field of view pygfx cannot draw
+    camera.world.reference_up = cam.up
     camera.maintain_aspect = False
     camera.zoom = 1.0
-    camera.depth_range = (float(cam.near), float(cam.far))
-    _set_window(camera, cam)
+    camera.depth_range = (cam.near, cam.far)
+    _hold_camera(light.shadow, cam.eye, cam.forward)
+    _aim(camera, cam.eye, cam.forward)  # what the override does each frame, now
     return camera
+
+
+class SceneSurfaces(NamedTuple):
+    """A pygfx scene's shadow casters and receivers in world coordinates.
+
+    Attributes:
+        casters: :class:`~shadowmath.Mesh` of the visible meshes with ``cast_shadow``.
+        receivers: :class:`~shadowmath.Mesh` of those with ``receive_shadow``.
+    """
+
+    casters: Mesh
+    receivers: Mesh
+
+
+class LightFit(NamedTuple):
+    """What :func:`fit_scene_shadows` did for one shadow-casting light.
+
+    Attributes:
+        light: the pygfx light.
+        fit: its :class:`~shadowmath.ShadowSetup` (sun, spot) or
+            :class:`~shadowmath.CubeDepthRange` (point light), or None where skipped.
+        skipped: "" when fitted; else why not (the fit's ``ValueError`` message, or that
+            the scene casts no shadow). A skipped light draws with pygfx's own shadow
+            camera, as if never fitted.
+    """
+
+    light: Any
+    fit: ShadowSetup | CubeDepthRange | None
+    skipped: str
+
+
+def gather_scene(scene: Any) -> SceneSurfaces:
+    r"""The casters and receivers of a pygfx scene, in world coordinates.
+
+    Every visible ``gfx.Mesh`` under ``scene`` (pygfx draws nothing under an invisible
+    parent) with ``cast_shadow`` is a caster and with ``receive_shadow`` a receiver:
+    its geometry's ``positions`` and ``indices`` placed by its ``world.matrix`` (times
+    each instance's matrix for a ``gfx.InstancedMesh``), gathered by
+    :func:`shadowmath.gather_meshes`: :math:`w = M_\text{world} (v, 1)`, faces offset.
+
+    Arguments:
+        scene: a pygfx ``WorldObject``, usually the ``gfx.Scene``.
+
+    Returns:
+        :class:`SceneSurfaces`: two :class:`~shadowmath.Mesh`, float64 vertices
+        ``(V, 3)`` and int64 faces ``(F, 3)``; empty ``(0, 3)`` where no mesh has the flag.
+
+    Raises:
+        ValueError: from :func:`shadowmath.gather_meshes`, naming the entry: a mesh
+            with non-finite positions, indices outside its positions or a projective
+            world matrix.
+
+    Example:
+        >>> import pygfx as gfx
+        >>> scene = gfx.Scene()
+        >>> floor = gfx.Mesh(gfx.plane_geometry(4, 4), gfx.MeshPhongMaterial())
+        >>> floor.receive_shadow = True
+        >>> cube = gfx.Mesh(gfx.box_geometry(1, 1, 1), gfx.MeshPhongMaterial())
+        >>> cube.cast_shadow = True
+        >>> cube.local.position = (0, 0, 3)
+        >>> _ = scene.add(floor, cube)
+        >>> surfaces = gather_scene(scene)
+        >>> surfaces.casters.vertices[:, 2].min(), surfaces.receivers.faces.shape
+        (np.float64(2.5), (2, 3))
+    """
+    casters: list[tuple[Any, Any]] = []
+    receivers: list[tuple[Any, Any]] = []
+    for mesh in scene.iter(lambda o: isinstance(o, gfx.Mesh), skip_invisible=True):
+        if not (mesh.cast_shadow or mesh.receive_shadow):
+            continue
+        geometry = mesh.geometry
+        positions = np.asarray(geometry.positions.data)[:, :3]
+        indices = getattr(geometry, "indices", None)
+        faces = (
+            np.arange(len(positions) - len(positions) % 3)
+            if indices is None
+            else np.asarray(indices.data)
+        )
+        part = Mesh(positions, faces.reshape(-1, 3).astype(np.int64))
+        for matrix in _placements(mesh):
+            if mesh.cast_shadow:
+                casters.append((part, matrix))
+            if mesh.receive_shadow:
+                receivers.append((part, matrix))
+    return SceneSurfaces(gather_meshes(casters), gather_meshes(receivers))
+
+
+def _placements(mesh: Any) -> list[np.ndarray]:
+    world = np.asarray(mesh.world.matrix, dtype=np.float64)
+    if not isinstance(mesh, gfx.InstancedMesh):
+        return [world]
+    count = mesh.instance_buffer.nitems
+    return [world @ np.asarray(mesh.get_matrix_at(i), dtype=np.float64) for i in range(count)]
+
+
+def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
+    """Fit the shadow camera of every shadow-casting light of a pygfx scene: one call
+    per frame, before drawing it.
+
+    The scene's casters and receivers come from :func:`gather_scene`. Each visible light
+    with ``cast_shadow`` (sun, spot or point) is fitted as pygfx lights it this frame,
+    and handed to :func:`set_shadow_camera`:
+
+    * ``gfx.DirectionalLight``: :func:`shadowmath.fit_shadow` of
+      ``sm.DirectionalLight(position - target)`` (the camera's view direction for a light
+      parented to a camera, as pygfx does);
+    * ``gfx.SpotLight``: ``fit_shadow`` of ``sm.SpotLight(position, target - position,
+      angle)``; both with the casters' vertices, ``receivers=`` the receivers' triangles,
+      :data:`PYGFX_SHADOW_MAP_SIZE`, ``pcf_radius`` and ``api="webgpu"``;
+    * ``gfx.PointLight``: :func:`shadowmath.cube_depth_range` at its position, of the
+      casters' triangles, with the receivers.
+
+    The lights themselves are read, never written: position, target, angle, distance,
+    intensity and every other setting stay what the application set (only each light's
+    ``shadow.camera`` and the matrices pygfx draws with change). A light whose fit
+    raises ``ValueError`` (no casters, casters behind a spot light...) is skipped,
+    given back to pygfx's own shadow camera, and reported; the others are fitted.
+
+    Arguments:
+        scene: a pygfx ``WorldObject``, usually the ``gfx.Scene`` that is drawn.
+        pcf_radius: the border kept for pygfx's filter (its 5 x 5 kernel: 2).
+
+    Returns:
+        One :class:`LightFit` per shadow-casting light, in scene order.
+
+    Raises:
+        ValueError: bad geometry (see :func:`gather_scene`).
+        RuntimeError: pygfx lacks the private API the overrides use.
+
+    Example:
+        >>> import pygfx as gfx
+        >>> scene = gfx.Scene()
+        >>> cube = gfx.Mesh(gfx.box_geometry(1, 1, 1), gfx.MeshPhongMaterial())
+        >>> cube.cast_shadow = True
+        >>> sun = gfx.DirectionalLight(cast_shadow=True)
+        >>> sun.local.position = (3, -1.5, 3.5)
+        >>> behind = gfx.SpotLight(cast_shadow=True)  # at the cube's centre
+        >>> _ = scene.add(cube, sun, sun.target, behind, behind.target)
+        >>> [(type(r.light).__name__, r.skipped[:40]) for r in fit_scene_shadows(scene)]
+        [('DirectionalLight', ''), ('SpotLight', 'vertices: ...')]
+        >>> sun.local.position.tolist()  # the user's light, untouched
+        [3.0, -1.5, 3.5]
+    """
+    _check_pygfx()
+    surfaces = gather_scene(scene)
+    kinds = (gfx.DirectionalLight, gfx.SpotLight, gfx.PointLight)
+    lights = scene.iter(lambda o: isinstance(o, kinds) and o.cast_shadow, skip_invisible=True)
+    return [_fit_light(light, surfaces, pcf_radius) for light in lights]
+
+
+def _fit_light(light: Any, surfaces: SceneSurfaces, pcf_radius: int) -> LightFit:
+    """One light's fit set on it, or the reason it was skipped (and the light released)."""
+    if len(surfaces.casters.faces) == 0:
+        _release(light)
+        return LightFit(light, None, "the scene has no visible mesh with cast_shadow")
+    receivers = surfaces.receivers if len(surfaces.receivers.faces) else None
+    position = np.asarray(light.world.position, dtype=np.float64)
+    fit: ShadowSetup | CubeDepthRange
+    try:
+        if isinstance(light, gfx.PointLight):
+            fit = cube_depth_range(position, surfaces.casters, receivers=receivers)
+        else:
+            aim = np.asarray(_aimed_at(light), dtype=np.float64) - position
+            if not np.any(aim):  # pygfx's light shines down -z then
+                aim = np.array([0.0, 0.0, -1.0])
+            sm_light: Any = (
+                DirectionalLight(-aim)
+                if isinstance(light, gfx.DirectionalLight)
+                else SpotLight(position, aim, np.float64(light.angle))
+            )
+            fit = fit_shadow(
+                sm_light, surfaces.casters.vertices, PYGFX_SHADOW_MAP_SIZE,
+                pcf_radius=pcf_radius, api="webgpu", receivers=receivers,
+            )  # fmt: skip
+        set_shadow_camera(light, fit)
+    except ValueError as err:
+        _release(light)
+        return LightFit(light, None, str(err))
+    return LightFit(light, fit, "")
 
 
 class _Camera:
@@ -175,14 +367,25 @@ class _Camera:
         self.orthographic = bool(np.asarray(cam.orthographic))
 
 
-def _check_pygfx() -> None:
-    for owner in (_LightShadow, _PointLightShadow):
-        if not callable(getattr(owner, "_update_matrix", None)):
-            raise RuntimeError(
-                f"pygfx {gfx.__version__} has no {owner.__name__}._update_matrix, which "
-                "shadowmath.integrations.pygfx calls for spot and point lights; tested with "
-                f"pygfx {_versions()}"
-            )
+def _check_pygfx(light: Any = None) -> None:
+    """pygfx's private API that the overrides replace and call (RuntimeError without)."""
+    missing = [
+        f"{owner.__name__}._update_matrix"
+        for owner in (_LightShadow, _PointLightShadow)
+        if not callable(getattr(owner, "_update_matrix", None))
+    ]
+    if light is not None and isinstance(getattr(light, "shadow", None), _LightShadow):
+        if not hasattr(light.shadow, "_gfx_matrix_buffer"):
+            missing.append("LightShadow._gfx_matrix_buffer")
+        names = getattr(getattr(light, "uniform_buffer", None), "data", np.zeros(0)).dtype.names
+        if "light_view_proj_matrix" not in (names or ()):
+            missing.append("the light uniform's light_view_proj_matrix")
+    if missing:
+        raise RuntimeError(
+            f"pygfx {gfx.__version__} has no {', '.join(missing)}, which "
+            "shadowmath.integrations.pygfx overrides and calls; tested with "
+            f"pygfx {_versions()}"
+        )
     version = tuple(gfx.version_info[:2])
     if not TESTED_PYGFX[0] <= version < TESTED_PYGFX[1]:
         warnings.warn(
@@ -209,11 +412,6 @@ def _light_kind(light: Any) -> str:
         raise ValueError(
             "light: expected a pygfx DirectionalLight, SpotLight or PointLight, got "
             f"{type(light).__name__}"
-        )
-    if isinstance(light.parent, gfx.Camera):
-        raise ValueError(
-            "light: it is parented to a camera, so pygfx aims it along that camera and "
-            "ignores its target; add it to the scene instead"
         )
     return kind
 
@@ -261,28 +459,50 @@ def _set_window(camera: Any, cam: _Camera) -> None:
         camera.set_view_offset(2.0 * X, 2.0 * Y, lo + X, Y - t, r - lo, t - b)
 
 
-def _aim_spot_shadow(shadow: Any, forward: np.ndarray) -> None:
-    """Override ``shadow._update_matrix`` (pygfx's once-a-frame hook) for one spot light.
+def _hold_camera(shadow: Any, eye: np.ndarray, forward: np.ndarray) -> None:
+    """Override ``shadow._update_matrix`` (pygfx's once-a-frame hook) for one light.
 
-    ``SpotLightShadow._update_matrix`` resets the camera's field of view to
-    ``2 light.angle`` and its depth range from ``light.distance``, then calls the base
-    ``LightShadow._update_matrix``, which places the camera at the light, looks at the
-    light's target and uploads the matrix. The override calls that base directly, with
-    the light's target swapped (for the call only) for a point along the fitted
-    ``forward``, so the cone keeps its own aim.
+    pygfx's own (``LightShadow._update_matrix``, and ``SpotLightShadow``'s, which first
+    rebuilds the field of view from ``light.angle``) places the camera at the light,
+    aims it at the light's target and uploads its matrix. The override places the
+    camera at the fit's ``eye``, aims it along ``forward`` and uploads the same way:
+    the light itself is only read by pygfx, never written.
     """
-    aim = gfx.WorldObject()
 
     def update_matrix(light: Any) -> None:
-        aim.world.position = light.world.position + forward
-        cone_target = light.target
-        light.target = aim
-        try:
-            _LightShadow._update_matrix(shadow, light)
-        finally:
-            light.target = cone_target
+        _aim(shadow.camera, eye, forward)
+        _upload(light, shadow._gfx_matrix_buffer, shadow.camera.camera_matrix.T)
 
     shadow._update_matrix = update_matrix
+
+
+def _aim(camera: Any, eye: np.ndarray, forward: np.ndarray) -> None:
+    camera.world.position = eye
+    camera.look_at(eye + forward)
+
+
+def _upload(light: Any, buffer: Any, matrix: Any, face: int | None = None) -> None:
+    """A shadow camera's transposed matrix where pygfx's update puts it: the light's
+    uniform (read by the shader; ``face`` of a point light's six) and the buffer the
+    shadow pass draws with."""
+    if face is None:
+        light.uniform_buffer.data["light_view_proj_matrix"] = matrix
+    else:
+        light.uniform_buffer.data["light_view_proj_matrix"][face] = matrix
+    buffer.data["light_view_proj_matrix"] = matrix
+    buffer.update_full()
+
+
+def _release(light: Any) -> None:
+    """Give a light back to pygfx's own shadow camera: the override removed, the
+    camera's window, range and up those of a new shadow object of the same kind."""
+    shadow = light.shadow
+    shadow.__dict__.pop("_update_matrix", None)
+    default, camera = type(shadow)().camera, shadow.camera
+    for name in ("fov", "width", "height", "zoom", "maintain_aspect", "depth_range"):
+        setattr(camera, name, getattr(default, name))
+    camera.world.reference_up = default.world.reference_up
+    camera.clear_view_offset()
 
 
 def _set_cube_depth(light: Any, fit: Any) -> Any:
@@ -327,9 +547,7 @@ def _turn_up_face(shadow: Any, light: Any) -> None:
     half_turn = back @ np.diag([1.0, -1.0, -1.0, 1.0]) @ to_light
     stored = light.uniform_buffer.data["light_view_proj_matrix"]  # each face's matrix.T
     up = (np.asarray(stored[3], dtype=np.float64).T @ half_turn).T
-    stored[2] = up
-    shadow._gfx_matrix_buffer[2].data["light_view_proj_matrix"] = up
-    shadow._gfx_matrix_buffer[2].update_full()
+    _upload(light, shadow._gfx_matrix_buffer[2], up, face=2)
 
 
 class _WithoutCutoff:
