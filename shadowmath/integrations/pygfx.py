@@ -9,18 +9,22 @@ window, depth range and roll with those of a fit (:func:`shadowmath.shadow_camer
 pygfx draws and samples exactly the fitted map (its clip matrix is the fit's
 ``blocker_to_clip`` for ``api="webgpu"``, to float32 rounding):
 
-* **directional**: public attributes only. The light moves to the camera's eye (the
-  centre of the fitted box; a directional light's position does not light anything)
-  and aims along ``forward``; the orthographic camera gets ``width``, ``height``,
-  ``depth_range = (near, far)`` measured from the eye, and ``reference_up = up``
-  (pygfx's look-at keeps the camera's up closest to it; any other up rolls the map).
-* **spot**: the same public attributes (``fov``, ``width``, ``height`` and
-  ``set_view_offset`` for the window, off-centre where the fit clipped it to the cone),
-  plus one override, because pygfx offers no public hook: the shadow object's
-  ``_update_matrix`` (called once a frame) is replaced, on that one light's shadow
-  object, by pygfx's base ``LightShadow._update_matrix`` aimed along the fitted
-  ``forward``. That skips only ``SpotLightShadow``'s rebuild of the field of view from
-  ``light.angle``; the camera still follows the light's position every frame.
+The light itself is never written: its position, target, angle, distance, intensity
+and every other setting stay what the application set, after every frame; only the
+shadow object's camera and the matrices pygfx draws and samples with change.
+
+* **directional** and **spot**: the camera gets ``width``, ``height``, ``fov`` (0 for
+  the sun's orthographic box) and ``set_view_offset`` for the window (off-centre where
+  the fit clipped it to the cone), ``depth_range = (near, far)`` measured from the eye,
+  and ``reference_up = up`` (pygfx's look-at keeps the camera's up closest to it; any
+  other up rolls the map). pygfx offers no public hook for the camera's place: once a
+  frame its shadow object's ``_update_matrix`` puts the camera at the light, aims it at
+  the light's target (and, for a spot light, rebuilds the field of view from
+  ``light.angle``) and uploads its matrix. That method is replaced, on that one light's
+  shadow object, by one that puts the camera at the fit's ``eye`` (the centre of the
+  fitted box for a sun, the light for a spot), aims it along ``forward`` and uploads the
+  matrix as pygfx does. Refit when the light or the casters move
+  (:func:`fit_scene_shadows` does it for a whole scene, once a frame).
 * **point**: pygfx samples a point light's cube map through six fixed 90-degree faces
   whose orientation its shader hard-codes (``uv_to_direction``), so only the depth range
   can be fitted: :func:`shadowmath.cube_depth_range` of the light's position and the
@@ -35,9 +39,10 @@ pygfx draws and samples exactly the fitted map (its clip matrix is the fit's
 The map size is one module-level constant in pygfx's private renderer code, the same
 for every light; fit with ``map_size=PYGFX_SHADOW_MAP_SIZE`` and ``pcf_radius=2``
 (pygfx filters with a 5 x 5-texel kernel), and ``api="webgpu"`` if you also use the
-fit's matrices yourself. The override is checked against pygfx's private API at every
-call (:class:`RuntimeError` if it is gone) and pygfx versions outside
-:data:`TESTED_PYGFX` warn.
+fit's matrices yourself. The overrides are checked against pygfx's private API at every
+call (``_update_matrix``, the shadow's matrix buffer and the light uniform's
+``light_view_proj_matrix``: :class:`RuntimeError` if one is gone) and pygfx versions
+outside :data:`TESTED_PYGFX` warn.
 """
 
 from __future__ import annotations
@@ -100,10 +105,10 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
     A point light takes the :class:`~shadowmath.CubeDepthRange` of
     :func:`shadowmath.cube_depth_range` fitted at its position: its shadow camera's depth
     range becomes ``(near, far)`` (its six faces are fixed; see the module docstring).
-    A directional or spot light takes a fit, and this sets, on ``light`` and its
-    ``light.shadow.camera``: the light's position to the camera's eye (and a directional
-    light's target to ``eye + forward``), the camera's ``reference_up`` to ``up``, its
-    depth range to ``(near, far)`` and its window. A
+    A directional or spot light takes a fit, and this sets, on ``light.shadow.camera``
+    only (the light is not written): its place to the fit's ``eye`` looking along
+    ``forward``, kept there every frame by the override of the module docstring, its
+    ``reference_up`` to ``up``, its depth range to ``(near, far)`` and its window. A
     perspective window ``[l, r] x [b, t]`` (tangents) is cut out of the symmetric frustum
     of half-extents :math:`X = \max(-l, r)`, :math:`Y = \max(-b, t)`, whose field of view
     pygfx reads as
@@ -111,16 +116,16 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
     .. math:: \mathrm{fov} = 2 \arctan\frac{X + Y}{2}, \qquad \mathrm{aspect} = X / Y,
 
     by ``set_view_offset(2X, 2Y, l + X, Y - t, r - l, t - b)`` (offsets from the top-left
-    corner); an orthographic window the same way in world units. A spot light's shadow
-    object gets the documented override of the module docstring. Call it again whenever
+    corner); an orthographic window the same way in world units. Call it again whenever
     you refit (the casters or the light moved).
 
     Arguments:
         light: a ``pygfx.DirectionalLight`` (with an orthographic fit: ``sm.fit_shadow``
             of an ``sm.DirectionalLight``), a ``pygfx.SpotLight`` (with a perspective
             fit: an ``sm.SpotLight``, whose frame's ``Z`` is the cone's axis, or an
-            ``sm.PointLight``), not parented to a camera (pygfx then aims it along the
-            camera, ignoring the fit), or a ``pygfx.PointLight``.
+            ``sm.PointLight``), or a ``pygfx.PointLight``. Fit along the direction pygfx
+            lights with (from the light to its target, or along the camera's view for a
+            light parented to a camera).
         fit: one light's :class:`ShadowSetup` (from :func:`shadowmath.fit_shadow`, no
             batch) or :class:`ShadowCamera` (from :func:`shadowmath.shadow_camera`); for
             a point light, one :class:`CubeDepthRange` (scalar ``near`` and ``far``).
@@ -131,14 +136,14 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
         point light, the camera pygfx turns to each face, with the fitted depth range).
 
     Raises:
-        ValueError: a light that is not a pygfx directional, spot or point light, a light
-            parented to a camera, a fit that is not a ``ShadowSetup`` or ``ShadowCamera``
-            (a ``CubeDepthRange`` for a point light), a batch of fits, an orthographic
+        ValueError: a light that is not a pygfx directional, spot or point light, a fit
+            that is not a ``ShadowSetup`` or ``ShadowCamera`` (a ``CubeDepthRange`` for a
+            point light), a batch of fits, an orthographic
             fit for a spot light or a perspective one for a directional light, non-finite
             fields, a field of view wider than pygfx's 179 degrees, a depth range without
             ``0 < near < far``.
-        RuntimeError: pygfx lacks the private ``_update_matrix`` methods the spot and
-            point lights' overrides call.
+        RuntimeError: pygfx lacks the private ``_update_matrix`` methods, matrix buffer
+            or uniform field the overrides replace and write.
 
     Example:
         >>> import numpy as np, pygfx as gfx, shadowmath as sm
