@@ -217,6 +217,9 @@ def gather_scene(scene: Any) -> SceneSurfaces:
     its geometry's ``positions`` and ``indices`` placed by its ``world.matrix`` (times
     each instance's matrix for a ``gfx.InstancedMesh``), gathered by
     :func:`shadowmath.gather_meshes`: :math:`w = M_\text{world} (v, 1)`, faces offset.
+    pygfx also draws points and lines with ``cast_shadow`` into its shadow maps; they are
+    not gathered, so their shadows may fall outside the fitted maps: give them no
+    ``cast_shadow``, or add a mesh around them.
 
     Arguments:
         scene: a pygfx ``WorldObject``, usually the ``gfx.Scene``.

@@ -271,3 +271,27 @@ def test_a_light_with_nothing_to_shadow_is_skipped_and_reported(gfx):  # noqa: F
     meshes["floor"].geometry.positions.data[0] = np.nan
     with pytest.raises(ValueError, match=r"meshes\[0\].vertices: contains non-finite"):
         fit_scene_shadows(scene)
+
+
+def test_a_headlight_is_fitted_along_the_camera(gfx):  # noqa: F811 (the fixtures)
+    """A sun parented to the viewing camera (pygfx lights along the camera's view, not
+    toward its target): its shadow camera looks the way pygfx lights."""
+    from shadowmath.integrations.pygfx import fit_scene_shadows
+
+    scene, meshes, lit, group = build(gfx)
+    animate(0.3, meshes, lit, group)
+    for light in lit.values():
+        light.cast_shadow = False
+    camera = gfx.PerspectiveCamera(45)
+    camera.local.position = (2.0, -6.0, 7.0)
+    camera.look_at((1.0, 2.0, 0.0))  # not at the light's target, the origin
+    headlight = gfx.DirectionalLight(cast_shadow=True)
+    camera.add(headlight)
+    scene.add(camera)
+    (report,) = fit_scene_shadows(scene)
+    assert report.light is headlight and report.skipped == ""
+    headlight._gfx_update_uniform_buffer()
+    headlight.shadow._gfx_update_uniform_buffer(headlight)
+    lit_along = headlight.uniform_buffer.data["direction"][:3]
+    assert np.allclose(lit_along, camera.world.forward, atol=1e-6)
+    assert np.allclose(headlight.shadow.camera.world.forward, lit_along, atol=1e-6)
