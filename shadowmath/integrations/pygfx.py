@@ -307,7 +307,8 @@ def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
         One :class:`LightFit` per shadow-casting light, in scene order.
 
     Raises:
-        ValueError: bad geometry (see :func:`gather_scene`).
+        ValueError: a ``pcf_radius`` that is not an integer >= 0; bad geometry (see
+            :func:`gather_scene`).
         RuntimeError: pygfx lacks the private API the overrides use.
 
     Example:
@@ -325,6 +326,8 @@ def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
         [3.0, -1.5, 3.5]
     """
     _check_pygfx()
+    if isinstance(pcf_radius, bool) or not isinstance(pcf_radius, int) or pcf_radius < 0:
+        raise ValueError(f"pcf_radius: expected an integer >= 0, got {pcf_radius!r}")
     surfaces = gather_scene(scene)
     kinds = (gfx.DirectionalLight, gfx.SpotLight, gfx.PointLight)
     lights = scene.iter(lambda o: isinstance(o, kinds) and o.cast_shadow, skip_invisible=True)

@@ -268,6 +268,8 @@ def test_a_light_with_nothing_to_shadow_is_skipped_and_reported(gfx):  # noqa: F
     for light in (lit["spot"], fresh):
         light.shadow._gfx_update_uniform_buffer(light)
     assert np.allclose(lit["spot"].shadow.camera.camera_matrix, fresh.shadow.camera.camera_matrix)
+    with pytest.raises(ValueError, match=r"pcf_radius: expected an integer >= 0, got 1\.5"):
+        fit_scene_shadows(scene, pcf_radius=1.5)
     meshes["floor"].geometry.positions.data[0] = np.nan
     with pytest.raises(ValueError, match=r"meshes\[0\].vertices: contains non-finite"):
         fit_scene_shadows(scene)
