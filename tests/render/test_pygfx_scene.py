@@ -268,6 +268,10 @@ def test_a_light_with_nothing_to_shadow_is_skipped_and_reported(gfx):  # noqa: F
     for light in (lit["spot"], fresh):
         light.shadow._gfx_update_uniform_buffer(light)
     assert np.allclose(lit["spot"].shadow.camera.camera_matrix, fresh.shadow.camera.camera_matrix)
+    for mesh in meshes.values():  # nothing casts: every light reported, none raises
+        mesh.cast_shadow = False
+    reports = fit_scene_shadows(scene)
+    assert [r.skipped for r in reports] == ["the scene has no visible mesh with cast_shadow"] * 3
     with pytest.raises(ValueError, match=r"pcf_radius: expected an integer >= 0, got 1\.5"):
         fit_scene_shadows(scene, pcf_radius=1.5)
     meshes["floor"].geometry.positions.data[0] = np.nan
