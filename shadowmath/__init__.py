@@ -101,6 +101,7 @@ from ._math._smooth import smooth_max as smooth_max
 from ._math._soft import area_light_samples as area_light_samples
 from ._math._soft import area_light_samples_jax as area_light_samples_jax
 from ._math._soft import pyramid_to_unit_cube as pyramid_to_unit_cube
+from .gather import gather_meshes as gather_meshes
 from .lights import DirectionalLight as DirectionalLight
 from .lights import PointLight as PointLight
 from .lights import SpotLight as SpotLight
@@ -154,6 +155,7 @@ __all__ = [
     "fit_atlas",
     "fit_cascades",
     "fit_shadow",
+    "gather_meshes",
     "helper_axis",
     "light_frame",
     "light_frame_from_direction",

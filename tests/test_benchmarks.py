@@ -1,8 +1,9 @@
 """The speed benchmarks (``make bench``) run once at a tiny size so that none can rot.
 
 Nothing here is about time: every benchmark must run and produce finite figures.
-The GPU section may be skipped where JAX sees no GPU, the coverage section where
-there is no OpenGL context (but not under ``SHADOWMATH_REQUIRE_GL=1``, as in CI).
+The GPU section may be skipped where JAX sees no GPU, the coverage and pygfx sections
+where there is no OpenGL context or wgpu adapter (but not under
+``SHADOWMATH_REQUIRE_GL=1``, as in CI).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ EXPECTED = [
     "coverage",
     "cascades",
     "atlas",
+    "pygfx",
 ]
 
 
@@ -58,7 +60,7 @@ def test_every_benchmark_runs_tiny(tmp_path: Path) -> None:
     for name, section in benchmarks.items():
         if section["status"] == "skipped":
             may_skip = (name == "gpu" and not _has_gpu()) or (
-                name == "coverage" and os.environ.get("SHADOWMATH_REQUIRE_GL") != "1"
+                name in ("coverage", "pygfx") and os.environ.get("SHADOWMATH_REQUIRE_GL") != "1"
             )
             assert may_skip, f"{name} skipped: {section['skipped']}"
             continue

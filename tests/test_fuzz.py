@@ -2425,6 +2425,41 @@ def test_fuzz_cube_depth_range(data: st.DataObject) -> None:
     assert np.all(depth[drawn] >= near * (1 - 1e-12)) and np.all(depth[drawn] <= far)
 
 
+@given(data=st.data())
+def test_fuzz_gather_meshes(data: st.DataObject) -> None:
+    """Random meshes (indexed and triangle soups) under random affine transforms, or none:
+    each gathered triangle's corners are its own corners sent through its transform by
+    hand (M @ (v, 1), then / w = 1). One projective transform is refused, naming it."""
+    CASES["gather_meshes"] += 1
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    n = data.draw(st.integers(1, 4))
+    projective = data.draw(st.sampled_from([None, *range(n)]))
+    entries, expected = [], []
+    for i in range(n):
+        count, faces = int(rng.integers(1, 6)), int(rng.integers(1, 8))
+        vertices = rng.normal(size=(count, 3)) * 10.0 ** rng.integers(-3, 4)
+        F = rng.integers(0, count, (faces, 3))
+        M = np.eye(4)
+        M[:3] = rng.normal(size=(3, 4)) * 10.0 ** rng.integers(-2, 3)
+        if i == projective:
+            M[3, rng.integers(0, 4)] += data.draw(st.sampled_from([1e-9, 0.5, -1.0]))
+        transform = None if i != projective and data.draw(st.booleans()) else M
+        mesh = sm.Triangles(vertices[F]) if data.draw(st.booleans()) else sm.Mesh(vertices, F)
+        entries.append((mesh, transform))
+        h = np.c_[vertices, np.ones(count)] @ (np.eye(4) if transform is None else M).T
+        with np.errstate(divide="ignore", invalid="ignore"):  # w = 0: the projective one
+            expected.append((h[:, :3] / h[:, 3:])[F])
+    if projective is not None:
+        with pytest.raises(ValueError, match=rf"meshes\[{projective}\]: .*projective"):
+            sm.gather_meshes(entries)
+        return
+    got = sm.gather_meshes(entries)
+    want = np.concatenate(expected)
+    assert got.faces.shape == (len(want), 3) and got.faces.max() < len(got.vertices)
+    atol = 1e-12 * np.abs(want).max()
+    np.testing.assert_allclose(got.vertices[got.faces], want, rtol=1e-12, atol=atol)
+
+
 PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "GRAPHICS_APIS": ("test_fuzz_api_convention", "test_fuzz_fit_shadow_scene_options"),
     "NEAR_FAR_SLACK": ("test_fuzz_fit_shadow_scene_options",),
@@ -2471,6 +2506,7 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "camera_to_world": ("test_fuzz_shadow_camera",),
     "shadow_camera": ("test_fuzz_shadow_camera",),
     "fit_cascades": ("test_fuzz_fit_cascades",),
+    "gather_meshes": ("test_fuzz_gather_meshes",),
     "fit_shadow": ("test_fuzz_fit_shadow", "test_fuzz_fit_shadow_scene_options",
                    "test_fuzz_fit_shadow_invalid_options",
                    "test_fuzz_fit_shadow_jax_eager_jit_vmap"),

@@ -9,18 +9,22 @@ window, depth range and roll with those of a fit (:func:`shadowmath.shadow_camer
 pygfx draws and samples exactly the fitted map (its clip matrix is the fit's
 ``blocker_to_clip`` for ``api="webgpu"``, to float32 rounding):
 
-* **directional**: public attributes only. The light moves to the camera's eye (the
-  centre of the fitted box; a directional light's position does not light anything)
-  and aims along ``forward``; the orthographic camera gets ``width``, ``height``,
-  ``depth_range = (near, far)`` measured from the eye, and ``reference_up = up``
-  (pygfx's look-at keeps the camera's up closest to it; any other up rolls the map).
-* **spot**: the same public attributes (``fov``, ``width``, ``height`` and
-  ``set_view_offset`` for the window, off-centre where the fit clipped it to the cone),
-  plus one override, because pygfx offers no public hook: the shadow object's
-  ``_update_matrix`` (called once a frame) is replaced, on that one light's shadow
-  object, by pygfx's base ``LightShadow._update_matrix`` aimed along the fitted
-  ``forward``. That skips only ``SpotLightShadow``'s rebuild of the field of view from
-  ``light.angle``; the camera still follows the light's position every frame.
+The light itself is never written: its position, target, angle, distance, intensity
+and every other setting stay what the application set, after every frame; only the
+shadow object's camera and the matrices pygfx draws and samples with change.
+
+* **directional** and **spot**: the camera gets ``width``, ``height``, ``fov`` (0 for
+  the sun's orthographic box) and ``set_view_offset`` for the window (off-centre where
+  the fit clipped it to the cone), ``depth_range = (near, far)`` measured from the eye,
+  and ``reference_up = up`` (pygfx's look-at keeps the camera's up closest to it; any
+  other up rolls the map). pygfx offers no public hook for the camera's place: once a
+  frame its shadow object's ``_update_matrix`` puts the camera at the light, aims it at
+  the light's target (and, for a spot light, rebuilds the field of view from
+  ``light.angle``) and uploads its matrix. That method is replaced, on that one light's
+  shadow object, by one that puts the camera at the fit's ``eye`` (the centre of the
+  fitted box for a sun, the light for a spot), aims it along ``forward`` and uploads the
+  matrix as pygfx does. Refit when the light or the casters move
+  (:func:`fit_scene_shadows` does it for a whole scene, once a frame).
 * **point**: pygfx samples a point light's cube map through six fixed 90-degree faces
   whose orientation its shader hard-codes (``uv_to_direction``), so only the depth range
   can be fitted: :func:`shadowmath.cube_depth_range` of the light's position and the
@@ -35,31 +39,52 @@ pygfx draws and samples exactly the fitted map (its clip matrix is the fit's
 The map size is one module-level constant in pygfx's private renderer code, the same
 for every light; fit with ``map_size=PYGFX_SHADOW_MAP_SIZE`` and ``pcf_radius=2``
 (pygfx filters with a 5 x 5-texel kernel), and ``api="webgpu"`` if you also use the
-fit's matrices yourself. The override is checked against pygfx's private API at every
-call (:class:`RuntimeError` if it is gone) and pygfx versions outside
-:data:`TESTED_PYGFX` warn.
+fit's matrices yourself. The overrides are checked against pygfx's private API at every
+call (``_update_matrix``, the shadow's matrix buffer and the light uniform's
+``light_view_proj_matrix``: :class:`RuntimeError` if one is gone) and pygfx versions
+outside :data:`TESTED_PYGFX` warn.
 """
 
 from __future__ import annotations
 
 import math
 import warnings
-from typing import Any, Final
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 
-from shadowmath import CubeDepthRange, ShadowCamera, ShadowSetup, shadow_camera
+from shadowmath import (
+    CubeDepthRange,
+    DirectionalLight,
+    Mesh,
+    ShadowCamera,
+    ShadowSetup,
+    SpotLight,
+    cube_depth_range,
+    fit_shadow,
+    gather_meshes,
+    shadow_camera,
+)
 
 try:
     import pygfx as gfx
     from pygfx.objects._lights import LightShadow as _LightShadow
     from pygfx.objects._lights import PointLightShadow as _PointLightShadow
+    from pygfx.objects._lights import get_pos_from_camera_parent_or_target as _aimed_at
 except ImportError as err:  # pragma: no cover - the extra is part of `dev`
     raise ImportError(
         "shadowmath.integrations.pygfx needs pygfx: pip install 'shadowmath[pygfx]'"
     ) from err
 
-__all__ = ["PYGFX_SHADOW_MAP_SIZE", "TESTED_PYGFX", "set_shadow_camera"]
+__all__ = [
+    "PYGFX_SHADOW_MAP_SIZE",
+    "TESTED_PYGFX",
+    "LightFit",
+    "SceneSurfaces",
+    "fit_scene_shadows",
+    "gather_scene",
+    "set_shadow_camera",
+]
 
 #: Texels along each side of every pygfx shadow map (``LightRenderState.shadow_map_size``
 #: in pygfx 0.17, not configurable): the ``map_size`` to fit with.
@@ -80,10 +105,10 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
     A point light takes the :class:`~shadowmath.CubeDepthRange` of
     :func:`shadowmath.cube_depth_range` fitted at its position: its shadow camera's depth
     range becomes ``(near, far)`` (its six faces are fixed; see the module docstring).
-    A directional or spot light takes a fit, and this sets, on ``light`` and its
-    ``light.shadow.camera``: the light's position to the camera's eye (and a directional
-    light's target to ``eye + forward``), the camera's ``reference_up`` to ``up``, its
-    depth range to ``(near, far)`` and its window. A
+    A directional or spot light takes a fit, and this sets, on ``light.shadow.camera``
+    only (the light is not written): its place to the fit's ``eye`` looking along
+    ``forward``, kept there every frame by the override of the module docstring, its
+    ``reference_up`` to ``up``, its depth range to ``(near, far)`` and its window. A
     perspective window ``[l, r] x [b, t]`` (tangents) is cut out of the symmetric frustum
     of half-extents :math:`X = \max(-l, r)`, :math:`Y = \max(-b, t)`, whose field of view
     pygfx reads as
@@ -91,16 +116,16 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
     .. math:: \mathrm{fov} = 2 \arctan\frac{X + Y}{2}, \qquad \mathrm{aspect} = X / Y,
 
     by ``set_view_offset(2X, 2Y, l + X, Y - t, r - l, t - b)`` (offsets from the top-left
-    corner); an orthographic window the same way in world units. A spot light's shadow
-    object gets the documented override of the module docstring. Call it again whenever
+    corner); an orthographic window the same way in world units. Call it again whenever
     you refit (the casters or the light moved).
 
     Arguments:
         light: a ``pygfx.DirectionalLight`` (with an orthographic fit: ``sm.fit_shadow``
             of an ``sm.DirectionalLight``), a ``pygfx.SpotLight`` (with a perspective
             fit: an ``sm.SpotLight``, whose frame's ``Z`` is the cone's axis, or an
-            ``sm.PointLight``), not parented to a camera (pygfx then aims it along the
-            camera, ignoring the fit), or a ``pygfx.PointLight``.
+            ``sm.PointLight``), or a ``pygfx.PointLight``. Fit along the direction pygfx
+            lights with (from the light to its target, or along the camera's view for a
+            light parented to a camera).
         fit: one light's :class:`ShadowSetup` (from :func:`shadowmath.fit_shadow`, no
             batch) or :class:`ShadowCamera` (from :func:`shadowmath.shadow_camera`); for
             a point light, one :class:`CubeDepthRange` (scalar ``near`` and ``far``).
@@ -111,14 +136,14 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
         point light, the camera pygfx turns to each face, with the fitted depth range).
 
     Raises:
-        ValueError: a light that is not a pygfx directional, spot or point light, a light
-            parented to a camera, a fit that is not a ``ShadowSetup`` or ``ShadowCamera``
-            (a ``CubeDepthRange`` for a point light), a batch of fits, an orthographic
+        ValueError: a light that is not a pygfx directional, spot or point light, a fit
+            that is not a ``ShadowSetup`` or ``ShadowCamera`` (a ``CubeDepthRange`` for a
+            point light), a batch of fits, an orthographic
             fit for a spot light or a perspective one for a directional light, non-finite
             fields, a field of view wider than pygfx's 179 degrees, a depth range without
             ``0 < near < far``.
-        RuntimeError: pygfx lacks the private ``_update_matrix`` methods the spot and
-            point lights' overrides call.
+        RuntimeError: pygfx lacks the private ``_update_matrix`` methods, matrix buffer
+            or uniform field the overrides replace and write.
 
     Example:
         >>> import numpy as np, pygfx as gfx, shadowmath as sm
@@ -133,7 +158,7 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
         >>> bool(np.allclose(camera.camera_matrix, world_to_clip, atol=1e-6))
         True
     """
-    _check_pygfx()
+    _check_pygfx(light)
     kind = _light_kind(light)
     if kind == "point":
         return _set_cube_depth(light, fit)
@@ -145,21 +170,199 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
             f"{'DirectionalLight' if kind == 'directional' else 'SpotLight or sm.PointLight'})"
         )
     camera = light.shadow.camera
-    eye, forward, up = cam.eye, cam.forward, cam.up
-    light.world.position = eye
-    if kind == "directional":
-        light.target.world.position = eye + forward
-    else:
-        _aim_spot_shadow(light.shadow, forward)
-    camera.world.reference_up = up
-    # The same look-at pygfx does each frame, done now so that camera_matrix is right.
-    camera.world.position = eye
-    camera.look_at(eye + forward)
+    _set_window(camera, cam)  # first: it refuses a field of view pygfx cannot draw
+    camera.world.reference_up = cam.up
     camera.maintain_aspect = False
     camera.zoom = 1.0
-    camera.depth_range = (float(cam.near), float(cam.far))
-    _set_window(camera, cam)
+    camera.depth_range = (cam.near, cam.far)
+    _hold_camera(light.shadow, cam.eye, cam.forward)
+    _aim(camera, cam.eye, cam.forward)  # what the override does each frame, now
     return camera
+
+
+class SceneSurfaces(NamedTuple):
+    """A pygfx scene's shadow casters and receivers in world coordinates.
+
+    Attributes:
+        casters: :class:`~shadowmath.Mesh` of the visible meshes with ``cast_shadow``.
+        receivers: :class:`~shadowmath.Mesh` of those with ``receive_shadow``.
+    """
+
+    casters: Mesh
+    receivers: Mesh
+
+
+class LightFit(NamedTuple):
+    """What :func:`fit_scene_shadows` did for one shadow-casting light.
+
+    Attributes:
+        light: the pygfx light.
+        fit: its :class:`~shadowmath.ShadowSetup` (sun, spot) or
+            :class:`~shadowmath.CubeDepthRange` (point light), or None where skipped.
+        skipped: "" when fitted; else why not (the fit's ``ValueError`` message, or that
+            the scene casts no shadow). A skipped light draws with pygfx's own shadow
+            camera, as if never fitted.
+    """
+
+    light: Any
+    fit: ShadowSetup | CubeDepthRange | None
+    skipped: str
+
+
+def gather_scene(scene: Any) -> SceneSurfaces:
+    r"""The casters and receivers of a pygfx scene, in world coordinates.
+
+    Every visible ``gfx.Mesh`` under ``scene`` (pygfx draws nothing under an invisible
+    parent) with ``cast_shadow`` is a caster and with ``receive_shadow`` a receiver:
+    its geometry's ``positions`` and ``indices`` placed by its ``world.matrix`` (times
+    each instance's matrix for a ``gfx.InstancedMesh``), gathered by
+    :func:`shadowmath.gather_meshes`: :math:`w = M_\text{world} (v, 1)`, faces offset.
+    pygfx also draws points and lines with ``cast_shadow`` into its shadow maps; they are
+    not gathered, so their shadows may fall outside the fitted maps: give them no
+    ``cast_shadow``, or add a mesh around them.
+
+    Arguments:
+        scene: a pygfx ``WorldObject``, usually the ``gfx.Scene``.
+
+    Returns:
+        :class:`SceneSurfaces`: two :class:`~shadowmath.Mesh`, float64 vertices
+        ``(V, 3)`` and int64 faces ``(F, 3)``; empty ``(0, 3)`` where no mesh has the flag.
+
+    Raises:
+        ValueError: from :func:`shadowmath.gather_meshes`, naming the entry: a mesh
+            with non-finite positions, indices outside its positions or a projective
+            world matrix.
+
+    Example:
+        >>> import pygfx as gfx
+        >>> scene = gfx.Scene()
+        >>> floor = gfx.Mesh(gfx.plane_geometry(4, 4), gfx.MeshPhongMaterial())
+        >>> floor.receive_shadow = True
+        >>> cube = gfx.Mesh(gfx.box_geometry(1, 1, 1), gfx.MeshPhongMaterial())
+        >>> cube.cast_shadow = True
+        >>> cube.local.position = (0, 0, 3)
+        >>> _ = scene.add(floor, cube)
+        >>> surfaces = gather_scene(scene)
+        >>> surfaces.casters.vertices[:, 2].min(), surfaces.receivers.faces.shape
+        (np.float64(2.5), (2, 3))
+    """
+    casters: list[tuple[Any, Any]] = []
+    receivers: list[tuple[Any, Any]] = []
+    for mesh in scene.iter(lambda o: isinstance(o, gfx.Mesh), skip_invisible=True):
+        if not (mesh.cast_shadow or mesh.receive_shadow):
+            continue
+        geometry = mesh.geometry
+        positions = np.asarray(geometry.positions.data)[:, :3]
+        indices = getattr(geometry, "indices", None)
+        faces = (
+            np.arange(len(positions) - len(positions) % 3)
+            if indices is None
+            else np.asarray(indices.data)
+        )
+        part = Mesh(positions, faces.reshape(-1, 3).astype(np.int64))
+        for matrix in _placements(mesh):
+            if mesh.cast_shadow:
+                casters.append((part, matrix))
+            if mesh.receive_shadow:
+                receivers.append((part, matrix))
+    return SceneSurfaces(gather_meshes(casters), gather_meshes(receivers))
+
+
+def _placements(mesh: Any) -> list[np.ndarray]:
+    world = np.asarray(mesh.world.matrix, dtype=np.float64)
+    if not isinstance(mesh, gfx.InstancedMesh):
+        return [world]
+    count = mesh.instance_buffer.nitems
+    return [world @ np.asarray(mesh.get_matrix_at(i), dtype=np.float64) for i in range(count)]
+
+
+def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
+    """Fit the shadow camera of every shadow-casting light of a pygfx scene: one call
+    per frame, before drawing it.
+
+    The scene's casters and receivers come from :func:`gather_scene`. Each visible light
+    with ``cast_shadow`` (sun, spot or point) is fitted as pygfx lights it this frame,
+    and handed to :func:`set_shadow_camera`:
+
+    * ``gfx.DirectionalLight``: :func:`shadowmath.fit_shadow` of
+      ``sm.DirectionalLight(position - target)`` (the camera's view direction for a light
+      parented to a camera, as pygfx does);
+    * ``gfx.SpotLight``: ``fit_shadow`` of ``sm.SpotLight(position, target - position,
+      angle)``; both with the casters' vertices, ``receivers=`` the receivers' triangles,
+      :data:`PYGFX_SHADOW_MAP_SIZE`, ``pcf_radius`` and ``api="webgpu"``;
+    * ``gfx.PointLight``: :func:`shadowmath.cube_depth_range` at its position, of the
+      casters' triangles, with the receivers.
+
+    The lights themselves are read, never written: position, target, angle, distance,
+    intensity and every other setting stay what the application set (only each light's
+    ``shadow.camera`` and the matrices pygfx draws with change). A light whose fit
+    raises ``ValueError`` (no casters, casters behind a spot light...) is skipped,
+    given back to pygfx's own shadow camera, and reported; the others are fitted.
+
+    Arguments:
+        scene: a pygfx ``WorldObject``, usually the ``gfx.Scene`` that is drawn.
+        pcf_radius: the border kept for pygfx's filter (its 5 x 5 kernel: 2).
+
+    Returns:
+        One :class:`LightFit` per shadow-casting light, in scene order.
+
+    Raises:
+        ValueError: a ``pcf_radius`` that is not an integer >= 0; bad geometry (see
+            :func:`gather_scene`).
+        RuntimeError: pygfx lacks the private API the overrides use.
+
+    Example:
+        >>> import pygfx as gfx
+        >>> scene = gfx.Scene()
+        >>> cube = gfx.Mesh(gfx.box_geometry(1, 1, 1), gfx.MeshPhongMaterial())
+        >>> cube.cast_shadow = True
+        >>> sun = gfx.DirectionalLight(cast_shadow=True)
+        >>> sun.local.position = (3, -1.5, 3.5)
+        >>> behind = gfx.SpotLight(cast_shadow=True)  # at the cube's centre
+        >>> _ = scene.add(cube, sun, sun.target, behind, behind.target)
+        >>> [(type(r.light).__name__, r.skipped[:40]) for r in fit_scene_shadows(scene)]
+        [('DirectionalLight', ''), ('SpotLight', 'vertices: ...')]
+        >>> sun.local.position.tolist()  # the user's light, untouched
+        [3.0, -1.5, 3.5]
+    """
+    _check_pygfx()
+    if isinstance(pcf_radius, bool) or not isinstance(pcf_radius, int) or pcf_radius < 0:
+        raise ValueError(f"pcf_radius: expected an integer >= 0, got {pcf_radius!r}")
+    surfaces = gather_scene(scene)
+    kinds = (gfx.DirectionalLight, gfx.SpotLight, gfx.PointLight)
+    lights = scene.iter(lambda o: isinstance(o, kinds) and o.cast_shadow, skip_invisible=True)
+    return [_fit_light(light, surfaces, pcf_radius) for light in lights]
+
+
+def _fit_light(light: Any, surfaces: SceneSurfaces, pcf_radius: int) -> LightFit:
+    """One light's fit set on it, or the reason it was skipped (and the light released)."""
+    if len(surfaces.casters.faces) == 0:
+        _release(light)
+        return LightFit(light, None, "the scene has no visible mesh with cast_shadow")
+    receivers = surfaces.receivers if len(surfaces.receivers.faces) else None
+    position = np.asarray(light.world.position, dtype=np.float64)
+    fit: ShadowSetup | CubeDepthRange
+    try:
+        if isinstance(light, gfx.PointLight):
+            fit = cube_depth_range(position, surfaces.casters, receivers=receivers)
+        else:
+            aim = np.asarray(_aimed_at(light), dtype=np.float64) - position
+            if not np.any(aim):  # pygfx's light shines down -z then
+                aim = np.array([0.0, 0.0, -1.0])
+            sm_light: Any = (
+                DirectionalLight(-aim)
+                if isinstance(light, gfx.DirectionalLight)
+                else SpotLight(position, aim, np.float64(light.angle))
+            )
+            fit = fit_shadow(
+                sm_light, surfaces.casters.vertices, PYGFX_SHADOW_MAP_SIZE,
+                pcf_radius=pcf_radius, api="webgpu", receivers=receivers,
+            )  # fmt: skip
+        set_shadow_camera(light, fit)
+    except ValueError as err:
+        _release(light)
+        return LightFit(light, None, str(err))
+    return LightFit(light, fit, "")
 
 
 class _Camera:
@@ -175,14 +378,25 @@ class _Camera:
         self.orthographic = bool(np.asarray(cam.orthographic))
 
 
-def _check_pygfx() -> None:
-    for owner in (_LightShadow, _PointLightShadow):
-        if not callable(getattr(owner, "_update_matrix", None)):
-            raise RuntimeError(
-                f"pygfx {gfx.__version__} has no {owner.__name__}._update_matrix, which "
-                "shadowmath.integrations.pygfx calls for spot and point lights; tested with "
-                f"pygfx {_versions()}"
-            )
+def _check_pygfx(light: Any = None) -> None:
+    """pygfx's private API that the overrides replace and call (RuntimeError without)."""
+    missing = [
+        f"{owner.__name__}._update_matrix"
+        for owner in (_LightShadow, _PointLightShadow)
+        if not callable(getattr(owner, "_update_matrix", None))
+    ]
+    if light is not None and isinstance(getattr(light, "shadow", None), _LightShadow):
+        if not hasattr(light.shadow, "_gfx_matrix_buffer"):
+            missing.append("LightShadow._gfx_matrix_buffer")
+        names = getattr(getattr(light, "uniform_buffer", None), "data", np.zeros(0)).dtype.names
+        if "light_view_proj_matrix" not in (names or ()):
+            missing.append("the light uniform's light_view_proj_matrix")
+    if missing:
+        raise RuntimeError(
+            f"pygfx {gfx.__version__} has no {', '.join(missing)}, which "
+            "shadowmath.integrations.pygfx overrides and calls; tested with "
+            f"pygfx {_versions()}"
+        )
     version = tuple(gfx.version_info[:2])
     if not TESTED_PYGFX[0] <= version < TESTED_PYGFX[1]:
         warnings.warn(
@@ -209,11 +423,6 @@ def _light_kind(light: Any) -> str:
         raise ValueError(
             "light: expected a pygfx DirectionalLight, SpotLight or PointLight, got "
             f"{type(light).__name__}"
-        )
-    if isinstance(light.parent, gfx.Camera):
-        raise ValueError(
-            "light: it is parented to a camera, so pygfx aims it along that camera and "
-            "ignores its target; add it to the scene instead"
         )
     return kind
 
@@ -261,28 +470,50 @@ def _set_window(camera: Any, cam: _Camera) -> None:
         camera.set_view_offset(2.0 * X, 2.0 * Y, lo + X, Y - t, r - lo, t - b)
 
 
-def _aim_spot_shadow(shadow: Any, forward: np.ndarray) -> None:
-    """Override ``shadow._update_matrix`` (pygfx's once-a-frame hook) for one spot light.
+def _hold_camera(shadow: Any, eye: np.ndarray, forward: np.ndarray) -> None:
+    """Override ``shadow._update_matrix`` (pygfx's once-a-frame hook) for one light.
 
-    ``SpotLightShadow._update_matrix`` resets the camera's field of view to
-    ``2 light.angle`` and its depth range from ``light.distance``, then calls the base
-    ``LightShadow._update_matrix``, which places the camera at the light, looks at the
-    light's target and uploads the matrix. The override calls that base directly, with
-    the light's target swapped (for the call only) for a point along the fitted
-    ``forward``, so the cone keeps its own aim.
+    pygfx's own (``LightShadow._update_matrix``, and ``SpotLightShadow``'s, which first
+    rebuilds the field of view from ``light.angle``) places the camera at the light,
+    aims it at the light's target and uploads its matrix. The override places the
+    camera at the fit's ``eye``, aims it along ``forward`` and uploads the same way:
+    the light itself is only read by pygfx, never written.
     """
-    aim = gfx.WorldObject()
 
     def update_matrix(light: Any) -> None:
-        aim.world.position = light.world.position + forward
-        cone_target = light.target
-        light.target = aim
-        try:
-            _LightShadow._update_matrix(shadow, light)
-        finally:
-            light.target = cone_target
+        _aim(shadow.camera, eye, forward)
+        _upload(light, shadow._gfx_matrix_buffer, shadow.camera.camera_matrix.T)
 
     shadow._update_matrix = update_matrix
+
+
+def _aim(camera: Any, eye: np.ndarray, forward: np.ndarray) -> None:
+    camera.world.position = eye
+    camera.look_at(eye + forward)
+
+
+def _upload(light: Any, buffer: Any, matrix: Any, face: int | None = None) -> None:
+    """A shadow camera's transposed matrix where pygfx's update puts it: the light's
+    uniform (read by the shader; ``face`` of a point light's six) and the buffer the
+    shadow pass draws with."""
+    if face is None:
+        light.uniform_buffer.data["light_view_proj_matrix"] = matrix
+    else:
+        light.uniform_buffer.data["light_view_proj_matrix"][face] = matrix
+    buffer.data["light_view_proj_matrix"] = matrix
+    buffer.update_full()
+
+
+def _release(light: Any) -> None:
+    """Give a light back to pygfx's own shadow camera: the override removed, the
+    camera's window, range and up those of a new shadow object of the same kind."""
+    shadow = light.shadow
+    shadow.__dict__.pop("_update_matrix", None)
+    default, camera = type(shadow)().camera, shadow.camera
+    for name in ("fov", "width", "height", "zoom", "maintain_aspect", "depth_range"):
+        setattr(camera, name, getattr(default, name))
+    camera.world.reference_up = default.world.reference_up
+    camera.clear_view_offset()
 
 
 def _set_cube_depth(light: Any, fit: Any) -> Any:
@@ -327,9 +558,7 @@ def _turn_up_face(shadow: Any, light: Any) -> None:
     half_turn = back @ np.diag([1.0, -1.0, -1.0, 1.0]) @ to_light
     stored = light.uniform_buffer.data["light_view_proj_matrix"]  # each face's matrix.T
     up = (np.asarray(stored[3], dtype=np.float64).T @ half_turn).T
-    stored[2] = up
-    shadow._gfx_matrix_buffer[2].data["light_view_proj_matrix"] = up
-    shadow._gfx_matrix_buffer[2].update_full()
+    _upload(light, shadow._gfx_matrix_buffer[2], up, face=2)
 
 
 class _WithoutCutoff:
