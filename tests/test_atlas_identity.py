@@ -404,3 +404,26 @@ def test_docs_cache_example_runs(capsys: pytest.CaptureFixture[str]) -> None:
     for t, key in enumerate(zip(fit.tile_id.tolist(), fit.tile_face.tolist(), strict=True)):
         clip, port = tiles[key]
         assert np.array_equal(clip, fit.world_to_clip[t]) and port == tuple(fit.viewports[t])
+
+
+def test_keys_of_any_int64_id() -> None:
+    """Ids at both ends of int64 (no room to pack the face beside them) still match."""
+    big = [2**63 - 1, -(2**63), 5]
+    a = sm.allocate_atlas([0.3, 0.2, 0.3], atlas_size=2048, cube=[False, True, False],
+                          light_ids=big)  # fmt: skip
+    b = sm.allocate_atlas([0.3, 0.3, 0.2], atlas_size=2048, cube=[False, False, True],
+                          light_ids=[5, 2**63 - 1, -(2**63)], previous=a)  # fmt: skip
+    assert b.previous_index.tolist() == [7, 0, 1, 2, 3, 4, 5, 6]
+    lights = [POOL[1], POOL[0], POOL[3]]
+    fit_a = sm.fit_atlas(lights, VERTS, a)
+    fit_b = sm.fit_atlas([lights[2], lights[0], lights[1]], VERTS, b)
+    assert not sm.atlas_redraw(fit_b, fit_a).any()
+    assert sm.atlas_redraw(fit_b, fit_a._replace(tile_face=(fit_a.tile_face + 1) % 6)).any()
+    # 2**61 * 8 and -(2**63) * 8 wrap to 0 in int64: a key packed naively would take
+    # id 0 for them.
+    for old_id in (2**61, -(2**63)):
+        c = sm.allocate_atlas([0.3], atlas_size=1024, light_ids=[old_id])
+        d = sm.allocate_atlas([0.3], atlas_size=1024, light_ids=[0], previous=c)
+        assert np.array_equal(c.tile_rect, d.tile_rect) and d.previous_index.tolist() == [-1]
+        fit_c, fit_d = (sm.fit_atlas([POOL[1]], VERTS, x) for x in (c, d))
+        assert sm.atlas_redraw(fit_d, fit_c).tolist() == [True]

@@ -363,8 +363,10 @@ def _find_tiles(ids: Ints, faces: Ints, old_ids: Ints, old_faces: Ints) -> Ints:
         and np.array_equal(old_faces, faces)
     ):
         return np.arange(ids.size, dtype=np.int64)
-    _, code = np.unique(np.concatenate([old_ids, ids]), return_inverse=True)
-    code = code.reshape(-1) * 6 + np.concatenate([old_faces, faces])  # ids of any size
+    both = np.concatenate([old_ids, ids])
+    if both.size and not -(1 << 59) <= both.min() <= both.max() < 1 << 59:  # any int64: ranks
+        both = np.unique(both, return_inverse=True)[1].reshape(-1)
+    code = both * 8 + np.concatenate([old_faces, faces])
     return _find(code[old_ids.size :], code[: old_ids.size])
 
 
