@@ -12,7 +12,9 @@ face tiles for a point light's cube map). Per frame a renderer calls
    and each group runs :func:`fit_shadow`'s compiled loop once (NumPy with Numba) or
    its array driver (JAX, or NumPy alone); the cube lights' faces are
    :func:`cube_face_views` and :func:`cube_face_projection` with the border ring, on
-   whole arrays.
+   whole arrays;
+3. :func:`atlas_redraw` with this frame's fit and the last one: the tiles to draw (a
+   tile's identity is its key ``(light id, face)``, not its index).
 
 The rule, the borders and the API conventions are written out in ``docs/atlas.md``.
 """
