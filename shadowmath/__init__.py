@@ -47,6 +47,7 @@ from ._fits._atlas import allocate_atlas as allocate_atlas
 from ._fits._atlas import atlas_tile_transforms as atlas_tile_transforms
 from ._fits._atlas import atlas_viewports as atlas_viewports
 from ._fits._atlas import fit_atlas as fit_atlas
+from ._fits._atlas_redraw import atlas_redraw as atlas_redraw
 from ._fits._camera import ShadowCamera as ShadowCamera
 from ._fits._camera import camera_to_world as camera_to_world
 from ._fits._camera import shadow_camera as shadow_camera
@@ -137,6 +138,7 @@ __all__ = [
     "api_convention",
     "area_light_samples",
     "area_light_samples_jax",
+    "atlas_redraw",
     "atlas_tile_transforms",
     "atlas_viewports",
     "blocker_projection",

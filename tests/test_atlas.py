@@ -222,7 +222,8 @@ def test_hysteresis_holds_a_class_boundary() -> None:
 
 
 def assert_only_moved(a: ShadowAtlas, b: ShadowAtlas, changed: set[int]) -> None:
-    """Every light of ``b`` not in ``changed`` kept its rects from ``a`` (matched by id)."""
+    """Every light of ``b`` not in ``changed`` kept its rects from ``a`` (matched by id);
+    ``moved`` says so unless the tile's index shifted (lights before it left or came)."""
     for light, ident in enumerate(b.light_ids):
         tiles = b.light_tiles[light][b.light_tiles[light] >= 0]
         if int(ident) in changed:
@@ -230,8 +231,9 @@ def assert_only_moved(a: ShadowAtlas, b: ShadowAtlas, changed: set[int]) -> None
             continue
         old = int(np.flatnonzero(a.light_ids == ident)[0])
         old_tiles = a.light_tiles[old][a.light_tiles[old] >= 0]
+        assert np.array_equal(b.previous_index[tiles], old_tiles)
         assert np.array_equal(b.tile_rect[tiles], a.tile_rect[old_tiles])
-        assert not b.moved[tiles].any()
+        assert np.array_equal(b.moved[tiles], old_tiles != tiles)
 
 
 def test_a_light_changing_class_moves_only_itself() -> None:
@@ -275,7 +277,9 @@ def test_new_tiles_take_the_best_fitting_hole() -> None:
     b = allocate_atlas([0.4, 0.4, 0.4, 0.4], atlas_size=256, min_tile=64, max_tile=128,
                        light_ids=[1, 2, 3, 4], previous=a)  # fmt: skip
     assert b.tile_rect[3].tolist() == [192, 64, 64]
-    assert b.moved.tolist() == [False, False, False, True]
+    assert b.tile_rect[:3].tolist() == a.tile_rect[1:].tolist()  # kept, one index down
+    assert b.previous_index.tolist() == [1, 2, 3, -1]
+    assert b.moved.tolist() == [True, True, True, True]  # every index names another tile
 
 
 def test_fragmentation_falls_back_to_a_repack() -> None:

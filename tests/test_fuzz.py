@@ -2535,6 +2535,7 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "AtlasFit": ("test_fuzz_fit_atlas",),
     "ShadowAtlas": ("test_fuzz_allocate_atlas",),
     "allocate_atlas": ("test_fuzz_allocate_atlas",),
+    "atlas_redraw": ("test_fuzz_atlas_redraw",),
     "atlas_tile_transforms": ("test_fuzz_fit_atlas",),
     "atlas_viewports": ("test_fuzz_fit_atlas",),
     "fit_atlas": ("test_fuzz_fit_atlas",),
@@ -2696,6 +2697,42 @@ def atlas_scenes(draw: Any) -> tuple[np.ndarray, list[Any], np.ndarray]:
             lights.append(sm.DirectionalLight(direction))
         cube.append(kind == "cube")
     return verts, lights, np.array(cube)
+
+
+@given(scene=atlas_scenes(), seed=st.integers(0, 2**32 - 1))
+def test_fuzz_atlas_redraw(scene: Any, seed: int) -> None:
+    """Frames of lights leaving, joining, reordered, moved and resized: previous_index
+    maps tiles by (light id, face), a tile not moved kept its index, key and rect, and
+    renderers keeping tiles by atlas_redraw (one texture, a cache by key, a cache by
+    index with moved) sample every light's own depths, as a fresh draw gives them."""
+    from .test_atlas_identity import check_identity, run_renderers
+
+    verts, lights, cube = scene
+    CASES["atlas_redraw"] += 1
+    rng = np.random.default_rng(seed)
+    coverage = rng.uniform(0.02, 0.6, len(lights))
+    atlases: list[sm.ShadowAtlas] = []
+    frame_lights: list[list[Any]] = []
+    for _ in range(4):
+        ids = rng.permutation(len(lights))[: rng.integers(1, len(lights) + 1)]
+        coverage = np.where(rng.uniform(size=len(lights)) < 0.3, coverage * 2, coverage)
+        lights = [_nudged(light) if rng.uniform() < 0.3 and not c else light
+                  for light, c in zip(lights, cube, strict=True)]  # fmt: skip
+        previous = atlases[-1] if atlases else None
+        atlas = sm.allocate_atlas(coverage[ids], atlas_size=1024, cube=cube[ids], light_ids=ids,
+                                  budget=0.5, previous=previous)  # fmt: skip
+        if atlases:
+            check_identity(atlases[-1], atlas)
+        atlases.append(atlas)
+        frame_lights.append([lights[i] for i in ids])
+    run_renderers(atlases, frame_lights, verts)
+
+
+def _nudged(light: Any) -> Any:
+    """A 2D light moved a little (a spot keeps aiming at the origin's side)."""
+    if isinstance(light, sm.DirectionalLight):
+        return light._replace(direction=np.asarray(light.direction) + [0.01, 0.0, 0.0])
+    return light._replace(position=np.asarray(light.position) * 1.01)
 
 
 @given(

@@ -12,7 +12,9 @@ face tiles for a point light's cube map). Per frame a renderer calls
    and each group runs :func:`fit_shadow`'s compiled loop once (NumPy with Numba) or
    its array driver (JAX, or NumPy alone); the cube lights' faces are
    :func:`cube_face_views` and :func:`cube_face_projection` with the border ring, on
-   whole arrays.
+   whole arrays;
+3. :func:`atlas_redraw` with this frame's fit and the last one: the tiles to draw (a
+   tile's identity is its key ``(light id, face)``, not its index).
 
 The rule, the borders and the API conventions are written out in ``docs/atlas.md``.
 """
@@ -82,8 +84,12 @@ class ShadowAtlas(NamedTuple):
         light_size: ``(L,)`` each light's tile size (0: no tile, no shadow this frame).
         light_tiles: ``(L, 6)`` the tile of each face (``-1`` unused; a 2D light uses
             column 0).
-        moved: ``(T,)`` True where the tile's rect is not the one it had in
-            ``previous`` (a new tile counts as moved): redraw those.
+        moved: ``(T,)`` True unless tile ``t`` of ``previous`` was the same
+            ``(light id, face)`` at the same rect: a new tile, one whose rect moved or
+            resized, and one whose index now names another light's tile (lights left,
+            joined or were reordered before it) all count as moved. False is safe for
+            a cache by tile index *and* by key; it does not say that the light's
+            matrices are unchanged: :func:`atlas_redraw` is the complete rule.
         used: the fraction of the atlas's area covered by tiles.
         light_wish: ``(L,)`` the size each light asked for (its class, before the
             budget); the hysteresis of the next frame reads it.
@@ -96,6 +102,12 @@ class ShadowAtlas(NamedTuple):
             so a clamped tap reads "lit", as a single map's clamp-to-border does.
         repacked: True when the tiles kept from ``previous`` left no aligned hole for
             a new one, so every tile was laid out afresh.
+        tile_id: ``(T,)`` the id (``light_ids``) of each tile's light: a tile's identity
+            across frames is its key ``(tile_id[t], tile_face[t])``, not its index
+            ``t`` (which shifts when lights before it leave, join or are reordered).
+        previous_index: ``(T,)`` the index in ``previous`` of the tile with the same
+            key, ``-1`` for a new one (or without ``previous``): a renderer moves its
+            per-tile data (cached depths, uniforms) from ``previous_index[t]`` to ``t``.
     """
 
     atlas_size: int
@@ -112,6 +124,8 @@ class ShadowAtlas(NamedTuple):
     light_border: Ints
     tile_clamp: NDArray[np.float64]
     repacked: bool
+    tile_id: Ints
+    previous_index: Ints
 
 
 class AtlasFit(NamedTuple):
@@ -126,6 +140,15 @@ class AtlasFit(NamedTuple):
         tile_clamp: ``(T, 4)`` the atlas's :attr:`ShadowAtlas.tile_clamp`.
         near, far: ``(T,)`` each tile's depth range (light ``z`` for a 2D map, the
             distance along the face's axis for a cube face).
+        texture_size: ``(width, height)`` of the depth texture to allocate, in texels:
+            ``(atlas_size, atlas_size)``; every viewport lies inside it.
+        tile_id, tile_face: ``(T,)`` each tile's key ``(light id, face)``, the
+            atlas's :attr:`ShadowAtlas.tile_id` and :attr:`ShadowAtlas.tile_face`:
+            cache a tile's depths by key, not by index.
+
+    Which tiles to redraw this frame: :func:`atlas_redraw` ``(fit, previous_fit)``,
+    True where a tile is new, its viewport moved or resized, its ``world_to_clip``
+    changed, or the texture did.
     """
 
     world_to_clip: Array
@@ -134,6 +157,9 @@ class AtlasFit(NamedTuple):
     tile_clamp: NDArray[np.float64]
     near: Array
     far: Array
+    texture_size: tuple[int, int]
+    tile_id: Ints
+    tile_face: Ints
 
 
 # ------------------------------------------------------------------ allocation
@@ -317,14 +343,33 @@ def _match(ids: Ints, previous: ShadowAtlas | None) -> Ints:
     """Each light's index in ``previous`` (by id), or -1."""
     if previous is None:
         return np.full(ids.shape, -1, dtype=np.int64)
-    old = previous.light_ids
-    if old.shape == ids.shape and np.array_equal(old, ids):
-        return np.arange(ids.size, dtype=np.int64)
+    return _find(ids, previous.light_ids)
+
+
+def _find(keys: Ints, old: Ints) -> Ints:
+    """Each key's index in ``old`` (distinct keys), or -1."""
+    if old.shape == keys.shape and np.array_equal(old, keys):
+        return np.arange(keys.size, dtype=np.int64)
     if old.size == 0:
-        return np.full(ids.shape, -1, dtype=np.int64)
+        return np.full(keys.shape, -1, dtype=np.int64)
     order = np.argsort(old, kind="stable")
-    pos = np.minimum(np.searchsorted(old[order], ids), old.size - 1)
-    return np.where(old[order][pos] == ids, order[pos], -1).astype(np.int64)
+    pos = np.minimum(np.searchsorted(old[order], keys), old.size - 1)
+    return np.where(old[order][pos] == keys, order[pos], -1).astype(np.int64)
+
+
+def _find_tiles(ids: Ints, faces: Ints, old_ids: Ints, old_faces: Ints) -> Ints:
+    """Each tile's index among the old tiles with the same key ``(id, face)``, or -1."""
+    if (
+        old_ids.shape == ids.shape
+        and np.array_equal(old_ids, ids)
+        and np.array_equal(old_faces, faces)
+    ):
+        return np.arange(ids.size, dtype=np.int64)
+    both = np.concatenate([old_ids, ids])
+    if both.size and not -(1 << 59) <= both.min() <= both.max() < 1 << 59:  # any int64: ranks
+        both = np.unique(both, return_inverse=True)[1].reshape(-1)
+    code = both * 8 + np.concatenate([old_faces, faces])
+    return _find(code[old_ids.size :], code[: old_ids.size])
 
 
 def _allocate(
@@ -351,8 +396,11 @@ def _allocate(
     sizes = tiles.shrink_to_budget(wish, faces, order, o.min_tile, int(o.budget * grid * grid))
     if _unchanged(previous, o.size, ids, sizes, is_cube):
         assert previous is not None
-        moved = np.zeros(previous.tile_light.shape, dtype=bool)
-        return previous._replace(moved=moved, light_wish=wish, light_border=border, repacked=False)
+        count = previous.tile_light.shape[0]
+        return previous._replace(
+            moved=np.zeros(count, dtype=bool), light_wish=wish, light_border=border,
+            repacked=False, previous_index=np.arange(count, dtype=np.int64),
+        )  # fmt: skip
     lit = np.flatnonzero(sizes)
     per = faces[lit]
     tile_light = np.repeat(lit, per)
@@ -366,20 +414,23 @@ def _allocate(
     rank = rank_of[tile_light] * 6 + tile_face
     prev_rect = np.full((count, 3), -1, dtype=np.int64)
     keep = np.zeros(count, dtype=bool)
+    prev_tile = np.full(count, -1, dtype=np.int64)
+    if previous is not None and previous.light_size.size:
+        prev_tile = np.where(had[tile_light], previous.light_tiles[safe[tile_light], tile_face], -1)
     if previous is not None and previous.atlas_size == o.size and previous.light_size.size:
-        old_tile = previous.light_tiles[safe[tile_light], tile_face]
-        exists = had[tile_light] & (old_tile >= 0)
-        prev_rect[exists] = previous.tile_rect[old_tile[exists]]
+        exists = prev_tile >= 0
+        prev_rect[exists] = previous.tile_rect[prev_tile[exists]]
         same = had & (previous.light_size[safe] == sizes) & (previous.light_cube[safe] == is_cube)
         keep = same[tile_light] & exists
     rect, repacked = _layout(side, rank, keep, prev_rect, grid, o.min_tile)
-    moved = ~np.all(rect == prev_rect, axis=1)
+    # Index-safe: tile t keeps its meaning only if it was tile t, of the same key, there.
+    moved = ~np.all(rect == prev_rect, axis=1) | (prev_tile != np.arange(count))
     x, y, s = (rect[:, i].astype(np.float64) for i in range(3))
     clamp = np.stack([x + 0.5, y + 0.5, x + s - 0.5, y + s - 0.5], axis=1) / o.size
     used = float((sizes.astype(np.float64) ** 2 * faces).sum() / float(o.size) ** 2)
     return ShadowAtlas(
         o.size, tile_light, tile_face, rect, sizes, light_tiles, moved, used, wish, ids,
-        is_cube, border, clamp, repacked,
+        is_cube, border, clamp, repacked, ids[tile_light], prev_tile,
     )  # fmt: skip
 
 
@@ -619,7 +670,11 @@ def fit_atlas(
         parts.append(_fit_cubes(ctx, atlas, cubes, data, verts, tris, R, n, f, api, reversed_z))
     T = xp.asarray(_tile_transforms(atlas.tile_rect, atlas.atlas_size), dtype=ctx.dtype)
     clip, tex, lo, hi = _gather(ctx, parts, atlas.tile_light.shape[0])
-    return AtlasFit(clip, T @ tex, atlas_viewports(atlas), atlas.tile_clamp, lo, hi)
+    return AtlasFit(
+        clip, T @ tex, atlas_viewports(atlas), atlas.tile_clamp, lo, hi,
+        texture_size=(atlas.atlas_size, atlas.atlas_size), tile_id=atlas.tile_id,
+        tile_face=atlas.tile_face,
+    )  # fmt: skip
 
 
 def _gather(ctx: Context, parts: list[Any], total: int) -> tuple[Array, ...]:

@@ -85,6 +85,13 @@ class Cascades(NamedTuple):
         viewports: ``(n, 4)`` integers ``(x, y, width, height)`` of each cascade's
             tile in the atlas, in the API's own viewport convention (``(0, 0, W, H)``
             for every cascade with ``layout="layers"``).
+        texture_size: ``(width, height)`` in texels of the depth texture to allocate
+            (the same for every batch entry): each layer's, ``(W, H)``, with
+            ``layout="layers"``; the atlas's, ``(cols W, rows H)`` (``cols =
+            ceil(sqrt(n))``, ``rows = ceil(n / cols)``), with ``layout="atlas"``.
+            Every viewport lies inside it.
+        texture_layers: the texture's layer count: ``n`` with ``layout="layers"``
+            (a texture array), 1 with ``layout="atlas"``.
     """
 
     world_to_light: Array
@@ -95,6 +102,8 @@ class Cascades(NamedTuple):
     band_end: Array
     texel_size: Array
     viewports: Array
+    texture_size: tuple[int, int]
+    texture_layers: int
 
 
 def fit_cascades(
@@ -171,7 +180,8 @@ def fit_cascades(
         camera_api, camera_reversed_z: the conventions of ``projection``
             (default: ``api`` and not reversed).
         layout: ``"layers"`` (one texture layer per cascade) or ``"atlas"`` (tiles
-            in a grid of ``ceil(sqrt(n))`` columns, each ``map_size``).
+            in a grid of ``ceil(sqrt(n))`` columns, each ``map_size``); the texture
+            to allocate is ``texture_size`` (with ``texture_layers``) of the result.
         warp: ``"lispsm"``: light-space perspective warping of each cascade (Wimmer
             et al. 2004, ``docs/lispsm.md``): more texels near the eye; the matrices
             then have ``q = w != 1`` (divide by it) and ``texel_size`` is the largest
@@ -465,6 +475,7 @@ def _fit(
               for v in (hx, hy, near, far, mxs, mys, cx, cy)]  # fmt: skip
     rx, ry, nr, fa, m_x, m_y, ox, oy = fields
     fr = Frustum(rx, ry, nr, fa, m_x, m_y, ox, oy, orthographic=True)
+    texture = _texture(n, spec.size, layout)
     return Cascades(
         world_to_light=out(w),
         frustum=fr,
@@ -474,6 +485,8 @@ def _fit(
         band_end=checks.poison(xp.broadcast_to(depths.end, full), 1),
         texel_size=checks.poison(xp.broadcast_to(size, (*full, 2)), 2),
         viewports=ports,
+        texture_size=texture[0],
+        texture_layers=texture[1],
     )
 
 
@@ -603,6 +616,15 @@ def _tiles(n: int, size: tuple[int, int], layout: str) -> tuple[Array, tuple[int
     return ports, (cols, rows, cells)
 
 
+def _texture(n: int, size: tuple[int, int], layout: str) -> tuple[tuple[int, int], int]:
+    """The texture holding ``n`` cascades of ``size``: ``texture_size``, ``texture_layers``."""
+    w, h = int(size[0]), int(size[1])
+    if layout == "layers":
+        return (w, h), n
+    cols, rows = _grid(n, layout)
+    return (cols * w, rows * h), 1
+
+
 def _in_tile(xp: Any, tex: tuple[Array, ...], tile: tuple[int, int, Array]) -> tuple[Array, ...]:
     """Texture rows moved into the tile: ``s' = (s + col) / cols``, ``t' = (t + row) / rows``.
 
@@ -695,6 +717,7 @@ def _compiled(
     o = out.reshape(*shape, n, ROW)
     m = o[..., :48].reshape(*shape, n, 3, 4, 4)
     rx, ry, near, far, m_x, m_y, cx, cy = (o[..., 48 + k] for k in range(8))
+    texture = _texture(n, spec.size, layout)
     return Cascades(
         world_to_light=m[..., 0, :, :],
         frustum=Frustum(rx, ry, near, far, m_x, m_y, cx, cy, orthographic=True),
@@ -704,6 +727,8 @@ def _compiled(
         band_end=o[..., 56],
         texel_size=o[..., 57:59],
         viewports=_tiles(n, spec.size, layout)[0],
+        texture_size=texture[0],
+        texture_layers=texture[1],
     )
 
 

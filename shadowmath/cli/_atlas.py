@@ -177,9 +177,9 @@ def _write(options: Options, frame: AtlasFrame) -> None:
     print(f"wrote {output}: {summary(options, frame)}")
     if options.map_output is not None:
         save_png("--shadow-map-output", options.map_output, atlas_picture(frame))
-        size = frame.atlas.atlas_size
+        width, height = frame.fit.texture_size
         print(
-            f"wrote {options.map_output}: the {size}x{size} atlas, t upward, each tile's "
+            f"wrote {options.map_output}: the {width}x{height} atlas, t upward, each tile's "
             "depths from black (near) to light grey (far), white where nothing was drawn, "
             "each tile outlined in orange"
         )
@@ -188,13 +188,13 @@ def _write(options: Options, frame: AtlasFrame) -> None:
 def summary(options: Options, frame: AtlasFrame) -> str:
     """What the picture shows: its size, the scene, the lights, the atlas."""
     width, height = options.image_size
-    atlas = frame.atlas
+    atlas, texels = frame.atlas, frame.fit.texture_size
     kinds = [sum(1 for i in range(options.lights) if i % 3 == k) for k in range(3)]
     sizes = sorted({int(s) for s in atlas.light_size if s > 0}, reverse=True)
     return (
         f"a {width}x{height} PNG, a 24x24 ground with eight blocks and a {options.mesh} under "
         f"{options.lights} lights ({kinds[0]} point lights with cube maps, {kinds[1]} spots, "
-        f"{kinds[2]} suns), their shadow maps in one {atlas.atlas_size}x{atlas.atlas_size} "
+        f"{kinds[2]} suns), their shadow maps in one {texels[0]}x{texels[1]} "
         f"atlas ({len(atlas.tile_light)} tiles of {', '.join(map(str, sizes))} texels, "
         f"{100 * atlas.used:.1f}% used; PCF radius {options.pcf}, depth bias "
         f"{options.bias[0]:g} {options.bias[1]:g}) drawn with OpenGL"

@@ -189,8 +189,8 @@ def render_atlas(
     surfaces = sm.Triangles(np.concatenate(world))
     fit = sm.fit_atlas(list(lights), casting, atlas, receivers=surfaces, pcf_radius=k)
     gl = resolve_context(ctx)
-    with GpuScene(gl, prepared, (), [], p @ v, size, (atlas.atlas_size,) * 2) as scene:
-        depths = draw_atlas(scene, fit, atlas.atlas_size, cast, bias)
+    with GpuScene(gl, prepared, (), [], p @ v, size, fit.texture_size) as scene:
+        depths = draw_atlas(scene, fit, cast, bias)
         options = _Options(cast, k, float(normal_offset), float(ambient), background)
         return _shade_all(scene, table, atlas, fit, depths, options)
 
@@ -254,12 +254,12 @@ def _light_rows(i: int, light: Any, rows: NDArray[np.float64]) -> NDArray[np.flo
 
 
 def draw_atlas(
-    scene: GpuScene, fit: sm.AtlasFit, size: int, cast: Sequence[bool], bias: tuple[float, float]
+    scene: GpuScene, fit: sm.AtlasFit, cast: Sequence[bool], bias: tuple[float, float]
 ) -> moderngl.Texture:
-    """Every caster's depth into each tile's viewport (scissored) of one ``size``² depth
-    texture, cleared to 1; returns the texture (released with the scene)."""
+    """Every caster's depth into each tile's viewport (scissored) of one depth texture of
+    ``fit.texture_size``, cleared to 1; returns the texture (released with the scene)."""
     gl = scene.ctx
-    tex: moderngl.Texture = scene.keep(gl.depth_texture((size, size)))
+    tex: moderngl.Texture = scene.keep(gl.depth_texture(fit.texture_size))
     fbo = scene.keep(gl.framebuffer(depth_attachment=tex))
     prog = program(gl, "depth_map.vert", "depth_map.frag")
     clip = np.asarray(fit.world_to_clip, dtype=np.float64)
@@ -362,8 +362,8 @@ def _frame(
     depths: moderngl.Texture,
 ) -> AtlasFrame:
     position, normal, body = scene.read_record()
-    size = atlas.atlas_size
-    stored = np.frombuffer(depths.read(alignment=1), dtype=np.float32).reshape(size, size)
+    width, height = fit.texture_size
+    stored = np.frombuffer(depths.read(alignment=1), dtype=np.float32).reshape(height, width)
     return AtlasFrame(
         color=np.clip(color, 0.0, 1.0).astype(np.float32),
         shadow=shadow.astype(np.float32),

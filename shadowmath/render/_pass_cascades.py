@@ -340,17 +340,13 @@ def cascade_index(
 
 def draw_cascade_maps(scene: GpuScene, fit: sm.Cascades, atlas: bool) -> NDArray[np.float32]:
     """Every body's depth into each cascade's map: ``(n, h, w)`` layers, or ``(1, H, W)``
-    the atlas (each cascade in its viewport), window depths, row 0 ``t = 0``; no polygon
-    offset (``cascades.frag`` biases each receiver)."""
+    the atlas (each cascade in its viewport), window depths, row 0 ``t = 0``; each layer
+    ``fit.texture_size``; no polygon offset (``cascades.frag`` biases each receiver)."""
     gl = scene.ctx
     ports = np.asarray(fit.viewports, dtype=np.int64)
     clip = np.asarray(fit.world_to_clip, dtype=np.float64)
-    if atlas:
-        size = (int((ports[:, 0] + ports[:, 2]).max()), int((ports[:, 1] + ports[:, 3]).max()))
-        groups = [list(range(len(ports)))]
-    else:
-        size = (int(ports[0, 2]), int(ports[0, 3]))
-        groups = [[i] for i in range(len(ports))]
+    size = fit.texture_size
+    groups = [list(range(len(ports)))] if atlas else [[i] for i in range(len(ports))]
     prog = program(gl, "depth_map.vert", "depth_map.frag")
     layers = []
     for group in groups:

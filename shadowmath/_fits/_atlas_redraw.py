@@ -1,0 +1,90 @@
+r"""Which tiles of a shadow atlas to draw this frame: :func:`atlas_redraw`.
+
+A tile's depths are a function of what is drawn into it and how: its key ``(light id,
+face)`` says whose casters, its viewport where and how large, its ``world_to_clip``
+with which matrices. The allocator (:func:`allocate_atlas`) knows the first two; only
+the fits (:func:`fit_atlas`) know the matrices, so the rule compares two fits.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._atlas import AtlasFit, _find_tiles
+
+__all__ = ["atlas_redraw"]
+
+
+def atlas_redraw(fit: AtlasFit, previous: AtlasFit | None) -> NDArray[np.bool_]:
+    r"""Which tiles of ``fit`` to draw this frame; the others already hold their depths.
+
+    ``previous`` is the fit whose tiles the atlas texture holds (last frame's, every
+    tile it flagged drawn). Tile ``t``'s key is ``k = (tile_id[t], tile_face[t])``, and
+
+    .. math::
+
+        \mathrm{redraw}[t] = \lnot\bigl(\exists\, u:\ \mathrm{key}'[u] = k
+        \ \wedge\ \mathrm{viewport}'[u] = \mathrm{viewport}[t]
+        \ \wedge\ W'_u = W_t\bigr)
+
+    over the tiles ``u`` of ``previous`` (primed), ``W`` the ``world_to_clip``
+    matrices compared entry by entry, exactly; everything is redrawn without
+    ``previous`` or when the ``texture_size`` changed (a new texture). So a tile is
+    redrawn when it is new, when its rect moved or resized, or when its light's
+    matrices changed (the light moved or turned, its fit followed the casters, its
+    border, depth range or API changed); a tile whose *index* changed (lights before it
+    left, joined or were reordered) but whose key, rect and matrices did not is not:
+    its depths are still in its rect. Only the matrices are seen: when casters move
+    inside a light's fitted frustum without changing its matrices, the caller redraws
+    that light's tiles too (``|`` its own mask).
+
+    A renderer that keeps the atlas from frame to frame clears (scissored) and draws
+    exactly the flagged tiles' viewports, and samples every tile with this frame's
+    ``world_to_texture``. One that keeps its depths elsewhere caches them by key.
+
+    Arguments:
+        fit: this frame's :class:`AtlasFit`.
+        previous: the :class:`AtlasFit` the texture was drawn with, or None.
+
+    Returns:
+        ``(T,)`` bool NumPy array, one per tile of ``fit``.
+
+    Raises:
+        ValueError: ``fit`` not an :class:`AtlasFit`, ``previous`` neither one nor None.
+
+    Example:
+        >>> import numpy as np, shadowmath as sm
+        >>> box = np.array([[x, y, z] for x in (-1, 1) for y in (0, 2) for z in (-1, 1)], float)
+        >>> spot = lambda x: sm.SpotLight(np.array([x, 6.0, 0.0]), np.array([0.0, -1.0, 0.0]),
+        ...                               np.array(0.6))
+        >>> a = sm.allocate_atlas([0.5, 0.5, 0.5], atlas_size=1024, light_ids=[7, 8, 9])
+        >>> fit_a = sm.fit_atlas([spot(0.0), spot(1.0), spot(2.0)], box, a)
+        >>> b = sm.allocate_atlas([0.5, 0.5], atlas_size=1024, light_ids=[7, 9], previous=a)
+        >>> fit_b = sm.fit_atlas([spot(0.0), spot(2.0)], box, b)  # light 8 left
+        >>> b.previous_index.tolist(), b.moved.tolist()  # light 9's tile: index 2 -> 1
+        ([0, 2], [False, True])
+        >>> sm.atlas_redraw(fit_b, fit_a).tolist()  # same key, rect and matrices: kept
+        [False, False]
+        >>> sm.atlas_redraw(sm.fit_atlas([spot(0.0), spot(2.5)], box, b), fit_a).tolist()
+        [False, True]
+    """
+    if not isinstance(fit, AtlasFit):
+        raise ValueError(f"fit: expected an AtlasFit (from fit_atlas), got {type(fit).__name__}")
+    if previous is not None and not isinstance(previous, AtlasFit):
+        raise ValueError(
+            f"previous: expected an AtlasFit (last frame's fit) or None, got "
+            f"{type(previous).__name__}"
+        )
+    count = fit.tile_id.shape[0]
+    if previous is None or previous.tile_id.size == 0:
+        return np.ones(count, dtype=bool)
+    if tuple(previous.texture_size) != tuple(fit.texture_size):
+        return np.ones(count, dtype=bool)
+    at = _find_tiles(fit.tile_id, fit.tile_face, previous.tile_id, previous.tile_face)
+    had = at >= 0
+    old = np.where(had, at, 0)
+    same_port = np.all(np.asarray(previous.viewports)[old] == np.asarray(fit.viewports), axis=1)
+    old_clip = np.asarray(previous.world_to_clip)[old]
+    same_clip = np.all(old_clip == np.asarray(fit.world_to_clip), axis=(1, 2))
+    return np.asarray(~(had & same_port & same_clip))
