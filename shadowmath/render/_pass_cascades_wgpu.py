@@ -172,11 +172,7 @@ def _draw_maps(
     fit = scene.fit
     ports = np.asarray(fit.viewports, dtype=np.int64)
     clip = np.asarray(fit.world_to_clip, dtype=np.float64)
-    if atlas:
-        w, h = int((ports[:, 0] + ports[:, 2]).max()), int((ports[:, 1] + ports[:, 3]).max())
-    else:
-        w, h = int(ports[0, 2]), int(ports[0, 3])
-    layers = 1 if atlas else len(ports)
+    (w, h), layers = fit.texture_size, fit.texture_layers
     usage = wgpu.TextureUsage
     texture = device.create_texture(
         size=(w, h, layers), format="depth32float",
