@@ -6,11 +6,14 @@ lights (cube maps: six face tiles each), six spot lights and four suns; 46 tiles
 atlas. For each light, its rendered shadow mask may differ from the ray caster only in the
 band of BAND pixels around the edges of its shadow, of the region it reaches (its front
 faces, a spot's cone) and of the bodies, for box kernels of radius 0, 1 and 2. The test can
-fail: with a budget too small for every light, the dropped lights' shadows are lost.
+fail: with a budget too small for every light, the dropped lights' shadows are lost. These
+run on OpenGL (render_atlas) and on WebGPU (render_atlas_wgpu); test_render_atlas_wgpu.py
+compares the two.
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -73,6 +76,25 @@ def render(gl: Any, **kwargs: Any) -> Any:
     return render_atlas(BODIES, LIGHTS, VIEW, PROJECTION, image_size=SIZE, ctx=gl, **kwargs)
 
 
+def render_wgpu(lights: Any = LIGHTS, **kwargs: Any) -> Any:
+    """``render_atlas_wgpu`` of the scene (imported here: wgpu is an optional extra)."""
+    from shadowmath.render.webgpu import render_atlas_wgpu
+
+    kwargs.setdefault("atlas_size", ATLAS)
+    kwargs.setdefault("casters", CASTS)
+    return render_atlas_wgpu(BODIES, lights, VIEW, PROJECTION, image_size=SIZE, **kwargs)
+
+
+@pytest.fixture(params=["opengl", "webgpu"])
+def draw(request):
+    """The scene's renderer: ``render_atlas`` on the shared GL context (shaders/atlas.frag),
+    or ``render_atlas_wgpu`` (shaders/atlas.wgsl)."""
+    if request.param == "opengl":
+        return functools.partial(render, request.getfixturevalue("gl"))
+    request.getfixturevalue("wgpu_device")
+    return render_wgpu
+
+
 def truth(frame: Any, light: Any) -> Truth:
     """The ray caster's shadow of one light on the frame's visible points: the light reaches
     a point on a face turned toward it (inside a spot's cone), and a caster blocks the
@@ -111,8 +133,8 @@ def counts(frame: Any) -> list[Count]:
 
 
 @pytest.mark.parametrize("pcf_radius", [0, 1, 2])
-def test_every_light_agrees_with_the_ray_caster(gl, pcf_radius):
-    frame = render(gl, pcf_radius=pcf_radius)
+def test_every_light_agrees_with_the_ray_caster(draw, pcf_radius):
+    frame = draw(pcf_radius=pcf_radius)
     assert len(frame.atlas.tile_light) == 6 * 6 + 10
     assert (frame.atlas.light_size > 0).all()
     for i, count in enumerate(counts(frame)):
@@ -121,11 +143,11 @@ def test_every_light_agrees_with_the_ray_caster(gl, pcf_radius):
         assert count.differ_off_band == 0, (i, count)
 
 
-def test_a_budget_that_drops_lights_loses_their_shadows(gl):
+def test_a_budget_that_drops_lights_loses_their_shadows(draw):
     """The test can fail: at 1 % of a 1024² atlas the budget keeps ten lights at the
     smallest tile (16 texels) and drops the last six (spots and suns); their shadows are
     lost off the band."""
-    frame = render(gl, atlas_size=1024, budget=0.01)
+    frame = draw(atlas_size=1024, budget=0.01)
     dropped = np.flatnonzero(frame.atlas.light_size == 0)
     assert dropped.tolist() == list(range(10, 16))
     result = counts(frame)
@@ -135,12 +157,12 @@ def test_a_budget_that_drops_lights_loses_their_shadows(gl):
         assert not frame.shadow[i].any()
 
 
-def test_each_tile_holds_its_own_map(gl):
+def test_each_tile_holds_its_own_map(draw):
     """Every 2D tile and some face of every cube light was drawn (a depth below 1), a sun's
     tile kept its border ring of pcf_border_texels(k) texels empty (1.0; a spot's map is
     clipped to its cone, so casters outside the cone may cross its ring), and every texel
     outside the tiles stayed empty: no light drew outside its viewport."""
-    frame = render(gl, pcf_radius=2, atlas_size=2048)
+    frame = draw(pcf_radius=2, atlas_size=2048)
     depth, atlas = frame.shadow_map, frame.atlas
     covered = np.zeros(depth.shape, dtype=bool)
     drawn = np.zeros(len(LIGHTS), dtype=bool)
