@@ -70,35 +70,51 @@ VIEW = look_at((7, -9, 8), (0, 0, 0.5), (0, 0, 1))
 PROJECTION = perspective(45.0, SIZE[0] / SIZE[1], 0.5, 50.0)
 
 
-def render(gl: Any, **kwargs: Any) -> Any:
-    kwargs.setdefault("atlas_size", ATLAS)
-    kwargs.setdefault("casters", CASTS)
-    return render_atlas(BODIES, LIGHTS, VIEW, PROJECTION, image_size=SIZE, ctx=gl, **kwargs)
+#: The scene as render_atlas and render_atlas_wgpu take it (keywords and the four positional).
+SCENE: dict[str, Any] = {
+    "bodies": BODIES, "lights": LIGHTS, "view": VIEW, "projection": PROJECTION,
+    "casters": CASTS, "atlas_size": ATLAS, "image_size": SIZE,
+}  # fmt: skip
 
 
-def render_wgpu(lights: Any = LIGHTS, **kwargs: Any) -> Any:
-    """``render_atlas_wgpu`` of the scene (imported here: wgpu is an optional extra)."""
+def render_with(api: str, scene: dict[str, Any], gl: Any = None, **kwargs: Any) -> Any:
+    """``render_atlas`` (on ``gl``) or ``render_atlas_wgpu`` of ``scene``, its keywords
+    replaced by ``kwargs`` (wgpu imported here: it is an optional extra)."""
+    options = {**scene, **kwargs}
+    args = [options.pop(k) for k in ("bodies", "lights", "view", "projection")]
+    if api == "opengl":
+        return render_atlas(*args, ctx=gl, **options)
     from shadowmath.render.webgpu import render_atlas_wgpu
 
-    kwargs.setdefault("atlas_size", ATLAS)
-    kwargs.setdefault("casters", CASTS)
-    return render_atlas_wgpu(BODIES, lights, VIEW, PROJECTION, image_size=SIZE, **kwargs)
+    return render_atlas_wgpu(*args, **options)
+
+
+def render(gl: Any, **kwargs: Any) -> Any:
+    return render_with("opengl", SCENE, gl, **kwargs)
+
+
+def render_wgpu(**kwargs: Any) -> Any:
+    return render_with("webgpu", SCENE, **kwargs)
+
+
+def renderer(request: Any, scene: dict[str, Any]) -> Any:
+    """A ``draw`` fixture's renderer of ``scene`` by ``request.param``: ``render_atlas`` on
+    the shared GL context (shaders/atlas.frag) or ``render_atlas_wgpu`` (shaders/atlas.wgsl)."""
+    if request.param == "opengl":
+        return functools.partial(render_with, "opengl", scene, request.getfixturevalue("gl"))
+    request.getfixturevalue("wgpu_device")
+    return functools.partial(render_with, "webgpu", scene)
 
 
 @pytest.fixture(params=["opengl", "webgpu"])
 def draw(request):
-    """The scene's renderer: ``render_atlas`` on the shared GL context (shaders/atlas.frag),
-    or ``render_atlas_wgpu`` (shaders/atlas.wgsl)."""
-    if request.param == "opengl":
-        return functools.partial(render, request.getfixturevalue("gl"))
-    request.getfixturevalue("wgpu_device")
-    return render_wgpu
+    return renderer(request, SCENE)
 
 
-def truth(frame: Any, light: Any) -> Truth:
+def truth(frame: Any, light: Any, bodies: Any = BODIES, casts: Any = CASTS) -> Truth:
     """The ray caster's shadow of one light on the frame's visible points: the light reaches
-    a point on a face turned toward it (inside a spot's cone), and a caster blocks the
-    segment to it (the ray toward a sun)."""
+    a point on a face turned toward it (inside a spot's cone), and a caster (``bodies``
+    flagged in ``casts``) blocks the segment to it (the ray toward a sun)."""
     on = frame.body >= 0
     p = frame.position[on].astype(np.float64)
     n = frame.normal[on].astype(np.float64)
@@ -114,8 +130,8 @@ def truth(frame: Any, light: Any) -> Truth:
         reach &= -(toward @ axis) >= np.cos(float(light.angle)) * np.linalg.norm(toward, axis=1)
     blocked = np.zeros(len(p), dtype=bool)
     lit = np.flatnonzero(reach)
-    for body, casts in zip(BODIES, CASTS, strict=True):
-        if casts:
+    for body, cast in zip(bodies, casts, strict=True):
+        if cast:
             blocked[lit] |= segment_hits_triangles(p[lit] + LIFT * n[lit], target,
                                                    *world_mesh(body))  # fmt: skip
     shadow = np.zeros(on.shape, dtype=bool)
@@ -128,8 +144,12 @@ def truth(frame: Any, light: Any) -> Truth:
     return Truth(on, shadow, band)
 
 
-def counts(frame: Any) -> list[Count]:
-    return [compare(frame.shadow[i] > 0.5, truth(frame, light)) for i, light in enumerate(LIGHTS)]
+def counts(
+    frame: Any, lights: Any = LIGHTS, bodies: Any = BODIES, casts: Any = CASTS
+) -> list[Count]:
+    """Each light's mask against the ray caster (:func:`truth`)."""
+    return [compare(frame.shadow[i] > 0.5, truth(frame, light, bodies, casts))
+            for i, light in enumerate(lights)]  # fmt: skip
 
 
 @pytest.mark.parametrize("pcf_radius", [0, 1, 2])

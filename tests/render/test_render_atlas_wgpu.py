@@ -52,4 +52,4 @@ def test_errors_name_the_argument(wgpu_device):
     with pytest.raises(ValueError, match="casters"):
         render_wgpu(casters=[False] * 6)
     with pytest.raises(ValueError, match=r"lights\[1\]: .*expected an sm.PointLight"):
-        render_wgpu([LIGHTS[0], (1.0, 2.0, 3.0)])
+        render_wgpu(lights=[LIGHTS[0], (1.0, 2.0, 3.0)])
