@@ -212,7 +212,7 @@ def prepare_atlas(
     api: Literal["opengl", "webgpu"] = "opengl",
 ) -> AtlasScene:
     """Check the bodies, lights, camera (OpenGL conventions) and options of an atlas pass;
-    allocate the atlas and fit it in ``api``'s conventions (steps 1 of :func:`render_atlas`)."""
+    allocate the atlas and fit it in ``api``'s conventions (step 1 of :func:`render_atlas`)."""
     prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
     if not prepared:
         raise ValueError("bodies: expected at least one body")
