@@ -11,7 +11,7 @@ pass (``shaders/atlas.frag``) picks each light's tile (a cube light's face by
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import moderngl
 import numpy as np
@@ -23,7 +23,7 @@ from ._context import check_matrix, program, resolve_context, set_matrix, set_un
 from ._context import image_size as _image_size
 from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
 from ._pass_lit import draw_lit, finish
-from ._resources import Body, GpuScene, prepare_body, read_texture
+from ._resources import Body, GpuScene, Prepared, prepare_body, read_texture
 
 #: The default normal-offset bias of :func:`render_atlas`, in texels of each light's map.
 NORMAL_OFFSET = 0.5
@@ -69,7 +69,7 @@ class _Options(NamedTuple):
     background: tuple[float, float, float]
 
 
-class _Lights(NamedTuple):
+class LightTable(NamedTuple):
     """The lights as the shader reads them: ``(L, 4, 4)`` rows of light, colour, spot
     ``(axis, cos angle)`` (``w = -2`` not a spot), ``(cube, 0, 0, 0)``."""
 
@@ -162,6 +162,57 @@ def render_atlas(
         >>> frame.shadow.shape, frame.atlas.tile_light.tolist()
         ((2, 64, 64), [0, 0, 0, 0, 0, 0, 1])
     """
+    scene = prepare_atlas(
+        bodies, lights, view, projection, casters=casters, colors=colors, coverage=coverage,
+        atlas_size=atlas_size, budget=budget, previous=previous, pcf_radius=pcf_radius,
+        depth_bias=depth_bias, normal_offset=normal_offset, ambient=ambient,
+    )  # fmt: skip
+    size = _image_size("image_size", image_size)
+    atlas, fit, cast = scene.atlas, scene.fit, scene.cast
+    gl = resolve_context(ctx)
+    clip = scene.projection @ scene.view
+    with GpuScene(gl, scene.bodies, (), [], clip, size, fit.texture_size) as gpu:
+        depths = draw_atlas(gpu, fit, cast, scene.bias)
+        options = _Options(cast, scene.pcf_radius, scene.normal_offset, scene.ambient, background)
+        return _shade_all(gpu, scene.lights, atlas, fit, depths, options)
+
+
+class AtlasScene(NamedTuple):
+    """An atlas pass's checked scene and options, its atlas and fit (:func:`prepare_atlas`)."""
+
+    bodies: list[Prepared]
+    cast: list[bool]
+    lights: LightTable
+    view: NDArray[np.float64]
+    projection: NDArray[np.float64]
+    pcf_radius: int
+    bias: tuple[float, float]
+    normal_offset: float
+    ambient: float
+    atlas: sm.ShadowAtlas
+    fit: sm.AtlasFit
+
+
+def prepare_atlas(
+    bodies: Sequence[Body],
+    lights: Sequence[AtlasLight],
+    view: Any,
+    projection: Any,
+    *,
+    casters: Sequence[bool] | None,
+    colors: Any,
+    coverage: Any,
+    atlas_size: int,
+    budget: float,
+    previous: sm.ShadowAtlas | None,
+    pcf_radius: int,
+    depth_bias: tuple[float, float] | None,
+    normal_offset: float,
+    ambient: float = 0.15,
+    api: Literal["opengl", "webgpu"] = "opengl",
+) -> AtlasScene:
+    """Check the bodies, lights, camera (OpenGL conventions) and options of an atlas pass;
+    allocate the atlas and fit it in ``api``'s conventions (step 1 of :func:`render_atlas`)."""
     prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
     if not prepared:
         raise ValueError("bodies: expected at least one body")
@@ -174,10 +225,8 @@ def render_atlas(
     if not (np.isfinite(ambient) and ambient >= 0):
         raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
     v, p = check_matrix("view", view), check_matrix("projection", projection)
-    size = _image_size("image_size", image_size)
-    count = len(table.cube)
     atlas = sm.allocate_atlas(
-        np.ones(count) if coverage is None else coverage, atlas_size=atlas_size,
+        np.ones(len(table.cube)) if coverage is None else coverage, atlas_size=atlas_size,
         cube=table.cube, border_texels=sm.pcf_border_texels(k), previous=previous,
         budget=budget,
     )  # fmt: skip
@@ -187,12 +236,9 @@ def render_atlas(
     # ground's corners may lie outside a light's map while its middle is under the casters.
     casting = sm.Triangles(np.concatenate([t for t, c in zip(world, cast, strict=True) if c]))
     surfaces = sm.Triangles(np.concatenate(world))
-    fit = sm.fit_atlas(list(lights), casting, atlas, receivers=surfaces, pcf_radius=k)
-    gl = resolve_context(ctx)
-    with GpuScene(gl, prepared, (), [], p @ v, size, fit.texture_size) as scene:
-        depths = draw_atlas(scene, fit, cast, bias)
-        options = _Options(cast, k, float(normal_offset), float(ambient), background)
-        return _shade_all(scene, table, atlas, fit, depths, options)
+    fit = sm.fit_atlas(list(lights), casting, atlas, receivers=surfaces, pcf_radius=k, api=api)
+    return AtlasScene(prepared, cast, table, v, p, k, bias, float(normal_offset), float(ambient),
+                      atlas, fit)  # fmt: skip
 
 
 def _casters(casters: Sequence[bool] | None, count: int) -> list[bool]:
@@ -206,7 +252,7 @@ def _casters(casters: Sequence[bool] | None, count: int) -> list[bool]:
     return flags
 
 
-def _light_table(lights: Sequence[AtlasLight], colors: Any) -> _Lights:
+def _light_table(lights: Sequence[AtlasLight], colors: Any) -> LightTable:
     """The shader's per-light rows; point lights are cube maps."""
     count = len(lights)
     if count == 0:
@@ -226,7 +272,7 @@ def _light_table(lights: Sequence[AtlasLight], colors: Any) -> _Lights:
             f"lights[{bad[0]}]: its position, direction and angle must be finite, the "
             "direction nonzero"
         )
-    return _Lights(rows.astype(np.float32), rows[:, 3, 0] > 0.5)
+    return LightTable(rows.astype(np.float32), rows[:, 3, 0] > 0.5)
 
 
 def _light_rows(i: int, light: Any, rows: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -291,7 +337,7 @@ def _data_texture(gl: moderngl.Context, rows: NDArray[Any], components: int) -> 
 
 def _shade_all(
     scene: GpuScene,
-    table: _Lights,
+    table: LightTable,
     atlas: sm.ShadowAtlas,
     fit: sm.AtlasFit,
     depths: moderngl.Texture,

@@ -192,7 +192,8 @@ def draw_depth(
     viewport: tuple[int, int, int, int] | None = None,
 ) -> None:
     """Clear the depth view ``target`` to 1 (or only draw, with ``viewport``: a tile of it
-    already cleared) and draw each ``(body_to_clip, vertex buffer, count)``."""
+    already cleared, the viewport and the scissor rect) and draw each ``(body_to_clip,
+    vertex buffer, count)``."""
     encoder = device.create_command_encoder()
     rp = encoder.begin_render_pass(
         color_attachments=[],
@@ -206,6 +207,7 @@ def draw_depth(
     rp.set_pipeline(pipeline)
     if viewport is not None:
         rp.set_viewport(*viewport, 0.0, 1.0)
+        rp.set_scissor_rect(*viewport)
     layout = pipeline.get_bind_group_layout(0)
     for body_to_clip, vbo, count in draws:
         buf = uniform_buffer(device, column_major_bytes(body_to_clip))

@@ -8,6 +8,8 @@ without a GPU it runs on Mesa's software Vulkan driver (Debian:
 cascades of ``render_cascades`` (``shaders/cascades.wgsl``).
 """
 
+from ._pass_atlas_wgpu import WgpuAtlasFrame as WgpuAtlasFrame
+from ._pass_atlas_wgpu import render_atlas_wgpu as render_atlas_wgpu
 from ._pass_cascades_wgpu import FLOAT_DEPTH_RESOLUTION as FLOAT_DEPTH_RESOLUTION
 from ._pass_cascades_wgpu import WgpuCascadeFrame as WgpuCascadeFrame
 from ._pass_cascades_wgpu import render_cascades_wgpu as render_cascades_wgpu
@@ -21,10 +23,12 @@ from ._pass_wgpu import wgpu_device as wgpu_device
 __all__ = [
     "FLOAT_DEPTH_RESOLUTION",
     "VULKAN_DEBIAN_PACKAGES",
+    "WgpuAtlasFrame",
     "WgpuCascadeFrame",
     "WgpuFrame",
     "WgpuUnavailableError",
     "adapter_description",
+    "render_atlas_wgpu",
     "render_cascades_wgpu",
     "render_depth_wgpu",
     "wgpu_device",

@@ -6,11 +6,14 @@ lights (cube maps: six face tiles each), six spot lights and four suns; 46 tiles
 atlas. For each light, its rendered shadow mask may differ from the ray caster only in the
 band of BAND pixels around the edges of its shadow, of the region it reaches (its front
 faces, a spot's cone) and of the bodies, for box kernels of radius 0, 1 and 2. The test can
-fail: with a budget too small for every light, the dropped lights' shadows are lost.
+fail: with a budget too small for every light, the dropped lights' shadows are lost. These
+run on OpenGL (render_atlas) and on WebGPU (render_atlas_wgpu); test_render_atlas_wgpu.py
+compares the two.
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -67,16 +70,51 @@ VIEW = look_at((7, -9, 8), (0, 0, 0.5), (0, 0, 1))
 PROJECTION = perspective(45.0, SIZE[0] / SIZE[1], 0.5, 50.0)
 
 
+#: The scene as render_atlas and render_atlas_wgpu take it (keywords and the four positional).
+SCENE: dict[str, Any] = {
+    "bodies": BODIES, "lights": LIGHTS, "view": VIEW, "projection": PROJECTION,
+    "casters": CASTS, "atlas_size": ATLAS, "image_size": SIZE,
+}  # fmt: skip
+
+
+def render_with(api: str, scene: dict[str, Any], gl: Any = None, **kwargs: Any) -> Any:
+    """``render_atlas`` (on ``gl``) or ``render_atlas_wgpu`` of ``scene``, its keywords
+    replaced by ``kwargs`` (wgpu imported here: it is an optional extra)."""
+    options = {**scene, **kwargs}
+    args = [options.pop(k) for k in ("bodies", "lights", "view", "projection")]
+    if api == "opengl":
+        return render_atlas(*args, ctx=gl, **options)
+    from shadowmath.render.webgpu import render_atlas_wgpu
+
+    return render_atlas_wgpu(*args, **options)
+
+
 def render(gl: Any, **kwargs: Any) -> Any:
-    kwargs.setdefault("atlas_size", ATLAS)
-    kwargs.setdefault("casters", CASTS)
-    return render_atlas(BODIES, LIGHTS, VIEW, PROJECTION, image_size=SIZE, ctx=gl, **kwargs)
+    return render_with("opengl", SCENE, gl, **kwargs)
 
 
-def truth(frame: Any, light: Any) -> Truth:
+def render_wgpu(**kwargs: Any) -> Any:
+    return render_with("webgpu", SCENE, **kwargs)
+
+
+def renderer(request: Any, scene: dict[str, Any]) -> Any:
+    """A ``draw`` fixture's renderer of ``scene`` by ``request.param``: ``render_atlas`` on
+    the shared GL context (shaders/atlas.frag) or ``render_atlas_wgpu`` (shaders/atlas.wgsl)."""
+    if request.param == "opengl":
+        return functools.partial(render_with, "opengl", scene, request.getfixturevalue("gl"))
+    request.getfixturevalue("wgpu_device")
+    return functools.partial(render_with, "webgpu", scene)
+
+
+@pytest.fixture(params=["opengl", "webgpu"])
+def draw(request):
+    return renderer(request, SCENE)
+
+
+def truth(frame: Any, light: Any, bodies: Any = BODIES, casts: Any = CASTS) -> Truth:
     """The ray caster's shadow of one light on the frame's visible points: the light reaches
-    a point on a face turned toward it (inside a spot's cone), and a caster blocks the
-    segment to it (the ray toward a sun)."""
+    a point on a face turned toward it (inside a spot's cone), and a caster (``bodies``
+    flagged in ``casts``) blocks the segment to it (the ray toward a sun)."""
     on = frame.body >= 0
     p = frame.position[on].astype(np.float64)
     n = frame.normal[on].astype(np.float64)
@@ -92,8 +130,8 @@ def truth(frame: Any, light: Any) -> Truth:
         reach &= -(toward @ axis) >= np.cos(float(light.angle)) * np.linalg.norm(toward, axis=1)
     blocked = np.zeros(len(p), dtype=bool)
     lit = np.flatnonzero(reach)
-    for body, casts in zip(BODIES, CASTS, strict=True):
-        if casts:
+    for body, cast in zip(bodies, casts, strict=True):
+        if cast:
             blocked[lit] |= segment_hits_triangles(p[lit] + LIFT * n[lit], target,
                                                    *world_mesh(body))  # fmt: skip
     shadow = np.zeros(on.shape, dtype=bool)
@@ -106,13 +144,17 @@ def truth(frame: Any, light: Any) -> Truth:
     return Truth(on, shadow, band)
 
 
-def counts(frame: Any) -> list[Count]:
-    return [compare(frame.shadow[i] > 0.5, truth(frame, light)) for i, light in enumerate(LIGHTS)]
+def counts(
+    frame: Any, lights: Any = LIGHTS, bodies: Any = BODIES, casts: Any = CASTS
+) -> list[Count]:
+    """Each light's mask against the ray caster (:func:`truth`)."""
+    return [compare(frame.shadow[i] > 0.5, truth(frame, light, bodies, casts))
+            for i, light in enumerate(lights)]  # fmt: skip
 
 
 @pytest.mark.parametrize("pcf_radius", [0, 1, 2])
-def test_every_light_agrees_with_the_ray_caster(gl, pcf_radius):
-    frame = render(gl, pcf_radius=pcf_radius)
+def test_every_light_agrees_with_the_ray_caster(draw, pcf_radius):
+    frame = draw(pcf_radius=pcf_radius)
     assert len(frame.atlas.tile_light) == 6 * 6 + 10
     assert (frame.atlas.light_size > 0).all()
     for i, count in enumerate(counts(frame)):
@@ -121,11 +163,11 @@ def test_every_light_agrees_with_the_ray_caster(gl, pcf_radius):
         assert count.differ_off_band == 0, (i, count)
 
 
-def test_a_budget_that_drops_lights_loses_their_shadows(gl):
+def test_a_budget_that_drops_lights_loses_their_shadows(draw):
     """The test can fail: at 1 % of a 1024² atlas the budget keeps ten lights at the
     smallest tile (16 texels) and drops the last six (spots and suns); their shadows are
     lost off the band."""
-    frame = render(gl, atlas_size=1024, budget=0.01)
+    frame = draw(atlas_size=1024, budget=0.01)
     dropped = np.flatnonzero(frame.atlas.light_size == 0)
     assert dropped.tolist() == list(range(10, 16))
     result = counts(frame)
@@ -135,12 +177,12 @@ def test_a_budget_that_drops_lights_loses_their_shadows(gl):
         assert not frame.shadow[i].any()
 
 
-def test_each_tile_holds_its_own_map(gl):
+def test_each_tile_holds_its_own_map(draw):
     """Every 2D tile and some face of every cube light was drawn (a depth below 1), a sun's
     tile kept its border ring of pcf_border_texels(k) texels empty (1.0; a spot's map is
     clipped to its cone, so casters outside the cone may cross its ring), and every texel
     outside the tiles stayed empty: no light drew outside its viewport."""
-    frame = render(gl, pcf_radius=2, atlas_size=2048)
+    frame = draw(pcf_radius=2, atlas_size=2048)
     depth, atlas = frame.shadow_map, frame.atlas
     covered = np.zeros(depth.shape, dtype=bool)
     drawn = np.zeros(len(LIGHTS), dtype=bool)

@@ -1,0 +1,236 @@
+"""Many shadowed lights through one shadow atlas on WebGPU (``wgpu``): :func:`render_atlas_wgpu`.
+
+The WebGPU counterpart of :func:`render_atlas`, a client of the public API:
+:func:`shadowmath.allocate_atlas` and :func:`shadowmath.fit_atlas` with ``api="webgpu"``
+(clip depth ``0..w``, texture and viewport origin at the first row in memory); every
+caster's depth is drawn into each tile's viewport (scissored to it) of one
+``depth32float`` texture with the pipeline's depth bias, and the camera pass
+``shaders/atlas.wgsl`` picks each light's tile, biases and filters as
+``shaders/atlas.frag`` does.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+import wgpu
+from numpy.typing import NDArray
+
+import shadowmath as sm
+from shadowmath import api_convention, column_major_bytes
+
+from ._context import image_size as _image_size
+from ._pass_atlas import NORMAL_OFFSET, AtlasLight, AtlasScene, prepare_atlas
+from ._pass_wgpu import (
+    adapter_description,
+    depth_pipeline,
+    draw_camera,
+    draw_depth,
+    normal_to_world,
+    read_record,
+    read_wgpu_texture,
+    uniform_buffer,
+    vertex_buffers,
+    wgpu_device,
+)
+from ._resources import Body
+
+
+class WgpuAtlasFrame(NamedTuple):
+    """What :func:`render_atlas_wgpu` returns; images have row 0 at the *top*.
+
+    Attributes:
+        shadow: ``(L, H, W)`` float32, each light's shadow mask on the visible bodies (1
+            shadowed, 0 lit or not reached by the light; PCF gives fractions).
+        position: ``(H, W, 3)`` float32 world position of the visible surface (NaN on
+            the background).
+        normal: ``(H, W, 3)`` float32 unit face normal (NaN on the background).
+        body: ``(H, W)`` int32, which body is visible (``-1`` the background).
+        atlas: the :class:`shadowmath.ShadowAtlas` (pass it as ``previous`` next frame).
+        fit: the :class:`shadowmath.AtlasFit` (``api="webgpu"``) drawn and sampled.
+        shadow_map: ``(A, A)`` float32 depths of the whole atlas, row 0 its first row in
+            memory (WebGPU's ``t = 0``); 1 where nothing was drawn.
+        adapter: the adapter's description.
+    """
+
+    shadow: NDArray[np.float32]
+    position: NDArray[np.float32]
+    normal: NDArray[np.float32]
+    body: NDArray[np.int32]
+    atlas: sm.ShadowAtlas
+    fit: sm.AtlasFit
+    shadow_map: NDArray[np.float32]
+    adapter: str
+
+
+def render_atlas_wgpu(
+    bodies: Sequence[Body],
+    lights: Sequence[AtlasLight],
+    view: Any,
+    projection: Any,
+    *,
+    casters: Sequence[bool] | None = None,
+    coverage: Any = None,
+    atlas_size: int = 2048,
+    budget: float = 1.0,
+    previous: sm.ShadowAtlas | None = None,
+    pcf_radius: int = 1,
+    depth_bias: tuple[float, float] | None = None,
+    normal_offset: float = NORMAL_OFFSET,
+    image_size: int | tuple[int, int] = (512, 384),
+) -> WgpuAtlasFrame:
+    """Render each light's shadow on the bodies through one shadow atlas, in WebGPU.
+
+    :func:`render_atlas`'s shadow masks on a second graphics API: the same arguments
+    (``view`` and ``projection`` in OpenGL's conventions, as :func:`look_at` and
+    :func:`perspective` give them), the same atlas, the tiles fitted with
+    ``api="webgpu"``, the camera converted by ``api_convention(api="webgpu").gl_clip_to_clip``.
+    The atlas is a ``depth32float`` texture; tile ``t`` is drawn with
+    ``set_viewport(viewports[t])`` and ``set_scissor_rect(viewports[t])``. No picture:
+    one camera pass per light, its mask.
+
+    Arguments:
+        bodies, lights, view, projection, casters, coverage, atlas_size, budget, previous,
+            pcf_radius, normal_offset, image_size: as in :func:`render_atlas`.
+        depth_bias: ``(factor, units)`` as in :func:`render_atlas`: the pipeline's
+            ``depthBiasSlopeScale`` and ``depthBias`` (an integer in WebGPU: ``units`` is
+            rounded; its unit is ``2^(e - 23)`` at a triangle's largest depth ``z`` with
+            ``2^e <= z``, ``2^-24`` near depth 1 as a 24-bit buffer's).
+
+    Returns:
+        :class:`WgpuAtlasFrame`.
+
+    Raises:
+        ValueError: as :func:`render_atlas`.
+        WgpuUnavailableError: no WebGPU adapter.
+
+    Example:
+        >>> import shadowmath as sm
+        >>> from shadowmath.meshes import box, grid
+        >>> from shadowmath.render import Body, look_at, perspective
+        >>> ground = Body(*grid((20.0, 20.0), segments=(1, 1)))
+        >>> cube = Body(*box((2.0, 2.0, 2.0)), to_world=np.array(
+        ...     [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1.0]]))
+        >>> lights = [sm.PointLight(np.array([3.0, 0.0, 4.0])),
+        ...           sm.DirectionalLight(np.array([1.0, 1.0, 2.0]))]
+        >>> frame = render_atlas_wgpu([ground, cube], lights,
+        ...                           look_at([0, -12, 8], [0, 0, 0], [0, 0, 1]),
+        ...                           perspective(50.0, 1.0, 0.5, 50.0), casters=[False, True],
+        ...                           image_size=64, atlas_size=512)
+        >>> frame.shadow.shape, frame.atlas.tile_light.tolist()
+        ((2, 64, 64), [0, 0, 0, 0, 0, 0, 1])
+    """
+    scene = prepare_atlas(
+        bodies, lights, view, projection, casters=casters, colors=None, coverage=coverage,
+        atlas_size=atlas_size, budget=budget, previous=previous, pcf_radius=pcf_radius,
+        depth_bias=depth_bias, normal_offset=normal_offset, api="webgpu",
+    )  # fmt: skip
+    size = _image_size("image_size", image_size)
+    device = wgpu_device()
+    buffers = vertex_buffers(device, scene.bodies)
+    texture = _draw_atlas(device, scene, buffers)
+    draws = _body_draws(device, scene, buffers, texture)
+    shadow = []
+    for light in range(len(scene.lights.cube)):
+        targets = _draw_camera(device, scene, draws, size, light)
+        mask, position, normal, body = read_record(device, targets, size)
+        shadow.append(mask)
+    return WgpuAtlasFrame(
+        shadow=np.stack(shadow),
+        position=position,
+        normal=normal,
+        body=body,
+        atlas=scene.atlas,
+        fit=scene.fit,
+        shadow_map=read_wgpu_texture(device, texture, scene.fit.texture_size, 1)[..., 0],
+        adapter=adapter_description(),
+    )
+
+
+def _draw_atlas(device: Any, scene: AtlasScene, buffers: Sequence[tuple[Any, int]]) -> Any:
+    """Every caster's depth into each tile's viewport (scissored) of one ``depth32float``
+    texture cleared to 1, with the polygon offset ``scene.bias``; returns the texture."""
+    width, height = scene.fit.texture_size
+    usage = wgpu.TextureUsage
+    texture = device.create_texture(
+        size=(width, height, 1), format="depth32float",
+        usage=usage.RENDER_ATTACHMENT | usage.TEXTURE_BINDING | usage.COPY_SRC,
+    )  # fmt: skip
+    target = texture.create_view()
+    pipeline = depth_pipeline(device, scene.bias)
+    draw_depth(device, pipeline, target, [])  # clear
+    clip = np.asarray(scene.fit.world_to_clip, dtype=np.float64)
+    casting = [(b, vbo, n) for b, (vbo, n), c in zip(scene.bodies, buffers, scene.cast, strict=True)
+               if c]  # fmt: skip
+    for t, port in enumerate(np.asarray(scene.fit.viewports, dtype=np.int64)):
+        draws = [(clip[t] @ b.to_world, vbo, n) for b, vbo, n in casting]
+        x, y, w, h = (int(c) for c in port)
+        draw_depth(device, pipeline, target, draws, (x, y, w, h))
+    return texture
+
+
+def _storage(device: Any, data: bytes) -> Any:
+    return device.create_buffer_with_data(data=data, usage=wgpu.BufferUsage.STORAGE)
+
+
+def _tables(device: Any, scene: AtlasScene) -> tuple[Any, Any]:
+    """The ``tiles`` and ``lights`` storage buffers of atlas.wgsl: per tile
+    ``world_to_texture`` and ``(x, y, n, 0)`` (80 bytes); per light its position or
+    direction, ``(spot axis, cos)``, the six faces' tiles, ``cube`` (64 bytes)."""
+    rect = np.zeros((len(scene.atlas.tile_rect), 4), dtype=np.int32)
+    rect[:, :3] = scene.atlas.tile_rect
+    texture = np.asarray(scene.fit.world_to_texture, dtype=np.float64)
+    tiles = b"".join(
+        column_major_bytes(m) + r.tobytes() for m, r in zip(texture, rect, strict=True)
+    )
+    rows = scene.lights.rows
+    faces = np.zeros((len(rows), 8), dtype=np.int32)
+    faces[:, :6] = scene.atlas.light_tiles
+    faces[:, 6] = scene.lights.cube
+    lights = b"".join(
+        rows[i, 0].tobytes() + rows[i, 2].tobytes() + faces[i].tobytes() for i in range(len(rows))
+    )
+    return _storage(device, tiles), _storage(device, lights)
+
+
+def _body_draws(
+    device: Any, scene: AtlasScene, buffers: Sequence[tuple[Any, int]], texture: Any
+) -> list[tuple[list[Any], Any, int]]:
+    """Each body's bind group entries of atlas.wgsl but the frame's (bindings 1 to 4), its
+    vertex buffer and count."""
+    tiles, lights = _tables(device, scene)
+    view = texture.create_view()
+    draws = []
+    for i, (body, (vbo, n)) in enumerate(zip(scene.bodies, buffers, strict=True)):
+        data = column_major_bytes(body.to_world) + column_major_bytes(
+            normal_to_world(body.to_world)
+        )
+        data += np.array([i, scene.cast[i], 0.0, 0.0], dtype=np.float32).tobytes()
+        own = uniform_buffer(device, data)
+        entries = [{"binding": 1, "resource": view},
+                   {"binding": 2, "resource": {"buffer": tiles}},
+                   {"binding": 3, "resource": {"buffer": lights}},
+                   {"binding": 4, "resource": {"buffer": own}}]  # fmt: skip
+        draws.append((entries, vbo, n))
+    return draws
+
+
+def _draw_camera(
+    device: Any,
+    scene: AtlasScene,
+    draws: Sequence[tuple[list[Any], Any, int]],
+    size: tuple[int, int],
+    which: int,
+) -> list[Any]:
+    """Every body (:func:`_body_draws`) from the camera through atlas.wgsl, light ``which``'s
+    mask (:func:`draw_camera`)."""
+    camera = api_convention(api="webgpu").gl_clip_to_clip @ scene.projection @ scene.view
+    head = np.array([which, scene.pcf_radius], dtype=np.int32).tobytes()
+    head += np.array([scene.normal_offset, 0.0], dtype=np.float32).tobytes()
+    frame = {
+        "binding": 0,
+        "resource": {"buffer": uniform_buffer(device, column_major_bytes(camera) + head)},
+    }
+    return draw_camera(device, "atlas.wgsl", size, [([frame, *e], vbo, n) for e, vbo, n in draws])
