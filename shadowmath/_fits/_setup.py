@@ -50,7 +50,7 @@ from shadowmath.receivers import Mesh, Triangles
 from . import _compiled
 from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
 from ._shadow_setup import ShadowSetup
-from ._spec import FitKey, ShadowMapSpec, api_rows, spec_from_options
+from ._spec import FitKey, ShadowMapSpec, api_rows, map_spec
 
 __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
@@ -202,7 +202,9 @@ def fit_shadow(
     check_aim(aim)
     if method not in ("mdv", "optimized"):
         raise ValueError(f"method: expected 'mdv' or 'optimized', got {method!r}")
-    spec = _spec(map_size, border_texels, pcf_radius, pcf_filter, margin, api, reversed_z, stable)
+    spec = map_spec(map_size, border_texels=border_texels, pcf_radius=pcf_radius,
+                    pcf_filter=pcf_filter, margin=margin, api=api, reversed_z=reversed_z,
+                    stable=stable)  # fmt: skip
     spot = isinstance(light, SpotLight)
     if spot:
         named = {"light.position": light[0], "light.direction": light[1], "light.angle": light[2]}
@@ -257,53 +259,6 @@ def fit_shadow(
     if scalar:
         return assemble_one(ctx, key, a.B, entries)
     return assemble(ctx, checks, key, shape, a.B, entries)
-
-
-def _spec(
-    map_size: Any,
-    border_texels: int | None,
-    pcf_radius: int | None,
-    pcf_filter: PcfFilter,
-    margin: Any,
-    api: GraphicsApi,
-    reversed_z: bool,
-    stable: bool,
-) -> ShadowMapSpec:
-    """The map's spec: given, or made from the keyword options (cached when hashable)."""
-    options = {
-        "border_texels": border_texels,
-        "pcf_radius": pcf_radius,
-        "pcf_filter": pcf_filter,
-        "margin": margin,
-        "api": api,
-        "reversed_z": reversed_z,
-        "stable": stable,
-    }
-    if isinstance(map_size, ShadowMapSpec):
-        changed = [
-            k for k, v in options.items() if v != _DEFAULTS[k] or type(v) is not type(_DEFAULTS[k])
-        ]
-        if changed:
-            raise ValueError(
-                f"{', '.join(changed)}: given both in the ShadowMapSpec and as keywords; "
-                "set them in the spec"
-            )
-        return map_size
-    try:
-        return spec_from_options(map_size, **options)
-    except TypeError:  # unhashable (a list): made without the cache
-        return ShadowMapSpec(map_size, **options)
-
-
-_DEFAULTS: dict[str, Any] = {
-    "border_texels": None,
-    "pcf_radius": None,
-    "pcf_filter": "box",
-    "margin": None,
-    "api": "opengl",
-    "reversed_z": False,
-    "stable": False,
-}
 
 
 @functools.lru_cache(maxsize=256)

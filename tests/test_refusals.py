@@ -1,0 +1,152 @@
+"""Inputs that are not what they claim are refused at the door, naming the argument.
+
+A camera projection that is not one (transposed, scaled, singular, a last row neither
+perspective nor orthographic); triangles given as a raw array where receivers are
+points; a spec beside keywords that conflict with it; non-numeric input. Every
+correct projection (each API, reversed Z, perspective, orthographic, infinite far)
+is still accepted, and gives the cascades of the same camera in OpenGL's terms.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from jax.experimental import checkify
+
+import shadowmath as sm
+
+from .cameras import look_at, orthographic, perspective
+
+SUN = np.array([0.3, 1.0, 0.5])
+VIEW = look_at([0, 2, 0], [0, 1, -10])
+PERSPECTIVE = perspective(1.0, 1.5, 0.1, 300)
+BOX = np.array([[-50.0, 0, -50], [50, 5, 50]])
+FLIP_Z = np.diag([1.0, 1.0, -1.0, 1.0])
+
+
+def _infinite(proj: np.ndarray) -> np.ndarray:
+    near = proj[2, 3] / (proj[2, 2] - 1)
+    out = proj.copy()
+    out[2, 2], out[2, 3] = -1.0, -2 * near
+    return out
+
+
+CAMERAS = {
+    "perspective": (PERSPECTIVE, {}),
+    "orthographic": (orthographic(20, 15, 0.5, 120), {}),
+    "infinite": (_infinite(PERSPECTIVE), {"max_distance": 80.0}),
+}
+
+
+# --- projections ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("camera", CAMERAS)
+@pytest.mark.parametrize("api", sm.GRAPHICS_APIS)
+@pytest.mark.parametrize("reversed_z", [False, True])
+@pytest.mark.parametrize("left_handed", [False, True])
+def test_every_true_projection_is_accepted(
+    camera: str, api: str, reversed_z: bool, left_handed: bool
+) -> None:
+    """The same camera in any API, reversed or not, looking down -z or +z of its view
+    space (a left-handed view: last row (0, 0, 1, 0)), fits the OpenGL camera's cascades."""
+    proj, options = CAMERAS[camera]
+    gl = sm.fit_cascades(SUN, VIEW, proj, BOX, 256, **options)
+    view, p = (FLIP_Z @ VIEW, proj @ FLIP_Z) if left_handed else (VIEW, proj)
+    C = sm.api_convention(api=api, reversed_z=reversed_z).gl_clip_to_clip
+    c = sm.fit_cascades(SUN, view, C @ p, BOX, 256, camera_api=api,
+                        camera_reversed_z=reversed_z, **options)  # fmt: skip
+    np.testing.assert_allclose(c.splits, gl.splits, rtol=1e-12)
+    np.testing.assert_allclose(c.world_to_clip, gl.world_to_clip, rtol=1e-9, atol=1e-12)
+
+
+def _bad_row(proj: np.ndarray, row: list[float]) -> np.ndarray:
+    out = proj.copy()
+    out[3] = row
+    return out
+
+
+BAD_PROJECTIONS = {
+    "transposed perspective": PERSPECTIVE.T,
+    "transposed off-centre orthographic": (
+        orthographic(20, 15, 0.5, 120)
+        @ np.array([[1, 0, 0, 0.3], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+    ).T,
+    "scaled": 2 * PERSPECTIVE,
+    "projective mix": _bad_row(PERSPECTIVE, [0, 0, -1, 0.5]),
+    "tilted": _bad_row(PERSPECTIVE, [0.1, 0, -1, 0]),
+    "negative w": -orthographic(20, 15, 0.5, 120),
+}
+
+
+@pytest.mark.parametrize("name", BAD_PROJECTIONS)
+@pytest.mark.parametrize("path", ["compiled", "array"])
+def test_a_projection_that_is_not_one_is_refused(name: str, path: str) -> None:
+    from shadowmath._backends import _kernels
+
+    context = _kernels.array_path if path == "array" else _kernels.disabled
+    with context(), pytest.raises(ValueError, match=r"projection: its last row is neither"):
+        sm.fit_cascades(SUN, VIEW, BAD_PROJECTIONS[name], BOX, 256)
+
+
+def test_the_transposed_projection_would_have_been_a_narrow_camera() -> None:
+    """Why the scale is checked: up to scale the transpose is a camera (near 0.83, far
+    1.25 for near 0.1, far 300), which a fit would silently use."""
+    p = PERSPECTIVE.T / -PERSPECTIVE.T[3, 2]
+    c = sm.fit_cascades(SUN, VIEW, p, BOX, 256)
+    assert 0.8 < c.splits[0] < 0.9 and 1.2 < c.splits[-1] < 1.3
+
+
+def test_a_singular_projection_is_refused() -> None:
+    with pytest.raises(ValueError, match="projection: singular"):
+        sm.fit_cascades(SUN, VIEW, np.diag([0.0, 1, 1, 1]), BOX, 256)
+    with pytest.raises(ValueError, match=r"projection: expected shape \(\*batch, 4, 4\)"):
+        sm.fit_cascades(SUN, VIEW, np.eye(3), BOX, 256)
+
+
+def test_a_concrete_jax_projection_raises_too() -> None:
+    with pytest.raises(ValueError, match=r"projection: its last row is neither"):
+        sm.fit_cascades(SUN, VIEW, jnp.asarray(PERSPECTIVE.T), BOX, 256)
+
+
+def test_under_jit_a_bad_projection_is_nan_and_checkify_names_it() -> None:
+    def fit(p: Any) -> Any:
+        return sm.fit_cascades(SUN, VIEW, p, BOX, 256).world_to_clip
+
+    bad = np.asarray(jax.jit(fit)(jnp.asarray(PERSPECTIVE.T)))
+    good = np.asarray(jax.jit(fit)(jnp.asarray(PERSPECTIVE)))
+    assert np.all(np.isnan(bad)) and np.all(np.isfinite(good))
+    both = np.asarray(jax.vmap(fit)(jnp.stack([PERSPECTIVE, PERSPECTIVE.T])))
+    assert np.all(np.isfinite(both[0])) and np.all(np.isnan(both[1]))
+    err, _ = checkify.checkify(jax.jit(fit))(jnp.asarray(PERSPECTIVE.T))
+    with pytest.raises(checkify.JaxRuntimeError, match=r"projection: its last row is neither"):
+        err.throw()
+
+
+# --- a spec beside conflicting keywords -----------------------------------------------------
+
+SPEC_KEYWORDS = [
+    {"api": "vulkan"}, {"pcf_radius": 3}, {"stable": True}, {"border_texels": 2},
+    {"reversed_z": True}, {"pcf_filter": "bilinear"}, {"pcf_radius": 3, "api": "vulkan"},
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("keywords", SPEC_KEYWORDS)
+def test_fit_cascades_refuses_keywords_beside_a_spec(keywords: dict[str, Any]) -> None:
+    names = ", ".join(keywords)
+    with pytest.raises(ValueError, match=f"{names}: given both in the ShadowMapSpec"):
+        sm.fit_cascades(SUN, VIEW, PERSPECTIVE, BOX, sm.ShadowMapSpec(1024), **keywords)
+
+
+def test_fit_cascades_reads_its_options_from_the_spec() -> None:
+    spec = sm.ShadowMapSpec(1024, api="vulkan", pcf_radius=3, stable=True)
+    from_spec = sm.fit_cascades(SUN, VIEW, PERSPECTIVE, BOX, spec)
+    from_keywords = sm.fit_cascades(SUN, VIEW, PERSPECTIVE, BOX, 1024, api="vulkan",
+                                    pcf_radius=3, stable=True)  # fmt: skip
+    plain = sm.fit_cascades(SUN, VIEW, PERSPECTIVE, BOX, 1024)
+    np.testing.assert_array_equal(from_spec.world_to_clip, from_keywords.world_to_clip)
+    assert not np.allclose(from_spec.world_to_clip, plain.world_to_clip)
