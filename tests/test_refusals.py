@@ -150,3 +150,45 @@ def test_fit_cascades_reads_its_options_from_the_spec() -> None:
     plain = sm.fit_cascades(SUN, VIEW, PERSPECTIVE, BOX, 1024)
     np.testing.assert_array_equal(from_spec.world_to_clip, from_keywords.world_to_clip)
     assert not np.allclose(from_spec.world_to_clip, plain.world_to_clip)
+
+
+ATLAS_BOX = np.array([[x, y, z] for x in (-1, 1) for y in (0, 2) for z in (-1, 1)], float)
+ATLAS_LIGHTS = [
+    sm.SpotLight(np.array([0.0, 6.0, 0.0]), np.array([0.0, -1.0, 0.0]), np.array(0.6)),
+    sm.PointLight(np.array([3.0, 1.0, 0.0])),
+]
+
+
+def _atlas(border: int = 1) -> sm.ShadowAtlas:
+    return sm.allocate_atlas([0.5, 0.25], atlas_size=1024, cube=[False, True],
+                             border_texels=border)  # fmt: skip
+
+
+def test_fit_atlas_takes_its_options_from_a_spec() -> None:
+    atlas = _atlas(border=2)
+    spec = sm.ShadowMapSpec(1024, api="vulkan", reversed_z=True, pcf_radius=1)
+    a = sm.fit_atlas(ATLAS_LIGHTS, ATLAS_BOX, atlas, spec=spec)
+    b = sm.fit_atlas(ATLAS_LIGHTS, ATLAS_BOX, atlas, api="vulkan", reversed_z=True, pcf_radius=1)
+    np.testing.assert_array_equal(a.world_to_texture, b.world_to_texture)
+    plain = sm.fit_atlas(ATLAS_LIGHTS, ATLAS_BOX, atlas)
+    assert not np.allclose(a.world_to_clip, plain.world_to_clip)
+
+
+@pytest.mark.parametrize(
+    ("spec", "keywords", "message"),
+    [
+        (sm.ShadowMapSpec(1024), {"api": "vulkan"}, "api: given both in the ShadowMapSpec"),
+        (sm.ShadowMapSpec(1024), {"pcf_radius": 1}, "pcf_radius: given both in the"),
+        (sm.ShadowMapSpec(1024), {"reversed_z": True}, "reversed_z: given both in the"),
+        (sm.ShadowMapSpec(2048), {}, r"spec: its size \(2048, 2048\) is not the atlas's"),
+        (sm.ShadowMapSpec(1024, stable=True), {}, "spec: an atlas's tiles take no stable"),
+        (sm.ShadowMapSpec(1024, border_texels=3), {}, "spec: border_texels=3, but the atlas"),
+        (sm.ShadowMapSpec(1024, pcf_radius=2), {}, "pcf_radius: a box kernel of radius 2"),
+        (1024, {}, "spec: expected a ShadowMapSpec or None, got int"),
+    ],
+)
+def test_fit_atlas_refuses_a_spec_that_conflicts(
+    spec: Any, keywords: dict[str, Any], message: str
+) -> None:
+    with pytest.raises(ValueError, match=message):
+        sm.fit_atlas(ATLAS_LIGHTS, ATLAS_BOX, _atlas(), spec=spec, **keywords)

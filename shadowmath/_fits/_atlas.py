@@ -52,7 +52,7 @@ from . import _compiled
 from ._cube_depth import AT_LIGHT, caster_triangles, cube_depth_core
 from ._fit_arrays import Inputs, driver, fit_arrays
 from ._setup import _receiver_kind, _receiver_rows
-from ._spec import FitKey, api_rows
+from ._spec import FitKey, ShadowMapSpec, api_rows, map_spec
 
 __all__ = [
     "AtlasFit",
@@ -517,6 +517,7 @@ def fit_atlas(
     reversed_z: bool = False,
     pcf_radius: int | None = None,
     pcf_filter: PcfFilter = "box",
+    spec: ShadowMapSpec | None = None,
 ) -> AtlasFit:
     r"""Fit every tile of an atlas: the matrices that draw and sample each light's map.
 
@@ -556,6 +557,11 @@ def fit_atlas(
         api, reversed_z: the graphics API's conventions (:func:`api_convention`).
         pcf_radius, pcf_filter: the kernel the atlas is sampled with: refused when a
             light's border is narrower than :func:`pcf_border_texels` of it.
+        spec: instead of the four options above, the atlas texture's
+            :class:`ShadowMapSpec` (size ``atlas.atlas_size``; its ``api``,
+            ``reversed_z`` and PCF kernel used as above; its ``border_texels``, if
+            given, at most every light's border; no ``margin``, no ``stable``). As in
+            :func:`fit_shadow`, an option given both in it and as a keyword is refused.
 
     Returns:
         :class:`AtlasFit`, one entry per tile of ``atlas`` (lights without a tile have
@@ -567,7 +573,8 @@ def fit_atlas(
             ``lights[i]``), a light list of the wrong length or kind, a cube tile for a
             spot or directional light, a caster at a cube light's position, non-finite
             casters or receivers, wrong shapes, an ``atlas`` that is not a
-            :class:`ShadowAtlas`, an unknown ``api``, a kernel wider than a border.
+            :class:`ShadowAtlas`, an unknown ``api``, a kernel wider than a border, a
+            ``spec`` that does not describe the atlas or beside conflicting keywords.
 
     Example:
         >>> import numpy as np, shadowmath as sm
@@ -581,6 +588,10 @@ def fit_atlas(
     """
     if not isinstance(atlas, ShadowAtlas):
         raise ValueError(f"atlas: expected a ShadowAtlas (from allocate_atlas), got {atlas!r}")
+    if spec is not None:
+        options = {"api": api, "reversed_z": reversed_z, "pcf_radius": pcf_radius,
+                   "pcf_filter": pcf_filter}  # fmt: skip
+        api, reversed_z, pcf_radius, pcf_filter = _atlas_spec(spec, atlas, options)
     _check_api(api, reversed_z)
     count = atlas.light_size.shape[0]
     if pcf_radius is not None:
@@ -620,6 +631,27 @@ def fit_atlas(
     T = xp.asarray(_tile_transforms(atlas.tile_rect, atlas.atlas_size), dtype=ctx.dtype)
     clip, tex, lo, hi = _gather(ctx, parts, atlas.tile_light.shape[0])
     return AtlasFit(clip, T @ tex, atlas_viewports(atlas), atlas.tile_clamp, lo, hi)
+
+
+def _atlas_spec(
+    spec: Any, atlas: ShadowAtlas, options: dict[str, Any]
+) -> tuple[Any, bool, int | None, PcfFilter]:
+    """The options of the atlas texture's spec, checked against the atlas and the keywords."""
+    if not isinstance(spec, ShadowMapSpec):
+        raise ValueError(f"spec: expected a ShadowMapSpec or None, got {type(spec).__name__}")
+    map_spec(spec, **options)
+    n = atlas.atlas_size
+    if spec.size != (n, n):
+        raise ValueError(f"spec: its size {spec.size} is not the atlas's ({n}, {n})")
+    if spec.stable or spec.margin is not None:
+        raise ValueError("spec: an atlas's tiles take no stable or margin option")
+    borders = atlas.light_border
+    if spec.border_texels is not None and borders.size and borders.min() < spec.border_texels:
+        raise ValueError(
+            f"spec: border_texels={spec.border_texels}, but the atlas leaves "
+            f"{int(borders.min())} (allocate it with border_texels={spec.border_texels})"
+        )
+    return spec.api, spec.reversed_z, spec.pcf_radius, spec.pcf_filter
 
 
 def _gather(ctx: Context, parts: list[Any], total: int) -> tuple[Array, ...]:
