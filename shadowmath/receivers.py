@@ -1,9 +1,10 @@
 """Receivers as surfaces: triangles, or an indexed mesh, for ``fit_shadow(receivers=)``.
 
-A plain ``(*batch, M, 3)`` array passed as ``receivers=`` is a set of points; these
-types say that the receivers are surfaces, whose every point that the map covers
+A plain ``(*batch, M, 3)`` array passed as ``receivers=`` is a set of points, always;
+these types say that the receivers are surfaces, whose every point that the map covers
 the depth range must hold (a floor whose corners all lie outside the map still
-crosses it). Like the lights they are NamedTuples of arrays, so JAX pytrees, and
+crosses it). Receivers never add batch dimensions to a fit: a raw ``(M, 3, 3)`` array
+of triangles, read as ``M`` point sets, is refused beside one light and caster set. Like the lights they are NamedTuples of arrays, so JAX pytrees, and
 the kind is the type: static for ``jit``.
 """
 

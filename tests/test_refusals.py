@@ -192,3 +192,39 @@ def test_fit_atlas_refuses_a_spec_that_conflicts(
 ) -> None:
     with pytest.raises(ValueError, match=message):
         sm.fit_atlas(ATLAS_LIGHTS, ATLAS_BOX, _atlas(), spec=spec, **keywords)
+
+
+# --- receivers never add batch dimensions ---------------------------------------------------
+
+CASTERS = np.random.default_rng(3).normal(size=(20, 3)) * 0.5 + [0.0, 0.0, 8.0]
+FLOOR = np.array([[[-30.0, -3, -30], [30, -3, -30], [30, -3, 30]],
+                  [[-30.0, -3, -30], [30, -3, 30], [-30, -3, 30]]]) + [0.0, 0.0, 8.0]  # fmt: skip
+RECEIVER_BATCH = r"receivers: its batch shape \(2,\) would make a batch of fits \(2,\)"
+
+
+def test_raw_triangles_as_receivers_are_refused_not_read_as_a_batch() -> None:
+    """The floor's triangles as a raw (2, 3, 3) array would be two sets of three points:
+    two fits nobody asked for. Refused, naming sm.Triangles; wrapped, they are one fit
+    whose far holds the floor."""
+    with pytest.raises(ValueError, match=RECEIVER_BATCH + r".*sm\.Triangles"):
+        sm.fit_shadow(np.zeros(3), CASTERS, 256, receivers=FLOOR)
+    with pytest.raises(ValueError, match=RECEIVER_BATCH + r".*sm\.Triangles"):
+        sm.cube_depth_range(np.zeros(3), CASTERS, receivers=FLOOR)
+    with pytest.raises(ValueError, match=r"receivers: expected shape.*sm\.Triangles"):
+        sm.fit_atlas(ATLAS_LIGHTS, ATLAS_BOX, _atlas(), receivers=FLOOR)
+    fit = sm.fit_shadow(np.zeros(3), CASTERS, 256, receivers=sm.Triangles(FLOOR))
+    assert fit.frustum.far.shape == ()
+    assert fit.frustum.far > sm.fit_shadow(np.zeros(3), CASTERS, 256).frustum.far
+
+
+def test_receivers_may_follow_the_batch_the_other_arguments_ask_for() -> None:
+    lights = np.array([[0.0, 0.0, 0.0], [0.5, 0.0, 0.0]])
+    points = np.stack([FLOOR.reshape(-1, 3), FLOOR.reshape(-1, 3) + [0, -1, 0]])  # (2, 6, 3)
+    batched = sm.fit_shadow(lights, CASTERS, 256, receivers=points)
+    for i in range(2):
+        one = sm.fit_shadow(lights[i], CASTERS, 256, receivers=points[i])
+        np.testing.assert_allclose(batched.frustum.far[i], one.frustum.far, rtol=1e-12)
+    with pytest.raises(ValueError, match=r"receivers: its batch shape \(3, 2\)"):
+        sm.fit_shadow(lights, CASTERS, 256, receivers=np.broadcast_to(points, (3, 2, 6, 3)))
+    with pytest.raises(ValueError, match="batch dimensions do not broadcast"):
+        sm.fit_shadow(lights, CASTERS, 256, receivers=np.zeros((3, 6, 3)))

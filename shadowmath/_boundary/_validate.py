@@ -237,6 +237,29 @@ def batch_shape(*shapes: tuple[int, ...], names: Sequence[str]) -> tuple[int, ..
         raise ValueError(f"batch dimensions do not broadcast: {detail}") from None
 
 
+def require_no_new_batch(name: str, shape: tuple[int, ...], base: tuple[int, ...]) -> None:
+    """Receivers never add batch dimensions: ``shape`` must broadcast into ``base``, the
+    batch shape of the other arguments (the fits that were asked for).
+
+    A raw ``(M, 3, 3)`` array of triangles passed as receivers reads as ``M`` sets of
+    three points, which would make ``M`` fits no other argument asked for: refused.
+    """
+    full = batch_shape(base, shape, names=("the other arguments", name))
+    if full != tuple(base):
+        raise ValueError(
+            f"{name}: its batch shape {tuple(shape)} would make a batch of fits {full} that "
+            f"no other argument asks for (theirs: {tuple(base)}); receivers never add batch "
+            f"dimensions. {RECEIVER_KINDS}"
+        )
+
+
+#: How receivers are read, for the messages about their shape.
+RECEIVER_KINDS = (
+    "A raw array of receivers is points (*batch, M, 3); pass triangles as "
+    "sm.Triangles(corners) ((*batch, M, 3, 3)) or sm.Mesh(vertices, faces)"
+)
+
+
 def non_finite(name: str) -> str:
     """The message for an argument holding NaN or infinite entries."""
     return f"{name}: contains non-finite values (NaN or inf); every entry must be a finite number"

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from shadowmath._backends import _kernels
 from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import (
+    RECEIVER_KINDS,
     Array,
     Checks,
     Context,
@@ -759,8 +760,8 @@ def _check_arrays(
         raise shape_error("blocker_vertices", f"({count}, N, 3)", tuple(verts.shape),
                           "one caster set per light")  # fmt: skip
     if R is not None and R.ndim != 2:  # rows of 3 (points) or 9 (triangles), checked
-        raise shape_error("receivers", "(M, 3) points or M triangles", tuple(R.shape),
-                          "one set of receivers shared by every light")  # fmt: skip
+        hint = f"one set of receivers shared by every light. {RECEIVER_KINDS}"
+        raise shape_error("receivers", "(M, 3) points or M triangles", tuple(R.shape), hint)
     for name, v in (("near", n), ("far", f)):
         if v is not None and (v.ndim > 1 or (v.ndim == 1 and v.shape[0] != count)):
             raise shape_error(name, f"() or ({count},)", tuple(v.shape))
