@@ -228,3 +228,26 @@ def test_receivers_may_follow_the_batch_the_other_arguments_ask_for() -> None:
         sm.fit_shadow(lights, CASTERS, 256, receivers=np.broadcast_to(points, (3, 2, 6, 3)))
     with pytest.raises(ValueError, match="batch dimensions do not broadcast"):
         sm.fit_shadow(lights, CASTERS, 256, receivers=np.zeros((3, 6, 3)))
+
+
+# --- one Mesh type --------------------------------------------------------------------------
+
+
+def test_the_mesh_builders_return_what_every_function_takes() -> None:
+    """shadowmath.meshes builds sm.Mesh: as receivers it is the same surface as its
+    triangles, as cube casters too; no second mesh type leaks NumPy's errors."""
+    from shadowmath import meshes
+
+    assert meshes.Mesh is sm.Mesh
+    ground = meshes.grid((60.0, 60.0))
+    ground = sm.Mesh(ground.vertices[:, [0, 2, 1]] * [1, 1, -1] + [0, -3, 8], ground.faces)
+    assert isinstance(ground, sm.Mesh) and ground.faces.dtype == np.int64
+    corners = sm.Triangles(ground.vertices[ground.faces])
+    as_mesh = sm.fit_shadow(np.zeros(3), CASTERS, 256, receivers=ground)
+    as_triangles = sm.fit_shadow(np.zeros(3), CASTERS, 256, receivers=corners)
+    assert as_mesh.frustum.far == as_triangles.frustum.far
+    box = meshes.box((1.0, 1.0, 1.0))
+    box = sm.Mesh(box.vertices + [2.0, 0.0, 0.0], box.faces)
+    a = sm.cube_depth_range(np.zeros(3), box, receivers=ground)
+    b = sm.cube_depth_range(np.zeros(3), sm.Triangles(box.vertices[box.faces]), receivers=corners)
+    assert (a.near, a.far) == (b.near, b.far)
