@@ -15,6 +15,7 @@ import os
 import numpy as np
 from numpy.typing import NDArray
 
+from ._boundary._validate import integer, real
 from .receivers import Mesh as Mesh
 
 FloatArray = NDArray[np.float64]
@@ -44,15 +45,14 @@ def _grid_triangles(rows: int, cols: int, *, wrap_cols: bool, wrap_rows: bool) -
 
 
 def _positive(name: str, value: float) -> float:
-    if not (np.isfinite(value) and value > 0):
+    number = real(name, value)
+    if not (np.isfinite(number) and number > 0):
         raise ValueError(f"{name}: must be a positive finite number, got {value!r}")
-    return float(value)
+    return number
 
 
 def _count(name: str, value: int, minimum: int) -> int:
-    if int(value) != value or value < minimum:
-        raise ValueError(f"{name}: must be an integer >= {minimum}, got {value!r}")
-    return int(value)
+    return integer(name, value, minimum)
 
 
 def torus(

@@ -18,6 +18,7 @@ import pytest
 from jax.experimental import checkify
 
 import shadowmath as sm
+from shadowmath import meshes
 
 from .cameras import look_at, orthographic, perspective
 
@@ -236,8 +237,6 @@ def test_receivers_may_follow_the_batch_the_other_arguments_ask_for() -> None:
 def test_the_mesh_builders_return_what_every_function_takes() -> None:
     """shadowmath.meshes builds sm.Mesh: as receivers it is the same surface as its
     triangles, as cube casters too; no second mesh type leaks NumPy's errors."""
-    from shadowmath import meshes
-
     assert meshes.Mesh is sm.Mesh
     ground = meshes.grid((60.0, 60.0))
     ground = sm.Mesh(ground.vertices[:, [0, 2, 1]] * [1, 1, -1] + [0, -3, 8], ground.faces)
@@ -251,3 +250,72 @@ def test_the_mesh_builders_return_what_every_function_takes() -> None:
     a = sm.cube_depth_range(np.zeros(3), box, receivers=ground)
     b = sm.cube_depth_range(np.zeros(3), sm.Triangles(box.vertices[box.faces]), receivers=corners)
     assert (a.near, a.far) == (b.near, b.far)
+
+
+# --- numbers, and nothing else --------------------------------------------------------------
+
+NOT_NUMBERS = {
+    "allocate_atlas coverage strings": (lambda: sm.allocate_atlas(["0.5"]),
+                                        "coverage: expected real numbers, got an array of dtype"),
+    "allocate_atlas coverage booleans": (lambda: sm.allocate_atlas([True, False]),
+                                         "coverage: expected real numbers, got booleans"),
+    "allocate_atlas coverage objects": (lambda: sm.allocate_atlas([object()]),
+                                        "coverage: expected real numbers"),
+    "allocate_atlas atlas_size string": (lambda: sm.allocate_atlas([0.5], atlas_size="4096"),
+                                         "atlas_size: expected an integer, got '4096'"),
+    "allocate_atlas atlas_size bool": (lambda: sm.allocate_atlas([0.5], atlas_size=True),
+                                       "atlas_size: expected an integer, got True"),
+    "allocate_atlas budget bytes": (lambda: sm.allocate_atlas([0.5], budget=b"1"),
+                                    "budget: expected a number"),
+    "allocate_atlas hysteresis bool": (lambda: sm.allocate_atlas([0.5], hysteresis=False),
+                                       "hysteresis: expected a number, got False"),
+    "allocate_atlas cube ragged": (lambda: sm.allocate_atlas([0.5, 0.1], cube=[[True], [1, 0]]),
+                                   "cube: expected booleans"),
+    "allocate_atlas light_ids strings": (lambda: sm.allocate_atlas([0.5], light_ids=["a"]),
+                                         "light_ids: expected integers"),
+    "fit_shadow light bytes": (lambda: sm.fit_shadow(b"abc", CASTERS, 64),
+                               "light: expected real numbers, got an array of dtype"),
+    "fit_shadow vertices booleans": (lambda: sm.fit_shadow(np.zeros(3), CASTERS > 8, 64),
+                                     "blocker_vertices: expected real numbers, got booleans"),
+    "fit_shadow up with a bool": (lambda: sm.fit_shadow(np.zeros(3), CASTERS, 64, up=(0, True, 0)),
+                                  "up: expected real numbers, got booleans"),
+    "fit_shadow near string": (lambda: sm.fit_shadow(np.zeros(3), CASTERS, 64, near="0.5"),
+                               "near: expected real numbers"),
+    "fit_shadow map_size string": (lambda: sm.fit_shadow(np.zeros(3), CASTERS, "64"),
+                                   "map_size: expected an integer, got '64'"),
+    "fit_shadow map_size bool": (lambda: sm.fit_shadow(np.zeros(3), CASTERS, (64, True)),
+                                 "map_size: expected an integer, got True"),
+    "border_margin border string": (lambda: sm.border_margin(64, border_texels="1"),
+                                    "border_texels: expected an integer, got '1'"),
+    "fit_cascades lam bool": (lambda: sm.fit_cascades(SUN, VIEW, PERSPECTIVE, BOX, 64, lam=True),
+                              "lam: expected real numbers, got booleans"),
+    "fit_cascades overlap string": (
+        lambda: sm.fit_cascades(SUN, VIEW, PERSPECTIVE, BOX, 64, overlap="0.1"),
+        "overlap: expected real"),
+    "fit_atlas near string": (lambda: sm.fit_atlas(ATLAS_LIGHTS, ATLAS_BOX, _atlas(), near="1"),
+                              "near: expected real numbers"),
+    "cube_depth_range map_size float": (
+        lambda: sm.cube_depth_range(np.zeros(3), CASTERS, map_size=64.0, border_texels=1),
+        "map_size: expected an integer"),
+    "cube_face_projection map_size string": (lambda: sm.cube_face_projection(1.0, 2.0,
+                                             map_size="8"), "map_size: expected an integer"),
+    "torus radius string": (lambda: meshes.torus("1"), "major_radius: expected a number"),
+    "grid segments bool": (lambda: meshes.grid(segments=(True, 2)),
+                           r"segments\[0\]: expected an integer, got True"),
+    "silhouette_coverage border bool": (lambda: sm.silhouette_coverage(np.ones((8, 8), bool),
+                                        border_texels=True), "border_texels: expected an integer"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", NOT_NUMBERS)
+def test_what_is_not_a_number_is_refused_naming_the_argument(case: str) -> None:
+    call, message = NOT_NUMBERS[case]
+    with pytest.raises(ValueError, match=message):
+        call()
+
+
+def test_a_boolean_mask_is_still_a_mask() -> None:
+    """Booleans are refused as coordinates, not as what they are: a coverage mask."""
+    mask = np.zeros((8, 8), bool)
+    mask[2:6, 2:4] = True
+    assert float(sm.silhouette_coverage(mask, border_texels=2)) == 0.5

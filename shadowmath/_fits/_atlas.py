@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import functools
 import math
-import operator
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -35,8 +34,11 @@ from shadowmath._boundary._validate import (
     Checks,
     Context,
     convert,
+    integer,
     non_finite,
     raise_status,
+    real,
+    real_array,
     require_last,
     shape_error,
 )
@@ -195,7 +197,8 @@ def allocate_atlas(
         :class:`ShadowAtlas`.
 
     Raises:
-        ValueError: a coverage not finite or negative; an ``atlas_size``,
+        ValueError: a coverage not numbers (strings, booleans...), not finite or
+            negative; a ``budget``, ``hysteresis`` or size that is not a number; an ``atlas_size``,
             ``min_tile`` or ``max_tile`` not a power of two or out of order; a border
             that leaves no inner texel of ``min_tile``; ``cube``, ``border_texels`` or
             ``light_ids`` of the wrong length; repeated ids; a ``budget`` or
@@ -218,11 +221,11 @@ def allocate_atlas(
     if border.size and border.min() < 0:
         raise ValueError(f"border_texels: must be >= 0, got {int(border.min())}")
     lo, hi = _tile_range(size, min_tile, max_tile, int(border.max(initial=0)))
-    if not 0 < _real("budget", budget) <= 1:
+    if not 0 < real("budget", budget) <= 1:
         raise ValueError(
             f"budget: the fraction of the atlas to use must lie in (0, 1], got {budget!r}"
         )
-    if not 0 <= _real("hysteresis", hysteresis) < 1:
+    if not 0 <= real("hysteresis", hysteresis) < 1:
         raise ValueError(f"hysteresis: must lie in [0, 1), got {hysteresis!r}")
     ids = _ids(light_ids, count)
     if previous is not None and not isinstance(previous, ShadowAtlas):
@@ -239,17 +242,8 @@ class _Options(NamedTuple):
     hysteresis: float
 
 
-def _real(name: str, value: object) -> float:
-    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.number):
-        raise ValueError(f"{name}: expected a number, got {value!r}")
-    return float(value)
-
-
 def _coverage(coverage: Any) -> NDArray[np.float64]:
-    try:
-        cov = np.asarray(coverage, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"coverage: expected (L,) numbers, got {coverage!r}") from None
+    cov = np.asarray(real_array("coverage", coverage), dtype=np.float64)
     if cov.ndim != 1:
         raise shape_error("coverage", "(L,)", cov.shape, "one screen coverage per light")
     if not np.isfinite(cov).all():
@@ -260,22 +254,19 @@ def _coverage(coverage: Any) -> NDArray[np.float64]:
 
 
 def _power_of_two(name: str, value: object) -> int:
-    try:
-        if isinstance(value, bool | np.bool_):
-            raise TypeError
-        n = operator.index(value)  # type: ignore[arg-type]
-    except TypeError:
-        raise ValueError(f"{name}: expected an integer power of two, got {value!r}") from None
+    n = integer(name, value)
     if n < 1 or n & (n - 1):
         raise ValueError(f"{name}: must be a power of two (1, 2, 4, ...), got {n}")
     return n
 
 
 def _per_light(name: str, value: Any, count: int, dtype: Any) -> Any:
-    v = np.asarray(value)
-    kind = "b" if dtype is np.bool_ else "iu"
-    if v.dtype.kind not in kind or (dtype is not np.bool_ and v.dtype.kind == "b"):
-        what = "booleans" if dtype is np.bool_ else "integers"
+    what = "booleans" if dtype is np.bool_ else "integers"
+    try:
+        v = np.asarray(value)
+    except ValueError:  # ragged
+        v = np.asarray(None)
+    if v.dtype.kind not in ("b" if dtype is np.bool_ else "iu"):
         raise ValueError(f"{name}: expected {what} (one, or one per light), got {value!r}")
     if v.ndim > 1 or (v.ndim == 1 and v.shape[0] != count):
         raise shape_error(name, f"() or ({count},)", v.shape, "one value, or one per light")

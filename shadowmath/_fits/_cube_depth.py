@@ -17,13 +17,14 @@ from shadowmath._boundary._validate import (
     Context,
     batch_shape,
     convert,
+    integer,
     non_finite,
     require_last,
     require_no_new_batch,
     require_vertices,
     shape_error,
 )
-from shadowmath._math._cube import _int_arg, face_scale
+from shadowmath._math._cube import face_scale
 from shadowmath._math._frustum import NEAR_FAR_SLACK
 
 from ._setup import _mesh_corners, _receiver_kind, _receiver_rows
@@ -130,7 +131,7 @@ def triangle_min_chebyshev(xp: Any, T: Array) -> Array:
 def border_scale(map_size: int | None, border_texels: int) -> float:
     """``k`` of :func:`face_scale`; 1 without a ring, where ``map_size`` may be None."""
     if map_size is None:
-        if _int_arg("border_texels", border_texels, 0) == 0:
+        if integer("border_texels", border_texels, 0) == 0:
             return 1.0
         raise ValueError("map_size: a border ring of border_texels > 0 needs the face's map_size")
     return face_scale(map_size, border_texels)

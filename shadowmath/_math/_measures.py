@@ -11,7 +11,6 @@
 
 from __future__ import annotations
 
-import operator
 from typing import Any
 
 import numpy as np
@@ -22,6 +21,7 @@ from shadowmath._boundary._validate import (
     all_finite,
     batch_shape,
     convert,
+    integer,
     non_finite,
     require_last,
     require_matrix,
@@ -78,15 +78,12 @@ def silhouette_coverage(mask: Any, *, border_texels: int = 1) -> Array:
         >>> float(silhouette_coverage(m))
         0.5
     """
+    if getattr(mask, "dtype", None) == np.bool_:  # a boolean mask counts as 0 and 1
+        mask = mask.astype(np.uint8)
     ctx, (m,) = convert(mask=mask)
     if m.ndim < 2:
         raise ValueError(f"mask: expected shape (*batch, height, width), got {tuple(m.shape)}")
-    if isinstance(border_texels, bool | np.bool_):
-        raise ValueError(f"border_texels: expected an int, not a boolean, got {border_texels!r}")
-    try:
-        b = operator.index(border_texels)
-    except TypeError:
-        raise ValueError(f"border_texels: expected an int, got {border_texels!r}") from None
+    b = integer("border_texels", border_texels)
     h, w = int(m.shape[-2]), int(m.shape[-1])
     if b < 0 or min(h, w) <= 2 * b:
         raise ValueError(f"border_texels: {b} leaves no interior in a {w}x{h} mask")
