@@ -110,6 +110,16 @@ def real_array(name: str, value: Any) -> Any:
     return arr
 
 
+def flags(value: Any) -> Any:
+    """An argument whose booleans *are* its meaning (a mask, a per-entry switch), as 0 and
+    1 for :func:`convert`, which refuses booleans where numbers are meant."""
+    if isinstance(value, list | tuple) and _holds_bool(value):
+        value = np.asarray(value)
+    if getattr(value, "dtype", None) == np.bool_:
+        return value.astype(np.uint8)
+    return value
+
+
 def _holds_bool(value: object) -> bool:
     """True when a (nested) sequence holds a bool anywhere."""
     if isinstance(value, list | tuple):

@@ -23,6 +23,7 @@ from shadowmath._boundary._validate import (
     all_finite,
     batch_shape,
     convert,
+    flags,
     integer,
     non_finite,
     require_vertices,
@@ -350,7 +351,7 @@ def frustum_arrays(frustum: Frustum) -> tuple[Context, Checks, Frustum]:
     static_ortho = isinstance(ortho, bool | np.bool_)
     # A default (Python number) offset must not promote a float32 frustum to float64.
     defaults = {n: given.pop(n) for n in numeric[6:] if isinstance(given[n], int | float)}
-    extra = {} if static_ortho else {"orthographic": ortho}
+    extra = {} if static_ortho else {"orthographic": flags(ortho)}
     ctx, arrays = convert(**given, **extra)
     xp = ctx.xp
     converted = dict(zip([*given, *extra], arrays, strict=True))

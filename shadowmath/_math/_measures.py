@@ -13,14 +13,13 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from shadowmath._boundary._validate import (
     Array,
     Checks,
     all_finite,
     batch_shape,
     convert,
+    flags,
     integer,
     non_finite,
     require_last,
@@ -78,9 +77,7 @@ def silhouette_coverage(mask: Any, *, border_texels: int = 1) -> Array:
         >>> float(silhouette_coverage(m))
         0.5
     """
-    if getattr(mask, "dtype", None) == np.bool_:  # a boolean mask counts as 0 and 1
-        mask = mask.astype(np.uint8)
-    ctx, (m,) = convert(mask=mask)
+    ctx, (m,) = convert(mask=flags(mask))
     if m.ndim < 2:
         raise ValueError(f"mask: expected shape (*batch, height, width), got {tuple(m.shape)}")
     b = integer("border_texels", border_texels)
