@@ -319,3 +319,15 @@ def test_a_boolean_mask_is_still_a_mask() -> None:
     mask = np.zeros((8, 8), bool)
     mask[2:6, 2:4] = True
     assert float(sm.silhouette_coverage(mask, border_texels=2)) == 0.5
+
+
+def test_the_reference_renderer_refuses_a_transposed_camera_too() -> None:
+    from shadowmath import render as r
+
+    ground = r.Body(*meshes.grid((20.0, 20.0)))
+    sun = r.Light(direction=(0.3, 1.0, 0.5))
+    lamp = sm.PointLight(np.array([0.0, 3.0, 0.0]))
+    with pytest.raises(ValueError, match=r"projection: its last row is neither"):
+        r.render_cascades([ground], sun, VIEW, PERSPECTIVE.T)
+    with pytest.raises(ValueError, match=r"projection: its last row is neither"):
+        r.render_atlas([ground], [lamp], VIEW, PERSPECTIVE.T)

@@ -20,7 +20,15 @@ from numpy.typing import NDArray
 
 import shadowmath as sm
 
-from ._context import check_matrix, program, resolve_context, set_matrix, set_uniform, uniform
+from ._context import (
+    check_camera_projection,
+    check_matrix,
+    program,
+    resolve_context,
+    set_matrix,
+    set_uniform,
+    uniform,
+)
 from ._context import image_size as _image_size
 from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
 from ._pass_lit import draw_lit, finish, subtract_light
@@ -138,7 +146,9 @@ def render_cascades(
         light: a directional :class:`Light` (``Light(direction=...)``, toward the sun).
         view: ``(4, 4)`` the camera's world-to-view matrix (OpenGL: it looks down ``-z``),
             e.g. :func:`look_at`.
-        projection: ``(4, 4)`` its OpenGL projection, e.g. :func:`perspective`.
+        projection: ``(4, 4)`` its OpenGL projection, e.g. :func:`perspective` (refused, like
+            :func:`shadowmath.fit_cascades`'s, unless its last row is perspective or
+            orthographic: a transposed matrix is).
         scene_bounds: ``(2, 3)`` ``[min_corner, max_corner]`` holding every caster and
             receiver; default the bodies' bounding box. A caster outside it may lose
             its shadow (the maps reach toward the sun only to the box).
@@ -190,7 +200,7 @@ def render_cascades(
                              float(ambient), background, cascade_colors)  # fmt: skip
     if not (np.isfinite(options.ambient) and options.ambient >= 0):
         raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
-    v, p = check_matrix("view", view), check_matrix("projection", projection)
+    v, p = check_matrix("view", view), check_camera_projection(projection)
     bounds = _bounds(prepared) if scene_bounds is None else scene_bounds
     fit = sm.fit_cascades(
         sun.position, v, p, bounds, map_size, count=count, splits=splits, scheme=scheme,
