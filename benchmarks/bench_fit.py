@@ -99,7 +99,7 @@ def _case(rng: np.random.Generator, family: str, map_size: int) -> Case | None:
     covers = []
     clipped = 0
     for setup in (mdv, opt):
-        mask = render_shadow_map(mesh.vertices, mesh.triangles, setup.blocker_to_clip, map_size)
+        mask = render_shadow_map(mesh.vertices, mesh.faces, setup.blocker_to_clip, map_size)
         covers.append(float(sm.silhouette_coverage(mask)))
         EXAMPLES.setdefault(family, [])
         if len(EXAMPLES[family]) < 2:

@@ -39,9 +39,9 @@ def gather_meshes(meshes: Iterable[tuple[Any, Any]]) -> Mesh:
 
     Arguments:
         meshes: pairs ``(mesh, transform)``. ``mesh`` is an :class:`~shadowmath.Mesh`
-            (``vertices`` ``(V, 3)``, integer ``faces`` ``(F, 3)``), a mesh builder's
-            mesh from :mod:`shadowmath.meshes` (``vertices``, ``triangles``) or
-            :class:`~shadowmath.Triangles` ``(M, 3, 3)`` (each corner becomes a vertex).
+            (``vertices`` ``(V, 3)``, integer ``faces`` ``(F, 3)``; what the builders of
+            :mod:`shadowmath.meshes` return) or :class:`~shadowmath.Triangles` ``(M, 3, 3)``
+            (each corner becomes a vertex).
             ``transform`` is its ``(4, 4)`` local-to-world matrix (column vectors,
             ``w = M @ (v, 1)``), affine (last row ``(0, 0, 0, 1)``), or None when the
             vertices are already in world coordinates. No batch dimensions: one scene.
@@ -103,12 +103,12 @@ def _part(i: int, entry: Any) -> _Part:
         vertices: Any = _reshaped(mesh.corners, (corners[0] * 3, 3))
         faces = np.arange(3 * corners[0], dtype=np.int64).reshape(-1, 3)
     else:
-        indices = getattr(mesh, "faces", getattr(mesh, "triangles", None))
+        indices = getattr(mesh, "faces", None)
         vertices = getattr(mesh, "vertices", None)
         if vertices is None or indices is None:
             raise ValueError(
-                f"{name}: expected an sm.Mesh (vertices, faces), a shadowmath.meshes mesh "
-                f"(vertices, triangles) or sm.Triangles, got {type(mesh).__name__}"
+                f"{name}: expected an sm.Mesh (vertices, faces) or sm.Triangles, "
+                f"got {type(mesh).__name__}"
             )
         if np.ndim(vertices) != 2 or np.shape(vertices)[1] != 3:
             raise ValueError(f"{name}: expected vertices (V, 3), got {np.shape(vertices)}")

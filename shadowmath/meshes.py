@@ -1,8 +1,9 @@
 """Triangle meshes to cast and receive shadows: procedural shapes and an OBJ loader.
 
-Every function returns a :class:`Mesh`: ``vertices`` ``(N, 3)`` float64 and
-``triangles`` ``(M, 3)`` int64 indices into them, wound counter-clockwise seen
-from outside (the right-hand rule gives the outward normal), so closed meshes
+Every function returns a :class:`shadowmath.Mesh` (the one mesh type: what
+``receivers=``, ``cube_depth_range`` and ``fit_atlas`` take): ``vertices``
+``(N, 3)`` float64 and ``faces`` ``(M, 3)`` int64 indices into them, wound
+counter-clockwise seen from outside (the right-hand rule gives the outward normal), so closed meshes
 have a positive signed volume. Plain NumPy: no GL, no JAX, no optional
 dependency except for :func:`load_mesh` on formats other than OBJ.
 """
@@ -10,25 +11,15 @@ dependency except for :func:`load_mesh` on formats other than OBJ.
 from __future__ import annotations
 
 import os
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ._boundary._validate import integer, real
+from .receivers import Mesh as Mesh
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-class Mesh(NamedTuple):
-    """An indexed triangle mesh.
-
-    Attributes:
-        vertices: ``(N, 3)`` float64 positions.
-        triangles: ``(M, 3)`` int64 vertex indices, counter-clockwise from outside.
-    """
-
-    vertices: FloatArray
-    triangles: IntArray
 
 
 def _grid_triangles(rows: int, cols: int, *, wrap_cols: bool, wrap_rows: bool) -> IntArray:
@@ -54,15 +45,14 @@ def _grid_triangles(rows: int, cols: int, *, wrap_cols: bool, wrap_rows: bool) -
 
 
 def _positive(name: str, value: float) -> float:
-    if not (np.isfinite(value) and value > 0):
+    number = real(name, value)
+    if not (np.isfinite(number) and number > 0):
         raise ValueError(f"{name}: must be a positive finite number, got {value!r}")
-    return float(value)
+    return number
 
 
 def _count(name: str, value: int, minimum: int) -> int:
-    if int(value) != value or value < minimum:
-        raise ValueError(f"{name}: must be an integer >= {minimum}, got {value!r}")
-    return int(value)
+    return integer(name, value, minimum)
 
 
 def torus(
@@ -92,7 +82,7 @@ def torus(
 
     Example:
         >>> m = torus(segments=8, sides=4)
-        >>> m.vertices.shape, m.triangles.shape
+        >>> m.vertices.shape, m.faces.shape
         ((32, 3), (64, 3))
     """
     R = _positive("major_radius", major_radius)
@@ -128,7 +118,7 @@ def sphere(radius: float = 1.0, *, segments: int = 32, rings: int = 16) -> Mesh:
 
     Example:
         >>> m = sphere(segments=6, rings=3)
-        >>> m.vertices.shape, m.triangles.shape
+        >>> m.vertices.shape, m.faces.shape
         ((14, 3), (24, 3))
     """
     rad = _positive("radius", radius)
@@ -169,7 +159,7 @@ def box(size: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> Mesh:
 
     Example:
         >>> m = box((2.0, 1.0, 1.0))
-        >>> float(m.vertices[:, 0].max()), m.triangles.shape
+        >>> float(m.vertices[:, 0].max()), m.faces.shape
         (1.0, (12, 3))
     """
     half = np.array([_positive(f"size[{i}]", s) for i, s in enumerate(size)]) / 2
@@ -225,7 +215,7 @@ def grid(size: tuple[float, float] = (1.0, 1.0), *, segments: tuple[int, int] = 
 
     Example:
         >>> m = grid((2.0, 2.0), segments=(2, 3))
-        >>> m.vertices.shape, m.triangles.shape
+        >>> m.vertices.shape, m.faces.shape
         ((12, 3), (12, 3))
     """
     sx, sy = (_positive(f"size[{i}]", s) for i, s in enumerate(size))
@@ -248,7 +238,7 @@ def signed_volume(mesh: Mesh) -> float:
         >>> round(signed_volume(box((1.0, 2.0, 3.0))), 12)
         6.0
     """
-    a, b, c = (mesh.vertices[mesh.triangles[:, i]] for i in range(3))
+    a, b, c = (mesh.vertices[mesh.faces[:, i]] for i in range(3))
     return float(np.sum(a * np.cross(b, c)) / 6.0)
 
 
@@ -287,7 +277,7 @@ def load_obj(path: str | os.PathLike[str]) -> Mesh:
         >>> import pathlib, tempfile
         >>> p = pathlib.Path(tempfile.mkdtemp()) / "quad.obj"
         >>> _ = p.write_text("v 0 0 0\\nv 1 0 0\\nv 1 1 0\\nv 0 1 0\\nf 1 2 3 4\\n")
-        >>> load_obj(p).triangles
+        >>> load_obj(p).faces
         array([[0, 1, 2],
                [0, 2, 3]])
     """

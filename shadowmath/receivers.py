@@ -1,10 +1,12 @@
 """Receivers as surfaces: triangles, or an indexed mesh, for ``fit_shadow(receivers=)``.
 
-A plain ``(*batch, M, 3)`` array passed as ``receivers=`` is a set of points; these
-types say that the receivers are surfaces, whose every point that the map covers
+A plain ``(*batch, M, 3)`` array passed as ``receivers=`` is a set of points, always;
+these types say that the receivers are surfaces, whose every point that the map covers
 the depth range must hold (a floor whose corners all lie outside the map still
-crosses it). Like the lights they are NamedTuples of arrays, so JAX pytrees, and
-the kind is the type: static for ``jit``.
+crosses it). Receivers never add batch dimensions to a fit: a raw ``(M, 3, 3)`` array
+of triangles, read as ``M`` point sets, is refused beside one light and caster set.
+Like the lights they are NamedTuples of arrays, so JAX pytrees, and the kind is the
+type: static for ``jit``.
 """
 
 from __future__ import annotations
@@ -32,7 +34,11 @@ class Triangles(NamedTuple):
 
 
 class Mesh(NamedTuple):
-    """An indexed receiver mesh: shared vertices and the triangles that index them.
+    """An indexed triangle mesh: shared vertices and the triangles that index them.
+
+    The one mesh type of shadowmath: what :mod:`shadowmath.meshes` builds and loads
+    (float64 vertices, int64 faces wound counter-clockwise seen from outside), and
+    what ``receivers=``, :func:`cube_depth_range`'s and :func:`fit_atlas`'s casters take.
 
     Attributes:
         vertices: ``(*batch, V, 3)`` in world coordinates.

@@ -39,6 +39,18 @@ FRUSTUM = sm.Frustum(
 )
 
 
+CAMERA_VIEW = np.array([[1.0, 0, 0, 0], [0, 1, 0, -2], [0, 0, 1, 0], [0, 0, 0, 1]])
+CAMERA = np.array([[1.2, 0, 0, 0], [0, 1.8, 0, 0], [0, 0, -1.0006, -0.20006], [0, 0, -1, 0]])
+SCENE_BOX = np.array([[-50.0, -5, -50], [50, 5, 50]])
+FLOOR = np.array([[[-30.0, -3, -30], [30, -3, -30], [30, -3, 30]],
+                  [[-30.0, -3, -30], [30, -3, 30], [-30, -3, 30]]]) + [0.0, 0.0, 8.0]  # fmt: skip
+
+
+def _cascades(light: Any, projection: Any) -> tuple[Any, ...]:
+    c = sm.fit_cascades(light, CAMERA_VIEW, projection, SCENE_BOX, 64)
+    return c.world_to_clip, c.world_to_texture, c.splits
+
+
 def _with(a: np.ndarray, index: Any, value: float) -> np.ndarray:
     out = np.array(a, dtype=float)
     out[index] = value
@@ -260,6 +272,9 @@ VALUE_CASES = {
         _with(VERTS, (1, 2), np.nan)), (np.array([0.2, 0.3, -1.0]), VERTS),
         ("blocker_vertices:", "non-finite"),
     ),
+    "fit_cascades: transposed projection": Case(
+        _cascades, (LIGHT, CAMERA.T), (LIGHT, CAMERA), ("projection:", "last row is neither"),
+    ),
     "receiver_texture_matrix: non-finite receiver_to_world": Case(
         lambda L, V, R: sm.receiver_texture_matrix(sm.fit_shadow(L, V, 64), R),
         (LIGHT, VERTS, _with(np.eye(4), (2, 2), np.inf)), (LIGHT, VERTS, np.eye(4)),
@@ -388,7 +403,7 @@ STATIC_CASES: dict[str, tuple[Callable[[], Any], tuple[str, ...]]] = {
     "frustum: zero texels": (
         lambda: sm.adaptive_frustum(FRAME, VERTS, 0), ("map_size:", "positive")),
     "frustum: fractional texels": (
-        lambda: sm.adaptive_frustum(FRAME, VERTS, 64.5), ("map_size:", "integers")),  # type: ignore[arg-type]
+        lambda: sm.adaptive_frustum(FRAME, VERTS, 64.5), ("map_size:", "an integer")),  # type: ignore[arg-type]
     "frustum: negative border": (
         lambda: sm.adaptive_frustum(FRAME, VERTS, 64, border_texels=-1),
         ("border_texels:", ">= 0")),
@@ -415,6 +430,18 @@ STATIC_CASES: dict[str, tuple[Callable[[], Any], tuple[str, ...]]] = {
     "receiver_texture_matrix: not 4x4": (
         lambda: sm.receiver_texture_matrix(sm.fit_shadow(LIGHT, VERTS, 64), np.eye(3)),
         ("receiver_to_world:", "(*batch, 4, 4)")),
+    "fit_shadow: raw triangles as receivers": (
+        lambda: sm.fit_shadow(LIGHT, VERTS, 64, receivers=FLOOR),
+        ("receivers:", "batch shape (2,)", "sm.Triangles")),
+    "cube_depth_range: raw triangles as receivers": (
+        lambda: sm.cube_depth_range(LIGHT, VERTS, receivers=FLOOR),
+        ("receivers:", "batch shape (2,)", "sm.Triangles")),
+    "fit_cascades: spec beside keywords": (
+        lambda: sm.fit_cascades(LIGHT, CAMERA_VIEW, CAMERA, SCENE_BOX, sm.ShadowMapSpec(64),
+                                api="vulkan", stable=True),
+        ("api, stable:", "given both in the ShadowMapSpec")),
+    "allocate_atlas: coverage strings": (
+        lambda: sm.allocate_atlas(["0.5"]), ("coverage:", "expected real numbers")),
     "column_major_bytes: not 4x4": (
         lambda: sm.column_major_bytes(np.eye(3)), ("matrix:", "(*batch, 4, 4)")),
     "column_major_bytes: NaN from upstream": (
@@ -441,11 +468,12 @@ def test_static_conditions_raise(call: tuple[Callable[[], Any], tuple[str, ...]]
         lambda p, L: sm.fit_shadow(L[:3], jnp.zeros((0, 3)), 64),
         lambda p, L: sm.fit_shadow(L[:3], jnp.ones((4, 3)), 2),
         lambda p, L: sm.fit_shadow(L, jnp.ones((4, 3)), 64),
+        lambda p, L: sm.fit_shadow(L[:3], jnp.ones((4, 3)), 64, receivers=jnp.asarray(FLOOR)),
     ],
-    ids=["shape", "empty vertex set", "map too small", "homogeneous light"],
+    ids=["shape", "empty vertex set", "map too small", "homogeneous light", "raw triangles"],
 )
 def test_static_conditions_raise_under_jit_too(fn: Callable[..., Any]) -> None:
-    with pytest.raises(ValueError, match=r"plane:|vertices:|map_size:|light:"):
+    with pytest.raises(ValueError, match=r"plane:|vertices:|map_size:|light:|receivers:"):
         jax.jit(fn)(jnp.asarray(PLANE), jnp.asarray(LIGHT4))
 
 

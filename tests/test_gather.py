@@ -42,7 +42,7 @@ def test_gathering_is_each_mesh_placed_by_hand():
     )
     corners = []
     for mesh, m in zip(parts, placements, strict=True):
-        corners.append(_by_hand(mesh.vertices, m)[mesh.triangles])
+        corners.append(_by_hand(mesh.vertices, m)[mesh.faces])
     corners.append(soup.corners)
     corners.append(corners[0])
     expected = np.concatenate(corners)
@@ -52,7 +52,7 @@ def test_gathering_is_each_mesh_placed_by_hand():
     # The faces of entry i index only its own vertices, offset by those before it.
     sizes = [len(p.vertices) for p in parts] + [15, len(parts[0].vertices)]
     starts = np.cumsum([0, *sizes])
-    counts = [len(p.triangles) for p in parts] + [5, len(parts[0].triangles)]
+    counts = [len(p.faces) for p in parts] + [5, len(parts[0].faces)]
     first = np.cumsum([0, *counts])
     for i in range(len(sizes)):
         f = gathered.faces[first[i] : first[i + 1]]
@@ -65,7 +65,7 @@ def test_gathered_mesh_fits_as_the_hand_placed_one():
     rng = np.random.default_rng(5)
     floor, m = grid((10.0, 10.0)), _placement(rng)
     gathered = sm.gather_meshes([(floor, m)])
-    by_hand = sm.Triangles(_by_hand(floor.vertices, m)[floor.triangles])
+    by_hand = sm.Triangles(_by_hand(floor.vertices, m)[floor.faces])
     light = sm.PointLight(m[:3, 3] + 20 * m[:3, 2])
     blocker = _by_hand(box().vertices, m) + 3 * m[:3, 2]
     a = sm.fit_shadow(light, blocker, 512, receivers=gathered)
@@ -98,7 +98,7 @@ def test_gather_under_jax_jit():
 
 def test_gather_refusals():
     quad = grid()
-    v, f = quad.vertices, quad.triangles
+    v, f = quad.vertices, quad.faces
     projective = np.eye(4)
     projective[3, 2] = 1.0
     cases = [

@@ -9,7 +9,10 @@ Every public function of shadowmath starts with :func:`convert`, which
 * picks one floating result dtype: the promoted float dtype of the float
   arguments, float64 when all are integers (float16 is promoted to float32,
   since a shadow matrix in half precision is not usable);
-* refuses masked, object and complex arrays with a ``ValueError``.
+* refuses what is not real numbers with a ``ValueError`` naming the argument
+  (:func:`real_array`: masked, object, string, bytes, complex and boolean arrays,
+  booleans hidden in sequences); scalar options go through :func:`real` and
+  :func:`integer` (a bool is not a number there either).
 
 It then checks shapes (:func:`require_last`, :func:`require_matrix`,
 :func:`batch_shape`: bad shapes raise in every mode, since shapes are static
@@ -34,6 +37,7 @@ Bad *values* follow SciPy's eager-or-lazy rule, decided here and nowhere else:
 from __future__ import annotations
 
 import math
+import operator
 import sys
 from collections.abc import Callable, Sequence
 from types import ModuleType
@@ -80,8 +84,12 @@ class Context:
         return float(np.finfo(self.dtype).eps)
 
 
-def _as_input(name: str, value: Any) -> Any:
-    """Reject what has no unambiguous meaning as an array of coordinates."""
+def real_array(name: str, value: Any) -> Any:
+    """``value`` as an array of real numbers (integers or floats; NumPy or JAX, as given).
+
+    The one door for numbers given as arrays: strings, bytes, objects, complex numbers,
+    booleans, masked and ragged input are refused with a ``ValueError`` naming ``name``.
+    """
     if type(value) is np.ndarray or is_jax(value):
         arr = value
     elif isinstance(value, np.ma.MaskedArray):
@@ -92,12 +100,52 @@ def _as_input(name: str, value: Any) -> Any:
         except ValueError as err:  # ragged nested sequences
             raise ValueError(f"{name}: cannot be read as an array of numbers ({err})") from None
     kind = arr.dtype.kind
-    if kind not in "biuf":
+    if kind in "iuf" and isinstance(value, list | tuple) and _holds_bool(value):
+        kind = "b"  # NumPy reads [0, 1, True] as integers
+    if kind not in "iuf":
+        what = "booleans, not numbers" if kind == "b" else f"an array of dtype {arr.dtype}"
         raise ValueError(
-            f"{name}: expected real numbers, got an array of dtype {arr.dtype}; "
-            "convert it to float64 or float32 first"
+            f"{name}: expected real numbers, got {what}; convert it to float64 or float32 first"
         )
     return arr
+
+
+def flags(value: Any) -> Any:
+    """An argument whose booleans *are* its meaning (a mask, a per-entry switch), as 0 and
+    1 for :func:`convert`, which refuses booleans where numbers are meant."""
+    if isinstance(value, list | tuple) and _holds_bool(value):
+        value = np.asarray(value)
+    if getattr(value, "dtype", None) == np.bool_:
+        return value.astype(np.uint8)
+    return value
+
+
+def _holds_bool(value: object) -> bool:
+    """True when a (nested) sequence holds a bool anywhere."""
+    if isinstance(value, list | tuple):
+        return any(_holds_bool(v) for v in value)
+    return isinstance(value, bool | np.bool_)
+
+
+def real(name: str, value: object) -> float:
+    """A real number given as a Python or NumPy scalar (not a bool, a string, an array...)."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.integer |
+                                                            np.floating):  # fmt: skip
+        raise ValueError(f"{name}: expected a number, got {value!r}")
+    return float(value)
+
+
+def integer(name: str, value: object, minimum: int | None = None) -> int:
+    """An integer given as a Python or NumPy integer (not a bool, a float, a string...)."""
+    try:
+        if isinstance(value, bool | np.bool_):
+            raise TypeError
+        number = operator.index(value)  # type: ignore[arg-type]
+    except TypeError:
+        raise ValueError(f"{name}: expected an integer, got {value!r}") from None
+    if minimum is not None and number < minimum:
+        raise ValueError(f"{name}: must be >= {minimum}, got {number}")
+    return number
 
 
 def _result_dtype(inputs: Sequence[Any], use_jax: bool) -> tuple[ModuleType, Any]:
@@ -134,7 +182,7 @@ def convert(**arrays: Any) -> tuple[Context, tuple[Array, ...]]:
     mixed = _numpy_with_sequences(tuple(arrays.values()))
     if mixed is not None:
         return mixed
-    inputs = [_as_input(name, v) for name, v in arrays.items() if v is not None]
+    inputs = [real_array(name, v) for name, v in arrays.items() if v is not None]
     use_jax = any(is_jax(v) for v in inputs)
     lazy = use_jax and any(is_tracer(v) for v in inputs)
     xp, dtype = _result_dtype(inputs, use_jax)
@@ -184,7 +232,7 @@ def _numpy_with_sequences(values: tuple[Any, ...]) -> tuple[Context, tuple[Array
                 a = np.asarray(v)
             except ValueError:
                 return None
-            if a.dtype.kind not in "iu":
+            if a.dtype.kind not in "iu" or _holds_bool(v):
                 return None
             v = a.astype(ctx.dtype)
         elif v is not None and type(v) is not np.ndarray:
@@ -235,6 +283,29 @@ def batch_shape(*shapes: tuple[int, ...], names: Sequence[str]) -> tuple[int, ..
     except ValueError:
         detail = ", ".join(f"{n} {s}" for n, s in zip(names, shapes, strict=True))
         raise ValueError(f"batch dimensions do not broadcast: {detail}") from None
+
+
+def require_no_new_batch(name: str, shape: tuple[int, ...], base: tuple[int, ...]) -> None:
+    """Receivers never add batch dimensions: ``shape`` must broadcast into ``base``, the
+    batch shape of the other arguments (the fits that were asked for).
+
+    A raw ``(M, 3, 3)`` array of triangles passed as receivers reads as ``M`` sets of
+    three points, which would make ``M`` fits no other argument asked for: refused.
+    """
+    full = batch_shape(base, shape, names=("the other arguments", name))
+    if full != tuple(base):
+        raise ValueError(
+            f"{name}: its batch shape {tuple(shape)} would make a batch of fits {full} that "
+            f"no other argument asks for (theirs: {tuple(base)}); receivers never add batch "
+            f"dimensions. {RECEIVER_KINDS}"
+        )
+
+
+#: How receivers are read, for the messages about their shape.
+RECEIVER_KINDS = (
+    "A raw array of receivers is points (*batch, M, 3); pass triangles as "
+    "sm.Triangles(corners) ((*batch, M, 3, 3)) or sm.Mesh(vertices, faces)"
+)
 
 
 def non_finite(name: str) -> str:

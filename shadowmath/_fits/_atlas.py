@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import functools
 import math
-import operator
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -32,12 +31,16 @@ from numpy.typing import NDArray
 from shadowmath._backends import _kernels
 from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import (
+    RECEIVER_KINDS,
     Array,
     Checks,
     Context,
     convert,
+    integer,
     non_finite,
     raise_status,
+    real,
+    real_array,
     require_last,
     shape_error,
 )
@@ -54,7 +57,7 @@ from . import _compiled
 from ._cube_depth import AT_LIGHT, caster_triangles, cube_depth_core
 from ._fit_arrays import Inputs, driver, fit_arrays
 from ._setup import _receiver_kind, _receiver_rows
-from ._spec import FitKey, api_rows
+from ._spec import FitKey, ShadowMapSpec, api_rows, map_spec
 
 __all__ = [
     "AtlasFit",
@@ -220,7 +223,8 @@ def allocate_atlas(
         :class:`ShadowAtlas`.
 
     Raises:
-        ValueError: a coverage not finite or negative; an ``atlas_size``,
+        ValueError: a coverage not numbers (strings, booleans...), not finite or
+            negative; a ``budget``, ``hysteresis`` or size that is not a number; an ``atlas_size``,
             ``min_tile`` or ``max_tile`` not a power of two or out of order; a border
             that leaves no inner texel of ``min_tile``; ``cube``, ``border_texels`` or
             ``light_ids`` of the wrong length; repeated ids; a ``budget`` or
@@ -243,11 +247,11 @@ def allocate_atlas(
     if border.size and border.min() < 0:
         raise ValueError(f"border_texels: must be >= 0, got {int(border.min())}")
     lo, hi = _tile_range(size, min_tile, max_tile, int(border.max(initial=0)))
-    if not 0 < _real("budget", budget) <= 1:
+    if not 0 < real("budget", budget) <= 1:
         raise ValueError(
             f"budget: the fraction of the atlas to use must lie in (0, 1], got {budget!r}"
         )
-    if not 0 <= _real("hysteresis", hysteresis) < 1:
+    if not 0 <= real("hysteresis", hysteresis) < 1:
         raise ValueError(f"hysteresis: must lie in [0, 1), got {hysteresis!r}")
     ids = _ids(light_ids, count)
     if previous is not None and not isinstance(previous, ShadowAtlas):
@@ -264,17 +268,8 @@ class _Options(NamedTuple):
     hysteresis: float
 
 
-def _real(name: str, value: object) -> float:
-    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.number):
-        raise ValueError(f"{name}: expected a number, got {value!r}")
-    return float(value)
-
-
 def _coverage(coverage: Any) -> NDArray[np.float64]:
-    try:
-        cov = np.asarray(coverage, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"coverage: expected (L,) numbers, got {coverage!r}") from None
+    cov = np.asarray(real_array("coverage", coverage), dtype=np.float64)
     if cov.ndim != 1:
         raise shape_error("coverage", "(L,)", cov.shape, "one screen coverage per light")
     if not np.isfinite(cov).all():
@@ -285,22 +280,19 @@ def _coverage(coverage: Any) -> NDArray[np.float64]:
 
 
 def _power_of_two(name: str, value: object) -> int:
-    try:
-        if isinstance(value, bool | np.bool_):
-            raise TypeError
-        n = operator.index(value)  # type: ignore[arg-type]
-    except TypeError:
-        raise ValueError(f"{name}: expected an integer power of two, got {value!r}") from None
+    n = integer(name, value)
     if n < 1 or n & (n - 1):
         raise ValueError(f"{name}: must be a power of two (1, 2, 4, ...), got {n}")
     return n
 
 
 def _per_light(name: str, value: Any, count: int, dtype: Any) -> Any:
-    v = np.asarray(value)
-    kind = "b" if dtype is np.bool_ else "iu"
-    if v.dtype.kind not in kind or (dtype is not np.bool_ and v.dtype.kind == "b"):
-        what = "booleans" if dtype is np.bool_ else "integers"
+    what = "booleans" if dtype is np.bool_ else "integers"
+    try:
+        v = np.asarray(value)
+    except ValueError:  # ragged
+        v = np.asarray(None)
+    if v.dtype.kind not in ("b" if dtype is np.bool_ else "iu"):
         raise ValueError(f"{name}: expected {what} (one, or one per light), got {value!r}")
     if v.ndim > 1 or (v.ndim == 1 and v.shape[0] != count):
         raise shape_error(name, f"() or ({count},)", v.shape, "one value, or one per light")
@@ -568,6 +560,7 @@ def fit_atlas(
     reversed_z: bool = False,
     pcf_radius: int | None = None,
     pcf_filter: PcfFilter = "box",
+    spec: ShadowMapSpec | None = None,
 ) -> AtlasFit:
     r"""Fit every tile of an atlas: the matrices that draw and sample each light's map.
 
@@ -607,6 +600,11 @@ def fit_atlas(
         api, reversed_z: the graphics API's conventions (:func:`api_convention`).
         pcf_radius, pcf_filter: the kernel the atlas is sampled with: refused when a
             light's border is narrower than :func:`pcf_border_texels` of it.
+        spec: instead of the four options above, the atlas texture's
+            :class:`ShadowMapSpec` (size ``atlas.atlas_size``; its ``api``,
+            ``reversed_z`` and PCF kernel used as above; its ``border_texels``, if
+            given, at most every light's border; no ``margin``, no ``stable``). As in
+            :func:`fit_shadow`, an option given both in it and as a keyword is refused.
 
     Returns:
         :class:`AtlasFit`, one entry per tile of ``atlas`` (lights without a tile have
@@ -618,7 +616,8 @@ def fit_atlas(
             ``lights[i]``), a light list of the wrong length or kind, a cube tile for a
             spot or directional light, a caster at a cube light's position, non-finite
             casters or receivers, wrong shapes, an ``atlas`` that is not a
-            :class:`ShadowAtlas`, an unknown ``api``, a kernel wider than a border.
+            :class:`ShadowAtlas`, an unknown ``api``, a kernel wider than a border, a
+            ``spec`` that does not describe the atlas or beside conflicting keywords.
 
     Example:
         >>> import numpy as np, shadowmath as sm
@@ -632,6 +631,10 @@ def fit_atlas(
     """
     if not isinstance(atlas, ShadowAtlas):
         raise ValueError(f"atlas: expected a ShadowAtlas (from allocate_atlas), got {atlas!r}")
+    if spec is not None:
+        options = {"api": api, "reversed_z": reversed_z, "pcf_radius": pcf_radius,
+                   "pcf_filter": pcf_filter}  # fmt: skip
+        api, reversed_z, pcf_radius, pcf_filter = _atlas_spec(spec, atlas, options)
     _check_api(api, reversed_z)
     count = atlas.light_size.shape[0]
     if pcf_radius is not None:
@@ -675,6 +678,27 @@ def fit_atlas(
         texture_size=(atlas.atlas_size, atlas.atlas_size), tile_id=atlas.tile_id,
         tile_face=atlas.tile_face,
     )  # fmt: skip
+
+
+def _atlas_spec(
+    spec: Any, atlas: ShadowAtlas, options: dict[str, Any]
+) -> tuple[Any, bool, int | None, PcfFilter]:
+    """The options of the atlas texture's spec, checked against the atlas and the keywords."""
+    if not isinstance(spec, ShadowMapSpec):
+        raise ValueError(f"spec: expected a ShadowMapSpec or None, got {type(spec).__name__}")
+    map_spec(spec, **options)
+    n = atlas.atlas_size
+    if spec.size != (n, n):
+        raise ValueError(f"spec: its size {spec.size} is not the atlas's ({n}, {n})")
+    if spec.stable or spec.margin is not None:
+        raise ValueError("spec: an atlas's tiles take no stable or margin option")
+    borders = atlas.light_border
+    if spec.border_texels is not None and borders.size and borders.min() < spec.border_texels:
+        raise ValueError(
+            f"spec: border_texels={spec.border_texels}, but the atlas leaves "
+            f"{int(borders.min())} (allocate it with border_texels={spec.border_texels})"
+        )
+    return spec.api, spec.reversed_z, spec.pcf_radius, spec.pcf_filter
 
 
 def _gather(ctx: Context, parts: list[Any], total: int) -> tuple[Array, ...]:
@@ -782,8 +806,8 @@ def _check_arrays(
         raise shape_error("blocker_vertices", f"({count}, N, 3)", tuple(verts.shape),
                           "one caster set per light")  # fmt: skip
     if R is not None and R.ndim != 2:  # rows of 3 (points) or 9 (triangles), checked
-        raise shape_error("receivers", "(M, 3) points or M triangles", tuple(R.shape),
-                          "one set of receivers shared by every light")  # fmt: skip
+        hint = f"one set of receivers shared by every light. {RECEIVER_KINDS}"
+        raise shape_error("receivers", "(M, 3) points or M triangles", tuple(R.shape), hint)
     for name, v in (("near", n), ("far", f)):
         if v is not None and (v.ndim > 1 or (v.ndim == 1 and v.shape[0] != count)):
             raise shape_error(name, f"() or ({count},)", tuple(v.shape))

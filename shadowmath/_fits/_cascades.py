@@ -23,6 +23,7 @@ import numpy as np
 
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._projection import check_projection
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -53,7 +54,7 @@ from ._cascade_splits import (
     split_depths,
 )
 from ._lispsm import check_warp, warp_cascades
-from ._spec import ShadowMapSpec, api_rows, spec_from_options
+from ._spec import ShadowMapSpec, api_rows, map_spec
 
 __all__ = ["Cascades", "fit_cascades"]
 
@@ -160,11 +161,18 @@ def fit_cascades(
         view: ``(*batch, 4, 4)`` the camera's world-to-view matrix (rigid, affine).
         projection: ``(*batch, 4, 4)`` its projection, in ``camera_api``'s clip
             conventions (perspective or orthographic; an infinite far plane needs
-            ``max_distance``).
+            ``max_distance``), a column-vector matrix (``clip = projection @ p_view``)
+            with its last row as every API writes it: ``(0, 0, -1, 0)`` or
+            ``(0, 0, 1, 0)`` (perspective, looking down ``-z`` or ``+z``) or
+            ``(0, 0, 0, 1)`` (orthographic), to rounding; any depth row (reversed Z,
+            ``[0, 1]`` or ``[-1, 1]`` depth, an infinite far plane).
         scene_bounds: ``(*batch, 2, 3)`` the scene's box, ``[min_corner, max_corner]``:
             every caster and receiver inside it.
         map_size: each cascade's map, ``size``, ``(width, height)`` or a
-            :class:`ShadowMapSpec` (its border; its ``api`` unless given).
+            :class:`ShadowMapSpec` holding it with the map's options (then give none of
+            ``border_texels``, ``pcf_radius``, ``pcf_filter``, ``api``, ``reversed_z``
+            and ``stable`` as keywords: as in :func:`fit_shadow`, an option given in
+            both is refused; its ``margin`` is not used).
         count: the number of cascades (ignored when ``splits`` is given).
         splits: ``(*batch, n + 1)`` custom increasing view depths within the
             camera's range, instead of a scheme.
@@ -195,9 +203,12 @@ def fit_cascades(
 
     Raises:
         ValueError: wrong shapes, non-finite values, a non-invertible view or
-            projection, a projective view, a zero light direction, ``up`` parallel
-            to the light, an inverted ``scene_bounds``, splits outside the camera's
-            range or not increasing, bad scheme options (NaN under JAX transformations).
+            projection, a projective view, a ``projection`` whose last row is
+            neither perspective nor orthographic (a transposed or scaled matrix), a
+            zero light direction, ``up`` parallel to the light, an inverted
+            ``scene_bounds``, splits outside the camera's range or not increasing, bad
+            scheme options (these are NaN under JAX transformations); and whatever the
+            values: map options given both in a :class:`ShadowMapSpec` and as keywords.
 
     Example:
         >>> import numpy as np, shadowmath as sm
@@ -210,11 +221,9 @@ def fit_cascades(
         >>> c.world_to_clip.shape, c.splits.shape
         ((4, 4, 4), (5,))
     """
-    spec = map_size if isinstance(map_size, ShadowMapSpec) else spec_from_options(
-        map_size, border_texels=border_texels, pcf_radius=pcf_radius, pcf_filter=pcf_filter,
-        margin=None, api=api, reversed_z=reversed_z, stable=bool(stable) if isinstance(
-            stable, bool | np.bool_) else stable,
-    )  # fmt: skip
+    spec = map_spec(map_size, border_texels=border_texels, pcf_radius=pcf_radius,
+                    pcf_filter=pcf_filter, api=api, reversed_z=reversed_z,
+                    stable=stable)  # fmt: skip
     check_warp(warp, spec.stable)
     cam_api = spec.api if camera_api is None else camera_api
     _check_api(cam_api, camera_reversed_z)
@@ -239,7 +248,7 @@ def fit_cascades(
     checks = Checks(ctx)
     L = _light_vector(checks, L)
     require_matrix("view", V)
-    require_matrix("projection", P)
+    check_projection(checks, P)
     require_last("scene_bounds", box, 3, min_ndim=2, hint="[min_corner, max_corner]")
     if box.shape[-2] != 2:
         raise ValueError(

@@ -17,12 +17,14 @@ from shadowmath._boundary._validate import (
     Context,
     batch_shape,
     convert,
+    integer,
     non_finite,
     require_last,
+    require_no_new_batch,
     require_vertices,
     shape_error,
 )
-from shadowmath._math._cube import _int_arg, face_scale
+from shadowmath._math._cube import face_scale
 from shadowmath._math._frustum import NEAR_FAR_SLACK
 
 from ._setup import _mesh_corners, _receiver_kind, _receiver_rows
@@ -129,7 +131,7 @@ def triangle_min_chebyshev(xp: Any, T: Array) -> Array:
 def border_scale(map_size: int | None, border_texels: int) -> float:
     """``k`` of :func:`face_scale`; 1 without a ring, where ``map_size`` may be None."""
     if map_size is None:
-        if _int_arg("border_texels", border_texels, 0) == 0:
+        if integer("border_texels", border_texels, 0) == 0:
             return 1.0
         raise ValueError("map_size: a border ring of border_texels > 0 needs the face's map_size")
     return face_scale(map_size, border_texels)
@@ -172,7 +174,8 @@ def cube_depth_range(
             ``(*batch, M, 3, 3)`` or a :class:`Mesh`.
         receivers: what the shadows fall on: ``(*batch, M, 3)`` points,
             :class:`Triangles` ``(*batch, M, 3, 3)`` or a :class:`Mesh`; None: the
-            casters only.
+            casters only. They add no batch dimension (a raw ``(M, 3, 3)`` array is
+            ``M`` point sets, refused beside one light: wrap it in :class:`Triangles`).
         map_size: texels per face side; needed with ``border_texels``.
         border_texels: the border ring of :func:`cube_face_projection`.
 
@@ -180,7 +183,9 @@ def cube_depth_range(
         :class:`CubeDepthRange` ``(near, far)``, each ``(*batch,)``.
 
     Raises:
-        ValueError: wrong shapes; non-finite values; a caster at the light's position
+        ValueError: wrong shapes (receivers with batch dimensions that neither
+            ``light_position`` nor ``casters`` has); non-finite values; a caster at the
+            light's position
             (within rounding: no near plane keeps it); a border that leaves no inner
             texel. Under JAX transformations the affected entries (and their gradients)
             are NaN.
@@ -211,14 +216,13 @@ def cube_depth_range(
     else:
         triangles = caster_triangles(ctx, c_kind, C, casters, "casters")
     points = C if triangles is None else xp.reshape(triangles, (*triangles.shape[:-3], -1, 3))
-    shapes = [tuple(light.shape[:-1]), tuple(points.shape[:-2])]
+    shapes = (tuple(light.shape[:-1]), tuple(points.shape[:-2]))
+    shape = batch_shape(*shapes, names=("light_position", "casters"))
     corners = None
     if R is not None:
         R = _receiver_rows(ctx, r_kind, R, receivers)
         corners = xp.reshape(R, (*R.shape[:-2], -1, 3))  # triangles' rows of 9: 3 corners
-        shapes.append(tuple(R.shape[:-2]))
-    names = ("light_position", "casters", "receivers")[: len(shapes)]
-    shape = batch_shape(*shapes, names=names)
+        require_no_new_batch("receivers", R.shape[:-2], shape)
     checks = Checks(ctx)
     checks.require(xp.all(xp.isfinite(light), axis=-1), non_finite("light_position"))
     checks.require(xp.all(xp.isfinite(points), axis=(-2, -1)), non_finite("casters"))

@@ -36,6 +36,7 @@ from shadowmath._boundary._validate import (
     recorded_jit,
     require_last,
     require_matrix,
+    require_no_new_batch,
     require_vertices,
     shape_error,
 )
@@ -50,7 +51,7 @@ from shadowmath.receivers import Mesh, Triangles
 from . import _compiled
 from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
 from ._shadow_setup import ShadowSetup
-from ._spec import FitKey, ShadowMapSpec, api_rows, spec_from_options
+from ._spec import FitKey, ShadowMapSpec, api_rows, map_spec
 
 __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
@@ -123,7 +124,11 @@ def fit_shadow(
             (depth precision); such a receiver gets a depth before ``near``
             (below 0 in texture depth, above 1 with ``reversed_z``), which the
             recommended shader treats as lit, as it is. Receivers outside the
-            side planes are lit by the map (clamp-to-border).
+            side planes are lit by the map (clamp-to-border). Receivers never add
+            batch dimensions: their batch shape broadcasts into the other
+            arguments' (a raw ``(M, 3, 3)`` array is ``M`` sets of three points,
+            refused beside one light and caster set: wrap triangles in
+            :class:`Triangles`).
         api: ``"opengl"`` (default), ``"vulkan"``, ``"direct3d"``, ``"metal"`` or
             ``"webgpu"``: ``blocker_to_clip = C P W B`` and
             ``world_to_texture = T C P W`` with :func:`api_convention`'s ``C`` and
@@ -168,7 +173,8 @@ def fit_shadow(
     Raises:
         ValueError: everything :func:`light_frame` and :func:`adaptive_frustum`
             raise, a non-finite or wrongly shaped ``blocker_to_world``, a zero
-            directional light, receivers of the wrong shape or non-finite, an
+            directional light, receivers of the wrong shape or non-finite or with batch
+            dimensions that no other argument has, an
             unknown ``api`` (the message lists the valid ones), an ``up`` zero or
             parallel to the light's direction, a singular ``blocker_to_world``
             (its linear part's ``|det| <= 64 eps`` times its rows' norms), the nearest caster within
@@ -202,7 +208,9 @@ def fit_shadow(
     check_aim(aim)
     if method not in ("mdv", "optimized"):
         raise ValueError(f"method: expected 'mdv' or 'optimized', got {method!r}")
-    spec = _spec(map_size, border_texels, pcf_radius, pcf_filter, margin, api, reversed_z, stable)
+    spec = map_spec(map_size, border_texels=border_texels, pcf_radius=pcf_radius,
+                    pcf_filter=pcf_filter, margin=margin, api=api, reversed_z=reversed_z,
+                    stable=stable)  # fmt: skip
     spot = isinstance(light, SpotLight)
     if spot:
         named = {"light.position": light[0], "light.direction": light[1], "light.angle": light[2]}
@@ -257,53 +265,6 @@ def fit_shadow(
     if scalar:
         return assemble_one(ctx, key, a.B, entries)
     return assemble(ctx, checks, key, shape, a.B, entries)
-
-
-def _spec(
-    map_size: Any,
-    border_texels: int | None,
-    pcf_radius: int | None,
-    pcf_filter: PcfFilter,
-    margin: Any,
-    api: GraphicsApi,
-    reversed_z: bool,
-    stable: bool,
-) -> ShadowMapSpec:
-    """The map's spec: given, or made from the keyword options (cached when hashable)."""
-    options = {
-        "border_texels": border_texels,
-        "pcf_radius": pcf_radius,
-        "pcf_filter": pcf_filter,
-        "margin": margin,
-        "api": api,
-        "reversed_z": reversed_z,
-        "stable": stable,
-    }
-    if isinstance(map_size, ShadowMapSpec):
-        changed = [
-            k for k, v in options.items() if v != _DEFAULTS[k] or type(v) is not type(_DEFAULTS[k])
-        ]
-        if changed:
-            raise ValueError(
-                f"{', '.join(changed)}: given both in the ShadowMapSpec and as keywords; "
-                "set them in the spec"
-            )
-        return map_size
-    try:
-        return spec_from_options(map_size, **options)
-    except TypeError:  # unhashable (a list): made without the cache
-        return ShadowMapSpec(map_size, **options)
-
-
-_DEFAULTS: dict[str, Any] = {
-    "border_texels": None,
-    "pcf_radius": None,
-    "pcf_filter": "box",
-    "margin": None,
-    "api": "opengl",
-    "reversed_z": False,
-    "stable": False,
-}
 
 
 @functools.lru_cache(maxsize=256)
@@ -378,13 +339,14 @@ def _check_shapes(a: Inputs) -> tuple[int, ...]:
     if a.B is not None:
         require_matrix("blocker_to_world", a.B)
         named.append(("blocker_to_world", a.B.shape[:-2]))
-    if a.R is not None:  # rows checked by _receiver_rows
-        named.append(("receivers", a.R.shape[:-2]))
     if a.U is not None:
         require_last("up", a.U, 3, hint="an up hint is (x, y, z)")
         named.append(("up", a.U.shape[:-1]))
     named += [(n, v.shape) for n, v in (("near", a.near), ("far", a.far)) if v is not None]
-    return batch_shape(*(s for _, s in named), names=[n for n, _ in named])
+    shape = batch_shape(*(s for _, s in named), names=[n for n, _ in named])
+    if a.R is not None:  # rows checked by _receiver_rows
+        require_no_new_batch("receivers", a.R.shape[:-2], shape)
+    return shape
 
 
 def _points(a: Inputs) -> int:

@@ -161,9 +161,42 @@ def _spec_margins(spec: ShadowMapSpec) -> tuple[float, float]:
     return _margins(spec.size, spec.border, spec.margin)
 
 
+def map_spec(map_size: Any, **options: Any) -> ShadowMapSpec:
+    """The spec of a call taking ``map_size`` (a size or a :class:`ShadowMapSpec`) and
+    some of :class:`ShadowMapSpec`'s options as keywords (``options``: those it takes).
+
+    A spec with any of ``options`` set away from its default is refused, whatever the
+    spec holds (``ValueError`` naming them): an option has one place. A size makes the
+    spec from the options (cached when they are hashable: the same few recur every frame).
+    """
+    if isinstance(map_size, ShadowMapSpec):
+        changed = [k for k, v in options.items() if v != _DEFAULTS[k] or type(v) is not
+                   type(_DEFAULTS[k])]  # fmt: skip
+        if changed:
+            raise ValueError(
+                f"{', '.join(changed)}: given both in the ShadowMapSpec and as keywords; "
+                "set them in the spec"
+            )
+        return map_size
+    try:
+        return _spec_from_options(map_size, **options)
+    except TypeError:  # unhashable (a list): made without the cache
+        return ShadowMapSpec(map_size, **options)
+
+
+_DEFAULTS: dict[str, Any] = {
+    "border_texels": None,
+    "pcf_radius": None,
+    "pcf_filter": "box",
+    "margin": None,
+    "api": "opengl",
+    "reversed_z": False,
+    "stable": False,
+}
+
+
 @functools.lru_cache(maxsize=256, typed=True)  # typed: True and 1 are different options
-def spec_from_options(size: Any, **options: Any) -> ShadowMapSpec:
-    """A spec from ``fit_shadow``'s keyword options (cached: the same few recur every frame)."""
+def _spec_from_options(size: Any, **options: Any) -> ShadowMapSpec:
     return ShadowMapSpec(size, **options)
 
 

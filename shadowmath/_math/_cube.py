@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import functools
 import math
-import operator
 from types import ModuleType
 from typing import Any, NamedTuple
 
@@ -44,6 +43,7 @@ from shadowmath._boundary._validate import (
     all_finite,
     batch_shape,
     convert,
+    integer,
     non_finite,
     require_last,
 )
@@ -445,26 +445,14 @@ def cube_face_projection(
 
 def face_scale(map_size: object, border_texels: object) -> float:
     """``k = (N - 2b) / N``, the window scale of a face with a border ring, both checked."""
-    size = _int_arg("map_size", map_size, 1)
-    border = _int_arg("border_texels", border_texels, 0)
+    size = integer("map_size", map_size, 1)
+    border = integer("border_texels", border_texels, 0)
     if size - 2 * border < 1:
         raise ValueError(
             f"border_texels: a border of {border} texels on each side leaves no inner "
             f"texel of a {size}-texel face (need 2 * border_texels < map_size)"
         )
     return (size - 2 * border) / size
-
-
-def _int_arg(name: str, value: object, minimum: int) -> int:
-    try:
-        if isinstance(value, bool):
-            raise TypeError
-        number = operator.index(value)  # type: ignore[arg-type]
-    except TypeError:
-        raise ValueError(f"{name}: expected an integer, got {value!r}") from None
-    if number < minimum:
-        raise ValueError(f"{name}: must be >= {minimum}, got {number}")
-    return number
 
 
 def cube_face(directions: Any) -> CubeFaceCoords:

@@ -10,7 +10,6 @@ border of untouched texels.
 from __future__ import annotations
 
 import functools
-import operator
 from types import ModuleType
 from typing import Any, NamedTuple
 
@@ -24,6 +23,8 @@ from shadowmath._boundary._validate import (
     all_finite,
     batch_shape,
     convert,
+    flags,
+    integer,
     non_finite,
     require_vertices,
 )
@@ -84,12 +85,7 @@ def _texels(name: str, value: Any) -> tuple[int, int]:
     values = tuple(value) if is_pair else (value, value)
     if len(values) != 2:
         raise ValueError(f"{name}: expected an int or (width, height), got {value!r}")
-    if any(isinstance(v, bool | np.bool_) for v in values):
-        raise ValueError(f"{name}: texel counts must be integers, not booleans, got {value!r}")
-    try:
-        w, h = (operator.index(v) for v in values)
-    except TypeError:
-        raise ValueError(f"{name}: texel counts must be integers, got {value!r}") from None
+    w, h = (integer(name, v) for v in values)
     if w <= 0 or h <= 0:
         raise ValueError(f"{name}: texel counts must be positive, got {value!r}")
     return w, h
@@ -131,14 +127,7 @@ def border_margin(
         (0.9921875, 0.984375)
     """
     w, h = _texels("map_size", map_size)
-    if isinstance(border_texels, bool | np.bool_):
-        raise ValueError(f"border_texels: expected an int, not a boolean, got {border_texels!r}")
-    try:
-        b = operator.index(border_texels)
-    except TypeError:
-        raise ValueError(f"border_texels: expected an int, got {border_texels!r}") from None
-    if b < 0:
-        raise ValueError(f"border_texels: must be >= 0, got {b}")
+    b = integer("border_texels", border_texels, 0)
     if min(w, h) <= 2 * b:
         raise ValueError(
             f"map_size: {w}x{h} texels leave no room inside a border of {b} texel(s) on each "
@@ -362,7 +351,7 @@ def frustum_arrays(frustum: Frustum) -> tuple[Context, Checks, Frustum]:
     static_ortho = isinstance(ortho, bool | np.bool_)
     # A default (Python number) offset must not promote a float32 frustum to float64.
     defaults = {n: given.pop(n) for n in numeric[6:] if isinstance(given[n], int | float)}
-    extra = {} if static_ortho else {"orthographic": ortho}
+    extra = {} if static_ortho else {"orthographic": flags(ortho)}
     ctx, arrays = convert(**given, **extra)
     xp = ctx.xp
     converted = dict(zip([*given, *extra], arrays, strict=True))

@@ -11,10 +11,7 @@
 
 from __future__ import annotations
 
-import operator
 from typing import Any
-
-import numpy as np
 
 from shadowmath._boundary._validate import (
     Array,
@@ -22,6 +19,8 @@ from shadowmath._boundary._validate import (
     all_finite,
     batch_shape,
     convert,
+    flags,
+    integer,
     non_finite,
     require_last,
     require_matrix,
@@ -78,15 +77,10 @@ def silhouette_coverage(mask: Any, *, border_texels: int = 1) -> Array:
         >>> float(silhouette_coverage(m))
         0.5
     """
-    ctx, (m,) = convert(mask=mask)
+    ctx, (m,) = convert(mask=flags(mask))
     if m.ndim < 2:
         raise ValueError(f"mask: expected shape (*batch, height, width), got {tuple(m.shape)}")
-    if isinstance(border_texels, bool | np.bool_):
-        raise ValueError(f"border_texels: expected an int, not a boolean, got {border_texels!r}")
-    try:
-        b = operator.index(border_texels)
-    except TypeError:
-        raise ValueError(f"border_texels: expected an int, got {border_texels!r}") from None
+    b = integer("border_texels", border_texels)
     h, w = int(m.shape[-2]), int(m.shape[-1])
     if b < 0 or min(h, w) <= 2 * b:
         raise ValueError(f"border_texels: {b} leaves no interior in a {w}x{h} mask")

@@ -136,7 +136,7 @@ def blocker_mesh(name: str) -> meshes.Mesh:
     radius = np.linalg.norm(vertices - centre, axis=1).max()
     if not radius > 0:
         raise OptionError(f"--mesh {name}: the mesh has no extent (all vertices coincide)")
-    return meshes.Mesh((vertices - centre) * (1.3 / radius), loaded.triangles)
+    return meshes.Mesh((vertices - centre) * (1.3 / radius), loaded.faces)
 
 
 def _read_mesh_file(name: str) -> meshes.Mesh:

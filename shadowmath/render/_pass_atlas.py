@@ -19,7 +19,14 @@ from numpy.typing import NDArray
 
 import shadowmath as sm
 
-from ._context import check_matrix, program, resolve_context, set_matrix, set_uniform
+from ._context import (
+    check_camera_projection,
+    check_matrix,
+    program,
+    resolve_context,
+    set_matrix,
+    set_uniform,
+)
 from ._context import image_size as _image_size
 from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
 from ._pass_lit import draw_lit, finish
@@ -118,7 +125,9 @@ def render_atlas(
         lights: ``L`` lights, each one :class:`shadowmath.PointLight` (a cube map),
             :class:`shadowmath.SpotLight` or :class:`shadowmath.DirectionalLight`.
         view: ``(4, 4)`` the camera's world-to-view matrix (OpenGL: it looks down ``-z``).
-        projection: ``(4, 4)`` its OpenGL projection.
+        projection: ``(4, 4)`` its OpenGL projection (refused, like
+            :func:`shadowmath.fit_cascades`'s, unless its last row is perspective or
+            orthographic: a transposed matrix is).
         casters: ``(len(bodies),)`` which bodies cast (default all). A body that only
             receives (a ground) costs no texels.
         colors: ``(L, 3)`` each light's diffuse RGB; default white shared out, ``1.6 / L``.
@@ -224,7 +233,7 @@ def prepare_atlas(
         raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
     if not (np.isfinite(ambient) and ambient >= 0):
         raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
-    v, p = check_matrix("view", view), check_matrix("projection", projection)
+    v, p = check_matrix("view", view), check_camera_projection(projection)
     atlas = sm.allocate_atlas(
         np.ones(len(table.cube)) if coverage is None else coverage, atlas_size=atlas_size,
         cube=table.cube, border_texels=sm.pcf_border_texels(k), previous=previous,

@@ -21,7 +21,15 @@ from numpy.typing import NDArray
 
 import shadowmath as sm
 
-from ._context import check_matrix, program, resolve_context, set_matrix, set_uniform, uniform
+from ._context import (
+    check_camera_projection,
+    check_matrix,
+    program,
+    resolve_context,
+    set_matrix,
+    set_uniform,
+    uniform,
+)
 from ._context import image_size as _image_size
 from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
 from ._pass_lit import draw_lit, finish, subtract_light
@@ -151,7 +159,9 @@ def render_cascades(
         light: a directional :class:`Light` (``Light(direction=...)``, toward the sun).
         view: ``(4, 4)`` the camera's world-to-view matrix (OpenGL: it looks down ``-z``),
             e.g. :func:`look_at`.
-        projection: ``(4, 4)`` its OpenGL projection, e.g. :func:`perspective`.
+        projection: ``(4, 4)`` its OpenGL projection, e.g. :func:`perspective` (refused, like
+            :func:`shadowmath.fit_cascades`'s, unless its last row is perspective or
+            orthographic: a transposed matrix is).
         scene_bounds: ``(2, 3)`` ``[min_corner, max_corner]`` holding every caster and
             receiver; default the bodies' bounding box. A caster outside it may lose
             its shadow (the maps reach toward the sun only to the box).
@@ -263,7 +273,7 @@ def prepare_cascades(
     sun = prepare_light("light", light)
     if not sun.directional:
         raise ValueError("light: cascades need a directional light, Light(direction=...)")
-    v, p = check_matrix("view", view), check_matrix("projection", projection)
+    v, p = check_matrix("view", view), check_camera_projection(projection)
     fit_options = dict(fit_options)
     bounds = fit_options.pop("scene_bounds")
     bounds = _bounds(prepared) if bounds is None else bounds

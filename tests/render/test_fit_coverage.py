@@ -41,7 +41,7 @@ def test_optimized_fit_covers_more_without_clipping(gl: Any, name: str) -> None:
     cover = {}
     for method in ("mdv", "optimized"):
         s = fit_shadow(light, mesh.vertices, MAP, blocker_to_world=B, method=method)  # type: ignore[arg-type]
-        mask = render_shadow_map(mesh.vertices, mesh.triangles, s.blocker_to_clip, MAP, ctx=gl)
+        mask = render_shadow_map(mesh.vertices, mesh.faces, s.blocker_to_clip, MAP, ctx=gl)
         border = np.concatenate([mask[0], mask[-1], mask[:, 0], mask[:, -1]])
         assert border.max() == 0, f"{method} drew into the border"
         # The silhouette reaches the margin on all four sides for the off-centre frustum.

@@ -40,7 +40,7 @@ def test_sphere_shadow_is_the_analytic_cone():
     seg = light - points
     along = np.clip(np.sum((centre - points) * seg, axis=1) / np.sum(seg * seg, axis=1), 0, 1)
     distance = np.linalg.norm(points + along[:, None] * seg - centre, axis=1)
-    hits = segment_hits_triangles(points, light, mesh.vertices + centre, mesh.triangles)
+    hits = segment_hits_triangles(points, light, mesh.vertices + centre, mesh.faces)
     # The tessellation is inscribed: its radius lies within r cos(pi / 48) and r.
     clear = (distance < 0.99 * r) | (distance > r)
     assert clear.sum() > 3500
@@ -82,7 +82,7 @@ def test_directional_sphere_shadow_is_the_analytic_cylinder():
     points = np.c_[rng.uniform(-4, 4, size=(3000, 2)), np.zeros(3000)]
     rel = centre - points
     distance = np.linalg.norm(rel - np.sum(rel * u, axis=1)[:, None] * u, axis=1)
-    hits = segment_hits_triangles(points, np.append(d, 0), mesh.vertices + centre, mesh.triangles)
+    hits = segment_hits_triangles(points, np.append(d, 0), mesh.vertices + centre, mesh.faces)
     clear = (distance < 0.99 * r) | (distance > r)
     assert clear.sum() > 2500
     assert np.array_equal(hits[clear], distance[clear] < r)

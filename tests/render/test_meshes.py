@@ -22,7 +22,7 @@ from shadowmath.meshes import (
 
 
 def _directed_edges(mesh: Mesh) -> Counter:
-    t = mesh.triangles
+    t = mesh.faces
     return Counter(map(tuple, np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])))
 
 
@@ -63,7 +63,7 @@ def test_face_normals_point_outward():
             ],
         ),
     ):
-        a, b, c = (mesh.vertices[mesh.triangles[:, i]] for i in range(3))
+        a, b, c = (mesh.vertices[mesh.faces[:, i]] for i in range(3))
         normal = np.cross(b - a, c - a)
         centroid = (a + b + c) / 3
         assert np.all(np.sum(normal * (centroid - centre_of(centroid)), axis=1) > 0)
@@ -71,7 +71,7 @@ def test_face_normals_point_outward():
 
 def test_grid_faces_plus_z_and_spans_its_size():
     g = grid((4.0, 2.0), segments=(4, 3))
-    a, b, c = (g.vertices[g.triangles[:, i]] for i in range(3))
+    a, b, c = (g.vertices[g.faces[:, i]] for i in range(3))
     n = np.cross(b - a, c - a)
     assert np.all(n[:, 2] > 0)
     assert np.allclose(n[:, :2], 0)
@@ -119,9 +119,9 @@ def test_obj_reader(tmp_path):
     )
     mesh = load_obj(path)
     assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
-    assert mesh.triangles.tolist() == [[0, 1, 2], [0, 2, 3], [0, 1, 3]]
-    assert mesh.triangles.dtype == np.int64
-    assert load_mesh(str(path)).triangles.shape == (3, 3)
+    assert mesh.faces.tolist() == [[0, 1, 2], [0, 2, 3], [0, 1, 3]]
+    assert mesh.faces.dtype == np.int64
+    assert load_mesh(str(path)).faces.shape == (3, 3)
 
 
 @pytest.mark.parametrize(

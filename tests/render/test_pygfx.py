@@ -91,7 +91,7 @@ class Body(NamedTuple):
 
 def body(mesh: sm.Mesh, to_world: np.ndarray, *, cast: bool) -> Body:
     v = np.asarray(mesh.vertices, dtype=float) @ to_world[:3, :3].T + to_world[:3, 3]
-    return Body(v, np.asarray(mesh.triangles), cast)
+    return Body(v, np.asarray(mesh.faces), cast)
 
 
 class Scene(NamedTuple):

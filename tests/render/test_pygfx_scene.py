@@ -95,7 +95,7 @@ def build(gfx: Any) -> tuple[Any, dict[str, Any], dict[str, Any], Any]:  # noqa:
     scene, group = gfx.Scene(), gfx.Group()
     meshes = {}
     for name, part in PARTS.items():
-        corners = part.mesh.vertices[part.mesh.triangles]  # one face normal per triangle
+        corners = part.mesh.vertices[part.mesh.faces]  # one face normal per triangle
         n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         n /= np.linalg.norm(n, axis=1, keepdims=True)
         geometry = gfx.Geometry(
@@ -151,7 +151,7 @@ def truth_scene(t: float, kind: str) -> Scene:
     bodies = []
     for name, part in PARTS.items():
         v = part.mesh.vertices @ m[name][:3, :3].T + m[name][:3, 3]
-        bodies.append(Body(v, part.mesh.triangles, part.cast))
+        bodies.append(Body(v, part.mesh.faces, part.cast))
     eye, target = (3.0, -6.5, 6.0), (0.0, 0.0, 0.5)
     if kind == "directional":  # toward the light: from the target (the origin) to the sun
         return Scene(bodies, kind, at.sun, np.zeros(3), 0.0, eye, target)
@@ -220,7 +220,7 @@ def test_gather_scene_places_every_mesh_and_instance(gfx):  # noqa: F811 (the fi
     quad = grid((1.0, 1.0))
     instanced = gfx.InstancedMesh(
         gfx.Geometry(
-            positions=quad.vertices.astype(np.float32), indices=quad.triangles.astype(np.int32)
+            positions=quad.vertices.astype(np.float32), indices=quad.faces.astype(np.int32)
         ),
         gfx.MeshBasicMaterial(),
         2,
@@ -238,7 +238,7 @@ def test_gather_scene_places_every_mesh_and_instance(gfx):  # noqa: F811 (the fi
     surfaces = gather_scene(scene)
 
     def corners(mesh: sm.Mesh, matrix: np.ndarray) -> np.ndarray:
-        return (mesh.vertices @ matrix[:3, :3].T + matrix[:3, 3])[mesh.triangles]
+        return (mesh.vertices @ matrix[:3, :3].T + matrix[:3, 3])[mesh.faces]
 
     casters = [corners(PARTS[n].mesh, m[n]) for n in ("box", "post", "torus")]  # scene order
     casters += [corners(quad, m["post"]), corners(quad, m["post"] @ shift)]

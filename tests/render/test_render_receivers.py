@@ -39,7 +39,7 @@ def _bumpy() -> Body:
     v = flat.vertices.copy()
     x, y = v[:, 0], v[:, 1]
     v[:, 2] = 0.3 * np.sin(1.7 * x) * np.cos(1.3 * y) + 0.1 * np.sin(3.1 * y + 0.5)
-    return Body(v, flat.triangles)
+    return Body(v, flat.faces)
 
 
 LIGHT = Light((1.0, -0.5, 7.0))

@@ -55,7 +55,7 @@ def _case_masks(gl, seed: int):
         setup = fit_shadow(
             light, mesh.vertices, size, blocker_to_world=placement, border_texels=border
         )
-        mask = render_shadow_map(mesh.vertices, mesh.triangles, setup.blocker_to_clip, size, ctx=gl)
+        mask = render_shadow_map(mesh.vertices, mesh.faces, setup.blocker_to_clip, size, ctx=gl)
         yield size, border, mask
 
 
@@ -89,7 +89,7 @@ def test_margin_is_what_keeps_the_border_empty(gl):
     for _ in range(20):
         mesh, placement, light = _random_case(rng)
         setup = fit_shadow(light, mesh.vertices, 32, blocker_to_world=placement, margin=1.0)
-        mask = render_shadow_map(mesh.vertices, mesh.triangles, setup.blocker_to_clip, 32, ctx=gl)
+        mask = render_shadow_map(mesh.vertices, mesh.faces, setup.blocker_to_clip, 32, ctx=gl)
         edge = mask[0].max() + mask[-1].max() + mask[:, 0].max() + mask[:, -1].max()
         touched += edge > 0
     assert touched >= 15
