@@ -51,6 +51,7 @@ from . import _compiled
 from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
 from ._shadow_setup import ShadowSetup
 from ._spec import FitKey, ShadowMapSpec, api_rows, spec_from_options
+from ._spot_select import spot_selection
 
 __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
@@ -209,9 +210,10 @@ def fit_shadow(
     else:
         named = {"light": light[0] if isinstance(light, PointLight | DirectionalLight) else light}
     kind, r_name, r_array = _receiver_kind(receivers)
+    c_kind, c_name, c_array = _receiver_kind(blocker_vertices, "blocker_vertices")
     ctx, (*parts, verts, B, n, f, R, U) = convert(
         **named,
-        blocker_vertices=blocker_vertices,
+        **{c_name: c_array},
         blocker_to_world=blocker_to_world,
         near=near,
         far=far,
@@ -229,11 +231,27 @@ def fit_shadow(
             else None
         )
         directional, L = _light_kind(ctx, typed, parts[0])
+    casters = verts
+    if c_kind != "points":
+        casters = caster_triangles(ctx, c_kind, verts, blocker_vertices, "blocker_vertices")
+        verts = ctx.xp.reshape(casters, (*casters.shape[:-3], -1, 3))
     a = Inputs(L, verts, B, R, U, n, f)
     shape = _check_shapes(a)
     given = (B is not None, R is not None, U is not None, n is not None, f is not None)
     key = _fit_key(directional, spot, aim == "bbox", spec, (*given, kind != "points"))
     _check_static(key, method, spec)
+    if spot:
+        selection = spot_selection(ctx, L, U, B, casters, c_kind != "points")
+        a, used = a._replace(verts=selection.points), selection.kept
+    else:
+        used = casters.shape[-3 if c_kind != "points" else -2]
+    xp = ctx.xp
+    used = xp.broadcast_to(xp.asarray(used), shape)
+    return _fit(ctx, a, shape, key, method)._replace(casters_used=used)
+
+
+def _fit(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey, method: str) -> ShadowSetup:
+    """The fit of trusted, shape-checked inputs by the driver that suits them."""
     if method == "optimized":
         return _optimized(ctx, a, key.margins)
     if ctx.is_jax and not ctx.lazy:
@@ -453,6 +471,22 @@ def _mesh_corners(ctx: Context, vertices: Array, faces: Any, name: str = "receiv
     if ctx.is_jax:  # a traced index out of range fills NaN instead of clamping silently
         return xp.take(vertices, F, axis=-2, mode="fill", fill_value=xp.nan)
     return xp.take(vertices, F, axis=-2)
+
+
+def caster_triangles(ctx: Context, kind: str, C: Array, casters: Any, name: str) -> Array:
+    """Casters given as surfaces (``kind`` "triangles" or "mesh") as their triangles
+    ``(*batch, M, 3, 3)``, shape-checked."""
+    if kind == "triangles":
+        if C.ndim < 3 or tuple(C.shape[-2:]) != (3, 3):
+            hint = "sm.Triangles holds M triangles of three corners (x, y, z)"
+            raise shape_error(name, "(*batch, M, 3, 3)", tuple(C.shape), hint)
+        T = C
+    else:
+        require_vertices(f"{name}.vertices", C)
+        T = _mesh_corners(ctx, C, casters.faces, name=name)
+    if T.shape[-3] == 0:
+        raise ValueError(f"{name}: no caster triangles (M = 0); a shadow needs casters")
+    return T
 
 
 def _check_static(key: FitKey, method: str, spec: ShadowMapSpec) -> None:
