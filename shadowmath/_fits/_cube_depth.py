@@ -228,4 +228,3 @@ def cube_depth_range(
     checks.require(ok, f"casters: {AT_LIGHT}")
     near, far = xp.broadcast_to(near, shape), xp.broadcast_to(far, shape)
     return CubeDepthRange(checks.poison(near, 0), checks.poison(far, 0))
-
