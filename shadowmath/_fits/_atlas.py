@@ -563,17 +563,25 @@ def fit_atlas(
         pcf_radius, pcf_filter: the kernel the atlas is sampled with: refused when a
             light's border is narrower than :func:`pcf_border_texels` of it.
 
+    A spot light's tiles use the casters that reach into its cone's square pyramid
+    (:func:`fit_shadow`'s selection): shared casters given as :class:`Triangles` or a
+    :class:`Mesh` are clipped exactly to each spot's pyramid; a spot with nothing left
+    gets the empty fit.
+
     Returns:
         :class:`AtlasFit`, one entry per tile of ``atlas`` (lights without a tile have
-        none). NumPy input gives NumPy arrays; concrete JAX arrays (not under ``jit``:
-        the atlas is host data) run the array driver and give JAX arrays.
+        none), with ``light_errors`` per light. NumPy input gives NumPy arrays;
+        concrete JAX arrays (not under ``jit``: the atlas is host data) run the array
+        driver and give JAX arrays.
 
     Raises:
-        ValueError: what :func:`fit_shadow` raises for a light (the message names it:
-            ``lights[i]``), a light list of the wrong length or kind, a cube tile for a
-            spot or directional light, a caster at a cube light's position, non-finite
-            casters or receivers, wrong shapes, an ``atlas`` that is not a
-            :class:`ShadowAtlas`, an unknown ``api``, a kernel wider than a border.
+        ValueError: what is wrong for the whole call: a light list of the wrong length
+            or kind, a cube tile for a spot or directional light, non-finite casters or
+            receivers, wrong shapes, an ``atlas`` that is not a :class:`ShadowAtlas`, an
+            unknown ``api``, a kernel wider than a border. What one light's geometry
+            makes unfittable (what :func:`fit_shadow` would raise for it, a caster at a
+            cube light's position) is not raised: it is reported in
+            :attr:`AtlasFit.light_errors`, and every other light is fitted.
 
     Example:
         >>> import numpy as np, shadowmath as sm

@@ -97,7 +97,9 @@ def fit_shadow(
             A batch mixing both kinds is refused (split it by ``w == 0``), and so is
             a homogeneous light under a JAX transformation (pass a typed light).
         blocker_vertices: ``(*batch, N, 3)`` in the blocker's local coordinates
-            (world coordinates when ``blocker_to_world`` is None).
+            (world coordinates when ``blocker_to_world`` is None), or the blocker's
+            surfaces: :class:`Triangles` ``(*batch, M, 3, 3)`` or a :class:`Mesh` (their
+            corners, for a point or directional light).
         map_size: ``size`` or ``(width, height)`` of the shadow map in texels, or a
             :class:`ShadowMapSpec` holding it with the options below (then give
             none of them as keywords).
@@ -163,6 +165,22 @@ def fit_shadow(
     so every vertex lies within the margins, some vertex on each of the four
     (``blocker_to_clip`` is affine: last row ``(0, 0, 0, 1)``).
 
+    Spot lights select their casters first (:mod:`shadowmath._math._spot_casters`): a
+    receiver point inside the cone is shadowed only by geometry on its segment to the
+    light, inside the cone, so what lies outside the cone's square pyramid
+    ``|x|, |y| <= t z`` (``t = tan(angle)``, in the fit's frame) is dropped. Triangles
+    (:class:`Triangles`, :class:`Mesh`) are clipped exactly to the pyramid (a triangle
+    crossing the light's plane counts by its part in front; with a placement the
+    planes act on local points as ``B^T pi``); a vertex set keeps its vertices in front
+    of the light (their box clipped to the cone's square, as always) and drops those
+    behind. ``casters_used`` counts what was kept. With nothing left (every caster
+    behind the spot or outside its cone) the result is the **empty fit**: the square
+    ``|x|, |y| <= min(t, 1) z`` at the casters' largest ``|z|`` (1 if zero), a finite
+    frustum inside the pyramid that no caster enters, ``casters_used == 0``
+    (receivers still push ``far``). Draw every caster with it: the GPU clips the rest
+    (behind the light: ``w < 0``). Point lights keep every caster: their one frustum
+    aims at the casters and has no fixed "behind" (use a spot light or a cube map).
+
     Every light and option runs the same fit steps (:mod:`._fit_formulas`): in the
     compiled loop for NumPy input with the ``fast`` extra, on whole arrays otherwise.
 
@@ -172,9 +190,10 @@ def fit_shadow(
             directional light, receivers of the wrong shape or non-finite, an
             unknown ``api`` (the message lists the valid ones), an ``up`` zero or
             parallel to the light's direction, a singular ``blocker_to_world``
-            (its linear part's ``|det| <= 64 eps`` times its rows' norms), the nearest caster within
-            rounding of a point light (``z <= 32 eps`` times the coordinates'
-            magnitude), a point-light frustum wider than 170 degrees (the light too
+            (its linear part's ``|det| <= 64 eps`` times its rows' norms), the nearest
+            caster within rounding of a point or spot light (``z <= 32 eps`` times the
+            coordinates' magnitude; for a point light also a caster behind it), a
+            point-light frustum wider than 170 degrees (the light too
             close to the blocker: use a cube map or a spot cone) (value errors are
             NaN outputs under JAX transformations); and, whatever the values:
             ``stable=True`` for a point light without ``up``, ``near``/``far`` for a
