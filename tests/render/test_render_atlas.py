@@ -73,7 +73,7 @@ def render(gl: Any, **kwargs: Any) -> Any:
     return render_atlas(BODIES, LIGHTS, VIEW, PROJECTION, image_size=SIZE, ctx=gl, **kwargs)
 
 
-def truth(frame: Any, light: Any) -> Truth:
+def truth(frame: Any, light: Any, bodies: Any = BODIES, casts: Any = CASTS) -> Truth:
     """The ray caster's shadow of one light on the frame's visible points: the light reaches
     a point on a face turned toward it (inside a spot's cone), and a caster blocks the
     segment to it (the ray toward a sun)."""
@@ -92,8 +92,8 @@ def truth(frame: Any, light: Any) -> Truth:
         reach &= -(toward @ axis) >= np.cos(float(light.angle)) * np.linalg.norm(toward, axis=1)
     blocked = np.zeros(len(p), dtype=bool)
     lit = np.flatnonzero(reach)
-    for body, casts in zip(BODIES, CASTS, strict=True):
-        if casts:
+    for body, cast in zip(bodies, casts, strict=True):
+        if cast:
             blocked[lit] |= segment_hits_triangles(p[lit] + LIFT * n[lit], target,
                                                    *world_mesh(body))  # fmt: skip
     shadow = np.zeros(on.shape, dtype=bool)
