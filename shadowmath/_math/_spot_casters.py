@@ -171,7 +171,17 @@ def _weights(xp: ModuleType, g: Array) -> tuple[Array, Array]:
 def clip_triangles(
     xp: ModuleType, planes: Array, corners: Array, square: Array, eps: float
 ) -> Selection:
-    """Triangles ``(*batch, M, 3, 3)`` clipped by the planes: ``19 M + 4`` points (module)."""
+    """Triangles ``(*batch, M, 3, 3)`` clipped by the planes: ``19 M + 4`` points (module).
+
+    Example:
+        >>> import numpy as np
+        >>> axes = np.eye(3)  # the light at the origin looking down +Z, t = 1
+        >>> planes = pyramid_planes(np, np.zeros(3), axes, np.array(1.0))
+        >>> tri = np.array([[[0.0, 1.0, -1.0], [0.5, 1.0, 3.0], [-0.5, 1.0, 3.0]]])  # y = 1
+        >>> s = clip_triangles(np, planes, tri, np.zeros((4, 3)), 2.0**-52)
+        >>> int(s.kept), float(s.points[:, 2].min()), float(s.points[:, 2].max())  # y <= z
+        (1, 1.0, 3.0)
+    """
     g = plane_values(xp, planes[..., None, :4, :], corners)  # (*batch, M, 3, 4)
     w, exists = _weights(xp, g)
     points = xp.matmul(w, corners)  # (*batch, M, 19, 3)
