@@ -298,3 +298,16 @@ def test_fit_atlas_reports_on_every_path(path: str) -> None:
     assert fit.light_errors[1] is None
     assert fit.light_errors[0] is not None and "not strictly in front" in fit.light_errors[0]
     assert np.isfinite(fit.world_to_clip).all()
+
+
+def test_a_non_finite_frame_drops_nothing_so_the_fit_names_the_cause() -> None:
+    spot = sm.SpotLight(np.zeros(3), -AXIS, np.array(0.3))  # every caster behind it
+    for casters in (BOX, sm.Triangles(BOX[:6].reshape(2, 3, 3))):
+        with pytest.raises(ValueError, match=r"^up: contains non-finite"):
+            sm.fit_shadow(spot, casters, 64, up=np.array([np.nan, 1.0, 0.0]))
+        with pytest.raises(ValueError, match=r"^light: contains non-finite"):
+            sm.fit_shadow(spot._replace(position=np.array([0.0, np.inf, 0.0])), casters, 64)
+        B = np.eye(4)
+        B[0, 3] = np.nan
+        with pytest.raises(ValueError, match=r"^blocker_to_world: contains non-finite"):
+            sm.fit_shadow(spot, casters, 64, blocker_to_world=B)

@@ -45,7 +45,8 @@ the corners of a square ``|x|, |y| <= s z0`` at depth ``z0`` (:func:`empty_squar
 and every slot takes the first of them: an empty fit, a frustum inside the pyramid
 with no caster in it. Under ``jit`` and ``vmap`` the shapes depend on ``M`` only, and
 gradients flow through the kept candidates. A non-finite candidate is kept (never
-silently dropped), so the fit's own checks report it.
+silently dropped), and so is every caster (a triangle's corners) where the planes are
+not finite (a non-finite light, ``up`` or placement), so the fit's own checks report it.
 """
 
 from __future__ import annotations
@@ -130,7 +131,14 @@ def select_points(
     """Points ``(*batch, N, 3)`` selected by :func:`points_kept` (non-finite ones kept),
     the others replaced; ``square`` ``(*batch, 4, 3)`` for an empty entry."""
     keep = points_kept(xp, planes, points, eps) | ~xp.all(xp.isfinite(points), axis=-1)
+    keep = keep | ~_finite_planes(xp, planes)[..., None]
     return _filled(xp, points, keep, xp.sum(keep, axis=-1), square)
+
+
+def _finite_planes(xp: ModuleType, planes: Array) -> Array:
+    """``(*batch,)`` the planes are finite: else (a non-finite light, ``up`` or placement,
+    which the fit reports) nothing is dropped, so the fit's first check names the cause."""
+    return xp.all(xp.isfinite(planes), axis=(-2, -1))
 
 
 #: The 19 candidates' sources: the corner pairs of the edges and the adjacent plane pairs.
@@ -189,6 +197,9 @@ def clip_triangles(
     tau = _tolerance(xp, g, (-2, -1), eps)[..., None, None]
     inside = exists & xp.all(values >= -tau, axis=-1)
     keep = inside | ~xp.all(xp.isfinite(points), axis=-1)
+    corner = xp.arange(19) < 3  # the corners themselves (exact, whatever the planes)
+    finite = _finite_planes(xp, planes)[..., None, None]
+    keep = xp.where(finite, keep, corner)
     kept = xp.sum(xp.any(keep, axis=-1), axis=-1)
     flat = xp.reshape(points, (*points.shape[:-3], -1, 3))
     return _filled(xp, flat, xp.reshape(keep, flat.shape[:-1]), kept, square)
