@@ -597,7 +597,6 @@ VALUE_MUTATIONS = (
     "parallel_up",
     "zero_light",
     "spot_angle",
-    "outside_cone",
     "at_light",
     "near_nonpositive",
     "near_nan",
@@ -720,28 +719,6 @@ def invalid_fit_calls(
     if kind == "spot_angle" and scene.kind == "spot":
         angle = draw(st.sampled_from([0.0, -0.3, np.pi / 2, 2.0, 3.5]))
         return bad(with_scene(angle=angle), "light: a spot light's angle is the half-angle")
-    if kind == "outside_cone" and scene.kind == "spot":
-        # Turn the axis away from the blocker until its ratios leave the cone's square in
-        # every frame about the axis: the ratios lie in a disc of centre c and radius rho,
-        # and |c| / sqrt(2) - rho > tan(angle) puts the disc beyond the square along the
-        # frame's x or y, however the frame turns.
-        aim = _unit(world.mean(axis=0) - scene.position)
-        tilt = draw(st.floats(0.3, 0.8))
-        axis = np.cos(tilt) * aim + np.sin(tilt) * _perpendicular(aim)
-        angle = draw(st.floats(1e-3, 0.1))
-        off = world - scene.position
-        x_axis = _perpendicular(axis)
-        y_axis = np.cross(axis, x_axis)
-        z = off @ axis
-        if z.min() > 0:
-            u = np.stack([off @ x_axis, off @ y_axis], axis=-1) / z[:, None]
-            c = u.mean(axis=0)
-            rho = float(np.linalg.norm(u - c, axis=-1).max())
-            if np.linalg.norm(c) / np.sqrt(2) - rho > 1.5 * np.tan(angle):
-                return bad(
-                    with_scene(direction=axis, angle=angle, covers=False),
-                    "vertices: the blocker lies outside the spot light's cone",
-                )
     if kind == "at_light" and point_like and call.placement is None and call.aim == "mean":
         # Exactly at the light (a placement's rounding would move it off; a bounding box's
         # centre would move the aim).

@@ -111,8 +111,6 @@ def test_receivers_inside_the_cone_widen_the_depth_range() -> None:
 @pytest.mark.parametrize(
     ("spot", "message"),
     [
-        (sm.SpotLight(np.zeros(3), np.array([0.0, 0.0, -1.0]), np.array(0.3)), "BEHIND"),
-        (sm.SpotLight(np.array([9.0, 0, 0]), AXIS, np.array(0.1)), "outside the spot"),
         (sm.SpotLight(np.zeros(3), np.zeros(3), np.array(0.3)), "spot light's direction"),
         (sm.SpotLight(np.zeros(3), AXIS, np.array(np.pi / 2)), "spot light's angle"),
         (sm.SpotLight(np.zeros(3), AXIS, np.array(0.0)), "spot light's angle"),
@@ -120,8 +118,7 @@ def test_receivers_inside_the_cone_widen_the_depth_range() -> None:
 )
 @pytest.mark.parametrize("path", PATHS)
 def test_bad_spots_raise_the_same_message_on_every_path(spot: Any, message: str, path: str) -> None:
-    text = "not strictly in front" if message == "BEHIND" else message
-    with PATHS[path](), pytest.raises(ValueError, match=text):
+    with PATHS[path](), pytest.raises(ValueError, match=message):
         sm.fit_shadow(spot, BOX, 64)
 
 

@@ -38,7 +38,6 @@ from shadowmath._boundary._validate import (
     convert,
     integer,
     non_finite,
-    raise_status,
     real,
     real_array,
     require_last,
@@ -54,10 +53,11 @@ from shadowmath._math._pcf import _border_texels
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 
 from . import _compiled
-from ._cube_depth import AT_LIGHT, caster_triangles, cube_depth_core
+from ._cube_depth import AT_LIGHT, cube_depth_core
 from ._fit_arrays import Inputs, driver, fit_arrays
-from ._setup import _receiver_kind, _receiver_rows
+from ._setup import _receiver_kind, _receiver_rows, caster_triangles
 from ._spec import FitKey, ShadowMapSpec, api_rows, map_spec
+from ._spot_select import spot_selection
 
 __all__ = [
     "AtlasFit",
@@ -148,6 +148,11 @@ class AtlasFit(NamedTuple):
         tile_id, tile_face: ``(T,)`` each tile's key ``(light id, face)``, the
             atlas's :attr:`ShadowAtlas.tile_id` and :attr:`ShadowAtlas.tile_face`:
             cache a tile's depths by key, not by index.
+        light_errors: ``(L,)`` per light ``None``, or the message of what was wrong with
+            its fit (what :func:`fit_shadow` would raise for it, e.g. a caster within
+            rounding of the light). Such a light's tiles get matrices that draw
+            nothing and sample lit (OpenGL clip ``z = -2 w``: before the near plane;
+            ``s = t = 1/2``) and ``near = far = 0``; every other light is fitted.
 
     Which tiles to redraw this frame: :func:`atlas_redraw` ``(fit, previous_fit)``,
     True where a tile is new, its viewport moved or resized, its ``world_to_clip``
@@ -163,6 +168,7 @@ class AtlasFit(NamedTuple):
     texture_size: tuple[int, int]
     tile_id: Ints
     tile_face: Ints
+    light_errors: tuple[str | None, ...] = ()
 
 
 # ------------------------------------------------------------------ allocation
@@ -606,18 +612,26 @@ def fit_atlas(
             given, at most every light's border; no ``margin``, no ``stable``). As in
             :func:`fit_shadow`, an option given both in it and as a keyword is refused.
 
+    A spot light's tiles use the casters that reach into its cone's square pyramid
+    (:func:`fit_shadow`'s selection): shared casters given as :class:`Triangles` or a
+    :class:`Mesh` are clipped exactly to each spot's pyramid; a spot with nothing left
+    gets the empty fit.
+
     Returns:
         :class:`AtlasFit`, one entry per tile of ``atlas`` (lights without a tile have
-        none). NumPy input gives NumPy arrays; concrete JAX arrays (not under ``jit``:
-        the atlas is host data) run the array driver and give JAX arrays.
+        none), with ``light_errors`` per light. NumPy input gives NumPy arrays;
+        concrete JAX arrays (not under ``jit``: the atlas is host data) run the array
+        driver and give JAX arrays.
 
     Raises:
-        ValueError: what :func:`fit_shadow` raises for a light (the message names it:
-            ``lights[i]``), a light list of the wrong length or kind, a cube tile for a
-            spot or directional light, a caster at a cube light's position, non-finite
-            casters or receivers, wrong shapes, an ``atlas`` that is not a
-            :class:`ShadowAtlas`, an unknown ``api``, a kernel wider than a border, a
-            ``spec`` that does not describe the atlas or beside conflicting keywords.
+        ValueError: what is wrong for the whole call: a light list of the wrong length
+            or kind, a cube tile for a spot or directional light, non-finite casters or
+            receivers, wrong shapes, an ``atlas`` that is not a :class:`ShadowAtlas`, an
+            unknown ``api``, a kernel wider than a border, a ``spec`` that does not
+            describe the atlas or beside conflicting keywords. What one light's geometry
+            makes unfittable (what :func:`fit_shadow` would raise for it, a caster at a
+            cube light's position) is not raised: it is reported in
+            :attr:`AtlasFit.light_errors`, and every other light is fitted.
 
     Example:
         >>> import numpy as np, shadowmath as sm
@@ -665,18 +679,20 @@ def fit_atlas(
     if bool(np.any(atlas.light_cube & (kinds != _POINT))):
         i = int(np.flatnonzero(atlas.light_cube & (kinds != _POINT))[0])
         raise ValueError(f"lights[{i}]: a cube map needs a point light (atlas cube=True)")
+    report = _Report(ctx, api, reversed_z, count)
     parts: list[tuple[Ints, Array, Array, Array, Array]] = []
-    flat = _fit_2d(ctx, atlas, kinds, data, verts, R, n, f, reversed_z, api)
+    flat = _fit_2d(ctx, atlas, kinds, data, verts, R, n, f, tris=tris, report=report)
     parts.extend(flat)
     cubes = np.flatnonzero(atlas.light_cube & (atlas.light_size > 0))
     if cubes.size:
-        parts.append(_fit_cubes(ctx, atlas, cubes, data, verts, tris, R, n, f, api, reversed_z))
+        parts.append(_fit_cubes(ctx, atlas, cubes, data, verts, tris, R, n, f, api, report))
     T = xp.asarray(_tile_transforms(atlas.tile_rect, atlas.atlas_size), dtype=ctx.dtype)
     clip, tex, lo, hi = _gather(ctx, parts, atlas.tile_light.shape[0])
+    errors = tuple(report.errors)
     return AtlasFit(
         clip, T @ tex, atlas_viewports(atlas), atlas.tile_clamp, lo, hi,
         texture_size=(atlas.atlas_size, atlas.atlas_size), tile_id=atlas.tile_id,
-        tile_face=atlas.tile_face,
+        tile_face=atlas.tile_face, light_errors=errors,
     )  # fmt: skip
 
 
@@ -699,6 +715,43 @@ def _atlas_spec(
             f"{int(borders.min())} (allocate it with border_texels={spec.border_texels})"
         )
     return spec.api, spec.reversed_z, spec.pcf_radius, spec.pcf_filter
+
+
+class _Report:
+    """Each light's error message (None: fitted), and the matrices a failed light's tiles
+    get: OpenGL clip ``N`` with rows ``0, 0, (0, 0, 0, -2), (0, 0, 0, 1)`` (every point at
+    ``z = -2 w``, before the near plane: clipped, and sampled lit), then ``C N`` and
+    ``T C N`` in the API's conventions."""
+
+    def __init__(self, ctx: Context, api: str, reversed_z: bool, count: int) -> None:
+        N = np.zeros((4, 4))
+        N[2, 3], N[3, 3] = -2.0, 1.0
+        C, TC = (np.array(r).reshape(4, 4) for r in api_rows(api, bool(reversed_z)))
+        self.clip, self.tex = (ctx.xp.asarray(m, dtype=ctx.dtype) for m in (C @ N, TC @ N))
+        self.api = api_rows(api, bool(reversed_z))
+        self.reversed_z = reversed_z
+        self.errors: list[str | None] = [None] * count
+
+    def fail(self, light: int, message: str) -> None:
+        if self.errors[light] is None:
+            self.errors[light] = message
+
+    def replace(
+        self, ctx: Context, failed: Any, values: tuple[Array, Array, Array, Array]
+    ) -> tuple[Array, ...]:
+        """``(clip, tex, near, far)`` with the ``failed`` ``(K,)`` entries replaced."""
+        if not bool(np.any(failed)):
+            return values
+        xp = ctx.xp
+        bad = xp.asarray(failed)
+        clip, tex, lo, hi = values
+        zero = xp.zeros_like(lo)
+        return (
+            xp.where(bad[:, None, None], self.clip, clip),
+            xp.where(bad[:, None, None], self.tex, tex),
+            xp.where(bad, zero, lo),
+            xp.where(bad, zero, hi),
+        )
 
 
 def _gather(ctx: Context, parts: list[Any], total: int) -> tuple[Array, ...]:
@@ -815,12 +868,14 @@ def _check_arrays(
 
 def _fit_2d(
     ctx: Context, atlas: ShadowAtlas, kinds: Ints, data: Array, verts: Array, R: Array | None,
-    n: Array | None, f: Array | None, reversed_z: bool, api: str,
+    n: Array | None, f: Array | None, *, tris: Array | None, report: _Report,
 ) -> list[tuple[Ints, Array, Array, Array, Array]]:  # fmt: skip
     """One fit per group of 2D lights of one (kind, size, border).
 
     The lights are sorted by group, so each group is a slice; the compiled loop of each
-    group writes straight into its slice of one output block.
+    group writes straight into its slice of one output block. A spot group's casters are
+    selected per light first (:func:`spot_selection`: triangles clipped to each cone's
+    square pyramid). A light whose fit fails is reported and gets ``report``'s matrices.
     """
     lights = np.flatnonzero((~atlas.light_cube) & (atlas.light_size > 0))
     if lights.size == 0:
@@ -830,7 +885,7 @@ def _fit_2d(
     lights, code = lights[order], code[order]
     starts = [0, *(np.flatnonzero(code[1:] != code[:-1]) + 1).tolist()]
     ends = [*starts[1:], lights.size]
-    rows = api_rows(api, bool(reversed_z))
+    rows = report.api
     light_rows = data[lights]
     positions = light_rows[:, :3] if ctx.is_jax else np.ascontiguousarray(light_rows[:, :3])
     per_light = verts[lights] if verts.ndim == 3 else None
@@ -845,18 +900,21 @@ def _fit_2d(
         given = (not sun and n is not None, not sun and f is not None)
         key = _group_key(kind, size, border, rows, _receiver_flags(R), given)
         part = slice(start, end)
+        group = verts if per_light is None else per_light[part]
+        if kind == _SPOT:
+            casters = group if tris is None else tris if tris.ndim == 3 else tris[lights[part]]
+            selected = spot_selection(ctx, light_rows[part], None, None, casters, tris is not None)
+            group = selected.points
         a = Inputs(
-            light_rows[part] if kind == _SPOT else positions[part],
-            verts if per_light is None else per_light[part], None, R, None,
+            light_rows[part] if kind == _SPOT else positions[part], group, None, R, None,
             None if near_all is None or sun else near_all[part],
             None if far_all is None or sun else far_all[part],
         )  # fmt: skip
         if block is not None:
-            block.run(key, a, part, lights)
+            block.run(key, a, part, lights, report)
         else:
-            out.append(
-                (atlas.light_tiles[lights[part], 0], *_run_arrays(ctx, key, a, lights[part]))
-            )
+            values = _run_arrays(ctx, key, a, lights[part], report)
+            out.append((atlas.light_tiles[lights[part], 0], *values))
     if block is not None:
         mats, frusta = block.mats, block.out
         return [
@@ -874,19 +932,21 @@ class _Block:
         self.mats = np.empty((count, 4, 4, 4), dtype=ctx.dtype)
         self.status = np.empty(count, dtype=np.int32)
 
-    def run(self, key: FitKey, a: Inputs, part: slice, lights: Ints) -> None:
+    def run(self, key: FitKey, a: Inputs, part: slice, lights: Ints, report: _Report) -> None:
         count = part.stop - part.start
         status = self.status[part]
         operands = _compiled.operands((count,), a, count == 1)
         options = _compiled.options(key, self.ctx.dtype)
         _kernels.loops().fit_loop(*operands, options, self.out[part], self.mats[part], status)
-        if status.any():
-            errors = status & ~WIDE_WARNING
-            if errors.any():
-                i = int(np.flatnonzero(errors)[0])
-                _raise_for(
-                    int(lights[part][i]), errors[i : i + 1], bool(np.isfinite(a.verts).all())
-                )
+        errors = status & ~WIDE_WARNING
+        if errors.any():
+            messages = fit_messages(bool(np.isfinite(a.verts).all()))
+            for i in np.flatnonzero(errors).tolist():
+                report.fail(int(lights[part][i]), next(m for b, m in messages if errors[i] & b))
+            failed = errors != 0
+            mats, out = self.mats[part], self.out[part]
+            mats[failed, 1], mats[failed, 2] = report.clip, report.tex
+            out[failed, 14:16] = 0.0
 
 
 def _pick(ctx: Context, v: Array, idx: Ints) -> Array:
@@ -908,23 +968,28 @@ def _group_key(
                   False, receivers[0], False, *given, triangles=receivers[1])  # fmt: skip
 
 
-def _run_arrays(ctx: Context, key: FitKey, a: Inputs, idx: Ints) -> tuple[Array, ...]:
+def _run_arrays(
+    ctx: Context, key: FitKey, a: Inputs, idx: Ints, report: _Report
+) -> tuple[Array, ...]:
     """``world_to_clip``, the tile's ``world_to_texture``, near and far of one group, on
     whole arrays (JAX, or NumPy without the compiled loops)."""
     count = idx.size
     if ctx.xp is np and count <= _SCALAR_GROUP:
-        return _run_scalars(ctx, key, a, idx)
-    checks = Checks(ctx)
-    try:
-        with np.errstate(all="ignore"):
-            e = fit_arrays(ctx, checks, key, a, driver(ctx, scalar=False))
-    except ValueError as err:
-        raise ValueError(f"lights{idx.tolist()}: {err}") from None
+        return _run_scalars(ctx, key, a, idx, report)
+    checks = Checks(ctx, mode="record")
+    with np.errstate(all="ignore"):
+        e = fit_arrays(ctx, checks, key, a, driver(ctx, scalar=False))
     xp = ctx.xp
     clip, tex = (stack_matrix(xp, tuple(xp.broadcast_to(v, (count,)) for v in m))
                  for m in (e.clip, e.tex))  # fmt: skip
     lo, hi = (xp.broadcast_to(v, (count,)) for v in (e.box[2], e.box[3]))
-    return clip, tex, lo, hi
+    failed = np.zeros(count, dtype=bool)
+    for message, bad in checks.recorded:  # in report order: the first failure is kept
+        bad_np = np.broadcast_to(np.asarray(bad), (count,))
+        for i in np.flatnonzero(bad_np).tolist():
+            report.fail(int(idx[i]), message)
+        failed |= bad_np
+    return report.replace(ctx, failed, (clip, tex, lo, hi))
 
 
 #: NumPy without the compiled loops fits groups of at most this many lights one light at a
@@ -933,7 +998,9 @@ def _run_arrays(ctx: Context, key: FitKey, a: Inputs, idx: Ints) -> tuple[Array,
 _SCALAR_GROUP = 8
 
 
-def _run_scalars(ctx: Context, key: FitKey, a: Inputs, idx: Ints) -> tuple[Array, ...]:
+def _run_scalars(
+    ctx: Context, key: FitKey, a: Inputs, idx: Ints, report: _Report
+) -> tuple[Array, ...]:
     """:func:`_run_arrays` one light at a time with the per-entry steps on Python floats."""
     d = driver(ctx, scalar=True)
     mats, depth = [], []
@@ -946,7 +1013,10 @@ def _run_scalars(ctx: Context, key: FitKey, a: Inputs, idx: Ints) -> tuple[Array
             with np.errstate(all="ignore"):
                 e = fit_arrays(ctx, Checks(ctx), key, one, d)
         except ValueError as err:
-            raise ValueError(f"lights[{light}]: {err}") from None
+            report.fail(light, str(err))
+            mats.append((*report.clip.reshape(16).tolist(), *report.tex.reshape(16).tolist()))
+            depth.append((0.0, 0.0))
+            continue
         mats.append((*e.clip, *e.tex))
         depth.append((e.box[2], e.box[3]))
     m = np.array(mats, dtype=ctx.dtype).reshape(-1, 2, 4, 4)
@@ -954,48 +1024,47 @@ def _run_scalars(ctx: Context, key: FitKey, a: Inputs, idx: Ints) -> tuple[Array
     return m[:, 0], m[:, 1], z[:, 0], z[:, 1]
 
 
-def _raise_for(light: int, status: Array, finite: bool) -> None:
-    try:
-        raise_status(status, fit_messages(finite))
-    except ValueError as err:
-        raise ValueError(f"lights[{light}]: {err}") from None
-
-
 def _fit_cubes(
     ctx: Context, atlas: ShadowAtlas, cubes: Ints, data: Array, verts: Array,
     tris: Array | None, R: Array | None, n: Array | None, f: Array | None, api: str,
-    reversed_z: bool,
+    report: _Report,
 ) -> tuple[Ints, Array, Array, Array, Array]:  # fmt: skip
-    """The six faces of every cube light at once: ``(tiles, clip, texture, near, far)``."""
+    """The six faces of every cube light at once: ``(tiles, clip, texture, near, far)``;
+    a light with a non-finite position, a caster at it or a bad depth range is reported."""
     xp = ctx.xp
-    P = data[cubes, :3]
-    if not bool(xp.all(xp.isfinite(P))):
-        bad = int(cubes[np.flatnonzero(~np.isfinite(np.asarray(P)).all(axis=1))[0]])
-        raise ValueError(f"lights[{bad}]: {non_finite('light')}")
+    finite = np.asarray(xp.all(xp.isfinite(data[cubes, :3]), axis=1))
+    P = xp.where(xp.asarray(finite)[:, None], data[cubes, :3], 0.0)
     size = atlas.light_size[cubes].astype(np.float64)
     k = xp.asarray((size - 2 * atlas.light_border[cubes]) / size, dtype=ctx.dtype)
     VT = xp.matrix_transpose(verts[None] if verts.ndim == 2 else verts[cubes])
     corners = None if R is None else xp.reshape(R, (-1, 3))[None]
     T = None if tris is None else (tris[None] if tris.ndim == 3 else tris[cubes])
-    near, far, ok = cube_depth_core(xp, P, VT, corners, k, ctx.eps, T)
-    if not bool(np.asarray(ok).all()):
-        bad = int(cubes[np.flatnonzero(~np.asarray(ok))[0]])
-        raise ValueError(f"lights[{bad}]: {AT_LIGHT}, or give near=")
+    near, far, clear = cube_depth_core(xp, P, VT, corners, k, ctx.eps, T)
     lo = near if n is None else _pick(ctx, n, cubes)
     hi = far if f is None else _pick(ctx, f, cubes)
-    ok = np.asarray(xp.isfinite(lo) & xp.isfinite(hi) & (lo > 0) & (hi > lo))
-    if not ok.all():
-        bad = int(cubes[np.flatnonzero(~ok)[0]])
-        raise ValueError(f"lights[{bad}]: near and far must be finite with 0 < near < far")
+    ranged = np.asarray(xp.isfinite(lo) & xp.isfinite(hi) & (lo > 0) & (hi > lo))
+    failed = ~(finite & np.asarray(clear) & ranged)
+    for i in np.flatnonzero(failed).tolist():
+        report.fail(int(cubes[i]), _cube_message(finite[i], bool(np.asarray(clear)[i])))
+    bad = xp.asarray(failed)
+    lo, hi = xp.where(bad, 1.0, lo), xp.where(bad, 2.0, hi)  # safe: replaced below
     zero_to_one, flip_y = _APIS[api]
-    a, b = _depth_row(lo, hi, zero_to_one, bool(reversed_z))
+    a, b = _depth_row(lo, hi, zero_to_one, bool(report.reversed_z))
     Pm = _face_projections(xp, k, -k if flip_y else k, a, b)
     clip = Pm[:, None] @ _cube_face_views(xp, P)  # (C, 6, 4, 4)
-    T = ctx.constant(_texture_from_clip(api, bool(reversed_z)))
+    T = ctx.constant(_texture_from_clip(api, bool(report.reversed_z)))
     tex = T @ clip
     tile = atlas.light_tiles[cubes].reshape(-1)
-    lo, hi = xp.repeat(lo, 6), xp.repeat(hi, 6)
-    return tile, clip.reshape(-1, 4, 4), tex.reshape(-1, 4, 4), lo, hi
+    values = (clip.reshape(-1, 4, 4), tex.reshape(-1, 4, 4), xp.repeat(lo, 6), xp.repeat(hi, 6))
+    return (tile, *report.replace(ctx, np.repeat(failed, 6), values))
+
+
+def _cube_message(finite: bool, clear: bool) -> str:
+    if not finite:
+        return non_finite("light")
+    if not clear:
+        return f"{AT_LIGHT}, or give near="
+    return "near and far must be finite with 0 < near < far"
 
 
 def _face_projections(xp: Any, kx: Array, ky: Array, a: Array, b: Array) -> Array:

@@ -14,7 +14,6 @@ from typing import Any, NamedTuple
 from shadowmath._boundary._validate import (
     Array,
     Checks,
-    Context,
     batch_shape,
     convert,
     integer,
@@ -22,12 +21,11 @@ from shadowmath._boundary._validate import (
     require_last,
     require_no_new_batch,
     require_vertices,
-    shape_error,
 )
 from shadowmath._math._cube import face_scale
 from shadowmath._math._frustum import NEAR_FAR_SLACK
 
-from ._setup import _mesh_corners, _receiver_kind, _receiver_rows
+from ._setup import _receiver_kind, _receiver_rows, caster_triangles
 
 
 class CubeDepthRange(NamedTuple):
@@ -234,19 +232,3 @@ def cube_depth_range(
     checks.require(ok, f"casters: {AT_LIGHT}")
     near, far = xp.broadcast_to(near, shape), xp.broadcast_to(far, shape)
     return CubeDepthRange(checks.poison(near, 0), checks.poison(far, 0))
-
-
-def caster_triangles(ctx: Context, kind: str, C: Array, casters: Any, name: str) -> Array:
-    """Casters given as surfaces (``kind`` "triangles" or "mesh") as their triangles
-    ``(*batch, M, 3, 3)``, shape-checked."""
-    if kind == "triangles":
-        if C.ndim < 3 or tuple(C.shape[-2:]) != (3, 3):
-            hint = "sm.Triangles holds M triangles of three corners (x, y, z)"
-            raise shape_error(name, "(*batch, M, 3, 3)", tuple(C.shape), hint)
-        T = C
-    else:
-        require_vertices(f"{name}.vertices", C)
-        T = _mesh_corners(ctx, C, casters.faces, name=name)
-    if T.shape[-3] == 0:
-        raise ValueError(f"{name}: no caster triangles (M = 0); a shadow needs casters")
-    return T

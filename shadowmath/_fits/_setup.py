@@ -52,6 +52,7 @@ from . import _compiled
 from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
 from ._shadow_setup import ShadowSetup
 from ._spec import FitKey, ShadowMapSpec, api_rows, map_spec
+from ._spot_select import spot_selection
 
 __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
@@ -97,7 +98,9 @@ def fit_shadow(
             A batch mixing both kinds is refused (split it by ``w == 0``), and so is
             a homogeneous light under a JAX transformation (pass a typed light).
         blocker_vertices: ``(*batch, N, 3)`` in the blocker's local coordinates
-            (world coordinates when ``blocker_to_world`` is None).
+            (world coordinates when ``blocker_to_world`` is None), or the blocker's
+            surfaces: :class:`Triangles` ``(*batch, M, 3, 3)`` or a :class:`Mesh` (their
+            corners, for a point or directional light).
         map_size: ``size`` or ``(width, height)`` of the shadow map in texels, or a
             :class:`ShadowMapSpec` holding it with the options below (then give
             none of them as keywords).
@@ -167,6 +170,22 @@ def fit_shadow(
     so every vertex lies within the margins, some vertex on each of the four
     (``blocker_to_clip`` is affine: last row ``(0, 0, 0, 1)``).
 
+    Spot lights select their casters first (:mod:`shadowmath._math._spot_casters`): a
+    receiver point inside the cone is shadowed only by geometry on its segment to the
+    light, inside the cone, so what lies outside the cone's square pyramid
+    ``|x|, |y| <= t z`` (``t = tan(angle)``, in the fit's frame) is dropped. Triangles
+    (:class:`Triangles`, :class:`Mesh`) are clipped exactly to the pyramid (a triangle
+    crossing the light's plane counts by its part in front; with a placement the
+    planes act on local points as ``B^T pi``); a vertex set keeps its vertices in front
+    of the light (their box clipped to the cone's square, as always) and drops those
+    behind. ``casters_used`` counts what was kept. With nothing left (every caster
+    behind the spot or outside its cone) the result is the **empty fit**: the square
+    ``|x|, |y| <= min(t, 1) z`` at the casters' largest ``|z|`` (1 if zero), a finite
+    frustum inside the pyramid that no caster enters, ``casters_used == 0``
+    (receivers still push ``far``). Draw every caster with it: the GPU clips the rest
+    (behind the light: ``w < 0``). Point lights keep every caster: their one frustum
+    aims at the casters and has no fixed "behind" (use a spot light or a cube map).
+
     Every light and option runs the same fit steps (:mod:`._fit_formulas`): in the
     compiled loop for NumPy input with the ``fast`` extra, on whole arrays otherwise.
 
@@ -177,9 +196,10 @@ def fit_shadow(
             dimensions that no other argument has, an
             unknown ``api`` (the message lists the valid ones), an ``up`` zero or
             parallel to the light's direction, a singular ``blocker_to_world``
-            (its linear part's ``|det| <= 64 eps`` times its rows' norms), the nearest caster within
-            rounding of a point light (``z <= 32 eps`` times the coordinates'
-            magnitude), a point-light frustum wider than 170 degrees (the light too
+            (its linear part's ``|det| <= 64 eps`` times its rows' norms), the nearest
+            caster within rounding of a point or spot light (``z <= 32 eps`` times the
+            coordinates' magnitude; for a point light also a caster behind it), a
+            point-light frustum wider than 170 degrees (the light too
             close to the blocker: use a cube map or a spot cone) (value errors are
             NaN outputs under JAX transformations); and, whatever the values:
             ``stable=True`` for a point light without ``up``, ``near``/``far`` for a
@@ -217,9 +237,10 @@ def fit_shadow(
     else:
         named = {"light": light[0] if isinstance(light, PointLight | DirectionalLight) else light}
     kind, r_name, r_array = _receiver_kind(receivers)
+    c_kind, c_name, c_array = _receiver_kind(blocker_vertices, "blocker_vertices")
     ctx, (*parts, verts, B, n, f, R, U) = convert(
         **named,
-        blocker_vertices=blocker_vertices,
+        **{c_name: c_array},
         blocker_to_world=blocker_to_world,
         near=near,
         far=far,
@@ -237,11 +258,27 @@ def fit_shadow(
             else None
         )
         directional, L = _light_kind(ctx, typed, parts[0])
+    casters = verts
+    if c_kind != "points":
+        casters = caster_triangles(ctx, c_kind, verts, blocker_vertices, "blocker_vertices")
+        verts = ctx.xp.reshape(casters, (*casters.shape[:-3], -1, 3))
     a = Inputs(L, verts, B, R, U, n, f)
     shape = _check_shapes(a)
     given = (B is not None, R is not None, U is not None, n is not None, f is not None)
     key = _fit_key(directional, spot, aim == "bbox", spec, (*given, kind != "points"))
     _check_static(key, method, spec)
+    if spot:
+        selection = spot_selection(ctx, L, U, B, casters, c_kind != "points")
+        a, used = a._replace(verts=selection.points), selection.kept
+    else:
+        used = casters.shape[-3 if c_kind != "points" else -2]
+    xp = ctx.xp
+    used = xp.broadcast_to(xp.asarray(used), shape)
+    return _fit(ctx, a, shape, key, method)._replace(casters_used=used)
+
+
+def _fit(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey, method: str) -> ShadowSetup:
+    """The fit of trusted, shape-checked inputs by the driver that suits them."""
     if method == "optimized":
         return _optimized(ctx, a, key.margins)
     if ctx.is_jax and not ctx.lazy:
@@ -415,6 +452,22 @@ def _mesh_corners(ctx: Context, vertices: Array, faces: Any, name: str = "receiv
     if ctx.is_jax:  # a traced index out of range fills NaN instead of clamping silently
         return xp.take(vertices, F, axis=-2, mode="fill", fill_value=xp.nan)
     return xp.take(vertices, F, axis=-2)
+
+
+def caster_triangles(ctx: Context, kind: str, C: Array, casters: Any, name: str) -> Array:
+    """Casters given as surfaces (``kind`` "triangles" or "mesh") as their triangles
+    ``(*batch, M, 3, 3)``, shape-checked."""
+    if kind == "triangles":
+        if C.ndim < 3 or tuple(C.shape[-2:]) != (3, 3):
+            hint = "sm.Triangles holds M triangles of three corners (x, y, z)"
+            raise shape_error(name, "(*batch, M, 3, 3)", tuple(C.shape), hint)
+        T = C
+    else:
+        require_vertices(f"{name}.vertices", C)
+        T = _mesh_corners(ctx, C, casters.faces, name=name)
+    if T.shape[-3] == 0:
+        raise ValueError(f"{name}: no caster triangles (M = 0); a shadow needs casters")
+    return T
 
 
 def _check_static(key: FitKey, method: str, spec: ShadowMapSpec) -> None:

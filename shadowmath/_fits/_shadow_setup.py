@@ -23,6 +23,13 @@ class ShadowSetup(NamedTuple):
             draw the shadow map with it (``gl_Position = blocker_to_clip * p_local``).
         world_to_texture: ``(*batch, 4, 4)`` the article's ``M_WorldToShadowMapST``:
             world points to ``(s q, t q, r q, q)``.
+        casters_used: ``(*batch,)`` integers, set by :func:`fit_shadow`: how many casters
+            the fit used (triangles when they were given as :class:`Triangles` or a
+            :class:`Mesh`, points otherwise). A spot light uses those that reach into its
+            cone's square pyramid (the rest cannot shadow what it lights); ``0`` marks its
+            empty fit (nothing to shadow: a frustum inside the pyramid that no caster
+            enters). Point and directional lights use every caster. ``None`` from the
+            other fits.
     """
 
     frame: LightFrame
@@ -31,6 +38,7 @@ class ShadowSetup(NamedTuple):
     blocker_to_world: Array
     blocker_to_clip: Array
     world_to_texture: Array
+    casters_used: Array | None = None
 
 
 def setup_from(

@@ -151,9 +151,8 @@ def render_atlas(
     Raises:
         ValueError: bad bodies, lights, matrices, sizes or options, no caster; and
             whatever :func:`shadowmath.allocate_atlas` and :func:`shadowmath.fit_atlas`
-            raise (among them a caster vertex behind a spot light: its fit, as
-            :func:`shadowmath.fit_shadow`'s, needs every caster in front of the light,
-            even outside the cone).
+            raise (casters behind a spot light or outside its cone are not refused:
+            each spot's fit clips the casters' triangles to its cone's square pyramid).
         GLUnavailableError: no OpenGL context could be created.
 
     Example:

@@ -1,0 +1,271 @@
+r"""The casters a spot light's map can use: clipped to its cone's bounding square pyramid.
+
+A spot light's map is clipped to the square pyramid ``|x| <= t z``, ``|y| <= t z``
+(``t = tan(angle)``) in its frame (``Z`` the cone's axis; :func:`._fit_formulas.spot_sides`).
+A receiver point ``P`` inside the cone is shadowed only by geometry on the segment
+from the light to ``P``, which lies inside the cone (a cone is convex from its
+apex), so geometry outside the pyramid never shadows a lit point: it is dropped
+here, before the fit. A triangle that crosses the pyramid's sides (or the light's
+plane) is clipped to its part inside. The renderer may still draw every caster
+with the fitted matrix: the GPU clips what lies outside the frustum (behind the
+light: ``w < 0``).
+
+The pyramid's four side planes through the apex ``L`` are
+``pi_k = (n_k, -n_k . L)`` with ``n = t Z - X, t Z + X, t Z - Y, t Z + Y``
+(:func:`pyramid_planes`), ``pi . (p, 1) >= 0`` inside. With a placement ``B``
+(``p_world = B q``) the planes act on local points as ``B^T pi``
+(``pi . (B q) = (B^T pi) . q``), so the casters stay in local coordinates.
+
+**Triangles** (:func:`clip_triangles`). The clipped polygon is convex and its
+corners are among 19 candidates per triangle, each a barycentric combination of
+its corners:
+
+* its 3 corners;
+* the 12 points where an edge ``i -> j`` crosses a plane ``k``:
+  ``s = g_i / (g_i - g_j)`` with ``g = pi_k . q``, ``0 <= s <= 1``;
+* the 4 points where a lateral edge of the pyramid (planes ``k``, ``m`` adjacent:
+  ``x = +-t z``, ``y = +-t z``) pierces the triangle: barycentric ``b_i = n_i / det``
+  by Cramer's rule on ``sum b = 1``, ``sum b g_k = sum b g_m = 0``, inside when every
+  ``n_i`` has the sign of ``det``;
+
+each valid when all four plane values are ``>= -tau`` (``tau = 64 eps`` times the sum
+of the corners' ``|g|``: a rounding of the coordinates' scale, as
+:func:`._fit_formulas.triangle_far`). A vertex of the clipped polygon is a corner
+inside, or lies on one plane (an edge crossing) or on two (a lateral edge, which
+meets the triangle's plane in one point); so the valid candidates hold every
+vertex of the polygon and lie in it. The fit needs extremes only: of the ratios
+``x / z``, ``y / z`` (each linear-fractional with ``z > 0`` on the polygon, so
+monotone along every segment) and of ``z`` (linear), which a convex polygon attains
+at its vertices.
+
+**Static shapes.** Candidates are never removed: an invalid one is replaced by the
+first valid candidate of its batch entry, which changes no maximum or minimum (the
+set of values is the same). When none is valid the entry's ``4`` spare slots hold
+the corners of a square ``|x|, |y| <= s z0`` at depth ``z0`` (:func:`empty_square`),
+and every slot takes the first of them: an empty fit, a frustum inside the pyramid
+with no caster in it. Under ``jit`` and ``vmap`` the shapes depend on ``M`` only, and
+gradients flow through the kept candidates. A non-finite candidate is kept (never
+silently dropped), and so is every caster (a triangle's corners) where the planes are
+not finite (a non-finite light, ``up`` or placement), so the fit's own checks report it.
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+from typing import NamedTuple
+
+from shadowmath._boundary._validate import Array
+
+
+class Selection(NamedTuple):
+    """Casters as the fit reads them, and how many were kept.
+
+    Attributes:
+        points: ``(*batch, K + 4, 3)`` in the casters' (local) coordinates: the kept
+            points or clipped candidates, the invalid ones replaced (see the module).
+        kept: ``(*batch,)`` integer: the points or triangles kept; 0 means the empty fit.
+    """
+
+    points: Array
+    kept: Array
+
+
+def pyramid_planes(xp: ModuleType, position: Array, axes: Array, t: Array) -> Array:
+    """``(*batch, 5, 4)`` the pyramid ``|x|, |y| <= t z``'s side planes and the light's plane.
+
+    ``position`` ``(*batch, 3)``; ``axes`` ``(*batch, 3, 3)`` rows ``X, Y, Z``;
+    ``t`` ``(*batch,)``. Rows ``(n, -n . L)``: ``n = t Z -+ X``, ``t Z -+ Y`` (inside
+    ``>= 0``), then ``n = Z`` (the light coordinate ``z``).
+    """
+    X, Y, Z = axes[..., 0, :], axes[..., 1, :], axes[..., 2, :]
+    tz = t[..., None] * Z
+    n = xp.stack([tz - X, tz + X, tz - Y, tz + Y, Z], axis=-2)
+    d = -xp.sum(n * position[..., None, :], axis=-1)
+    return xp.concatenate([n, d[..., None]], axis=-1)
+
+
+def local_planes(xp: ModuleType, planes: Array, B: Array | None) -> Array:
+    """Planes acting on local points: ``B^T pi`` per plane (rows ``pi^T B``)."""
+    return planes if B is None else xp.matmul(planes, B)
+
+
+def plane_values(xp: ModuleType, planes: Array, q: Array) -> Array:
+    """``(*batch, N, P)`` the planes' values at points ``q`` ``(*batch, N, 3)``."""
+    n = xp.matrix_transpose(planes[..., :3])
+    return xp.matmul(q, n) + planes[..., None, :, 3]
+
+
+def _tolerance(xp: ModuleType, g: Array, axes: tuple[int, ...], eps: float) -> Array:
+    return 64.0 * eps * xp.sum(xp.abs(g), axis=axes)
+
+
+def inside_sides(xp: ModuleType, g: Array, eps: float) -> Array:
+    """``(*batch, N)`` points whose side values ``g[..., :4]`` are all ``>= -tau``,
+    ``tau = 64 eps sum |g|`` (the rounding of the point's own values)."""
+    sides = g[..., :4]
+    return xp.all(sides >= -_tolerance(xp, sides, (-1,), eps)[..., None], axis=-1)
+
+
+def points_kept(xp: ModuleType, planes: Array, q: Array, eps: float) -> Array:
+    """``(*batch, N)`` the points ``q`` a spot's fit keeps (``planes`` of :func:`pyramid_planes`).
+
+    A point set is kept as the fit has always read it, the blocker's vertices (whose
+    ratio box, clipped to the square, covers their hull's part in the cone), less the
+    points not in front of the light (``z <= tau``): the rest is kept when, for each
+    side plane, some of it lies strictly inside (``g_k > tau``: its ratio box meets the
+    square), and dropped as a whole otherwise (nothing of it reaches the cone). A point
+    at the light (every ``|g| <= tau``) is kept, for the fit to refuse. ``tau = 64 eps
+    (|n| . |q| + |d|)`` per plane ``(n, d)``: the rounding of ``g``.
+    """
+    g = plane_values(xp, planes, q)
+    tau = 64.0 * eps * plane_values(xp, xp.abs(planes), xp.abs(q))
+    front = g[..., 4:5] > tau[..., 4:5]
+    reaches = xp.all(xp.any(front & (g[..., :4] > tau[..., :4]), axis=-2), axis=-1)
+    at_light = xp.all(xp.abs(g) <= tau, axis=-1)
+    return (front[..., 0] & reaches[..., None]) | at_light
+
+
+def select_points(
+    xp: ModuleType, planes: Array, points: Array, square: Array, eps: float
+) -> Selection:
+    """Points ``(*batch, N, 3)`` selected by :func:`points_kept` (non-finite ones kept),
+    the others replaced; ``square`` ``(*batch, 4, 3)`` for an empty entry."""
+    keep = points_kept(xp, planes, points, eps) | ~xp.all(xp.isfinite(points), axis=-1)
+    keep = keep | ~_finite_planes(xp, planes)[..., None]
+    return _filled(xp, points, keep, xp.sum(keep, axis=-1), square)
+
+
+def _finite_planes(xp: ModuleType, planes: Array) -> Array:
+    """``(*batch,)`` the planes are finite: else (a non-finite light, ``up`` or placement,
+    which the fit reports) nothing is dropped, so the fit's first check names the cause."""
+    return xp.all(xp.isfinite(planes), axis=(-2, -1))
+
+
+#: The 19 candidates' sources: the corner pairs of the edges and the adjacent plane pairs.
+_EDGES = ((0, 1), (1, 2), (2, 0))
+_LATERAL = ((0, 2), (0, 3), (1, 2), (1, 3))
+
+
+def _weights(xp: ModuleType, g: Array) -> tuple[Array, Array]:
+    """Barycentric weights ``(..., 19, 3)`` of the candidates of triangles whose corners'
+    plane values are ``g`` ``(..., 3, 4)``, and whether each exists ``(..., 19)``."""
+    one, zero = xp.ones_like(g[..., 0, 0]), xp.zeros_like(g[..., 0, 0])
+    rows: list[tuple[Array, Array, Array]] = [
+        (one, zero, zero), (zero, one, zero), (zero, zero, one),
+    ]  # fmt: skip
+    ok: list[Array] = [one > 0] * 3
+    for i, j in _EDGES:
+        for k in range(4):
+            gi, gj = g[..., i, k], g[..., j, k]
+            den = gi - gj
+            s = gi / xp.where(den != 0, den, one)
+            w = [zero, zero, zero]
+            w[i], w[j] = one - s, s
+            rows.append((w[0], w[1], w[2]))
+            ok.append((den != 0) & (s >= 0) & (s <= 1))
+    for k, m in _LATERAL:
+        a, b = g[..., k], g[..., m]  # (..., 3): the corners' values on planes k and m
+        n0 = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+        n1 = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+        n2 = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+        det = n0 + n1 + n2
+        inv = one / xp.where(det != 0, det, one)
+        rows.append((n0 * inv, n1 * inv, n2 * inv))
+        ok.append((n0 * det >= 0) & (n1 * det >= 0) & (n2 * det >= 0) & (det != 0))
+    weights = xp.stack([xp.stack(r, axis=-1) for r in rows], axis=-2)
+    return weights, xp.stack(ok, axis=-1)
+
+
+def clip_triangles(
+    xp: ModuleType, planes: Array, corners: Array, square: Array, eps: float
+) -> Selection:
+    """Triangles ``(*batch, M, 3, 3)`` clipped by the planes: ``19 M + 4`` points (module).
+
+    Example:
+        >>> import numpy as np
+        >>> axes = np.eye(3)  # the light at the origin looking down +Z, t = 1
+        >>> planes = pyramid_planes(np, np.zeros(3), axes, np.array(1.0))
+        >>> tri = np.array([[[0.0, 1.0, -1.0], [0.5, 1.0, 3.0], [-0.5, 1.0, 3.0]]])  # y = 1
+        >>> s = clip_triangles(np, planes, tri, np.zeros((4, 3)), 2.0**-52)
+        >>> int(s.kept), float(s.points[:, 2].min()), float(s.points[:, 2].max())  # y <= z
+        (1, 1.0, 3.0)
+    """
+    g = plane_values(xp, planes[..., None, :4, :], corners)  # (*batch, M, 3, 4)
+    w, exists = _weights(xp, g)
+    points = xp.matmul(w, corners)  # (*batch, M, 19, 3)
+    values = xp.matmul(w, g)
+    tau = _tolerance(xp, g, (-2, -1), eps)[..., None, None]
+    inside = exists & xp.all(values >= -tau, axis=-1)
+    keep = inside | ~xp.all(xp.isfinite(points), axis=-1)
+    corner = xp.arange(19) < 3  # the corners themselves (exact, whatever the planes)
+    finite = _finite_planes(xp, planes)[..., None, None]
+    keep = xp.where(finite, keep, corner)
+    kept = xp.sum(xp.any(keep, axis=-1), axis=-1)
+    flat = xp.reshape(points, (*points.shape[:-3], -1, 3))
+    return _filled(xp, flat, xp.reshape(keep, flat.shape[:-1]), kept, square)
+
+
+def _filled(xp: ModuleType, points: Array, keep: Array, kept: Array, square: Array) -> Selection:
+    """Every point not kept replaced by the first kept one (the square's first corner when
+    none is); the square's four corners appended, kept only when nothing else is."""
+    shape = xp.broadcast_shapes(points.shape[:-2], keep.shape[:-1], square.shape[:-2])
+    count = points.shape[-2]
+    empty = xp.broadcast_to(kept == 0, shape)
+    points = xp.concatenate(
+        [xp.broadcast_to(points, (*shape, count, 3)), xp.broadcast_to(square, (*shape, 4, 3))],
+        axis=-2,
+    )
+    keep = xp.concatenate(
+        [xp.broadcast_to(keep, (*shape, count)), xp.broadcast_to(empty[..., None], (*shape, 4))],
+        axis=-1,
+    )
+    first = xp.argmax(keep, axis=-1)[..., None, None]
+    fill = xp.take_along_axis(points, xp.broadcast_to(first, (*shape, 1, 3)), axis=-2)
+    return Selection(xp.where(keep[..., None], points, fill), xp.broadcast_to(kept, shape))
+
+
+def empty_square(
+    xp: ModuleType,
+    position: Array,
+    axes: Array,
+    t: Array,
+    depth: Array,
+) -> Array:
+    """``(*batch, 4, 3)`` world corners ``L + z0 (+-s X +- s Y + Z)``, ``s = min(t, 1)``.
+
+    The empty fit's casters: a square inside the pyramid (``s <= t``) and at most 90
+    degrees wide (so a cone near 180 degrees still fits), at depth ``z0 = depth``.
+    """
+    s = xp.minimum(t, 1.0)[..., None, None]
+    signs = xp.asarray([[1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, -1.0]], dtype=axes.dtype)
+    X, Y, Z = axes[..., None, 0, :], axes[..., None, 1, :], axes[..., None, 2, :]
+    offset = s * (signs[:, 0:1] * X + signs[:, 1:2] * Y) + Z
+    return position[..., None, :] + depth[..., None, None] * offset
+
+
+def caster_depth(xp: ModuleType, planes: Array, B: Array | None, q: Array) -> Array:
+    """``(*batch,)`` the casters' largest ``|z|`` (1 if none or zero): the depth of the
+    empty fit's square. ``planes`` of :func:`pyramid_planes` on local points
+    ``q`` ``(*batch, N, 3)`` (the last is ``z``; ``B``'s last row gives ``w``)."""
+    if B is None:
+        z = plane_values(xp, planes[..., 4:5, :], q)[..., 0]
+    else:
+        zw = plane_values(xp, xp.concatenate([planes[..., 4:5, :], B[..., 3:4, :]], axis=-2), q)
+        z = zw[..., 0] / xp.where(zw[..., 1] > 0, zw[..., 1], 1.0)
+    depth = xp.max(xp.abs(z), axis=-1)
+    return xp.where(xp.isfinite(depth) & (depth > 0), depth, 1.0)
+
+
+def to_local(xp: ModuleType, B: Array | None, p: Array) -> Array:
+    """World points ``(*batch, K, 3)`` in the placement's local coordinates (``B^-1``).
+
+    A singular or non-finite ``B`` is replaced by the identity (the fit refuses it).
+    """
+    if B is None:
+        return p
+    det = xp.linalg.det(B)
+    ok = xp.isfinite(det) & (det != 0)
+    safe = xp.where(ok[..., None, None], B, xp.eye(4, dtype=B.dtype))
+    h = xp.matmul(xp.concatenate([p, xp.ones_like(p[..., :1])], axis=-1),
+                  xp.matrix_transpose(xp.linalg.inv(safe)))  # fmt: skip
+    return h[..., :3] / h[..., 3:]
