@@ -288,7 +288,9 @@ def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
       ``sm.DirectionalLight(position - target)`` (the camera's view direction for a light
       parented to a camera, as pygfx does);
     * ``gfx.SpotLight``: ``fit_shadow`` of ``sm.SpotLight(position, target - position,
-      angle)``; both with the casters' vertices, ``receivers=`` the receivers' triangles,
+      angle)``; both with the casters' triangles (a spot light keeps what reaches into
+      its cone, clipped exactly: :func:`shadowmath.fit_shadow`'s selection), ``receivers=``
+      the receivers' triangles,
       :data:`PYGFX_SHADOW_MAP_SIZE`, ``pcf_radius`` and ``api="webgpu"``;
     * ``gfx.PointLight``: :func:`shadowmath.cube_depth_range` at its position, of the
       casters' triangles, with the receivers.
@@ -296,7 +298,7 @@ def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
     The lights themselves are read, never written: position, target, angle, distance,
     intensity and every other setting stay what the application set (only each light's
     ``shadow.camera`` and the matrices pygfx draws with change). A light whose fit
-    raises ``ValueError`` (no casters, casters behind a spot light...) is skipped,
+    raises ``ValueError`` (no casters, a caster within rounding of the light...) is skipped,
     given back to pygfx's own shadow camera, and reported; the others are fitted.
 
     Arguments:
@@ -318,10 +320,13 @@ def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
         >>> cube.cast_shadow = True
         >>> sun = gfx.DirectionalLight(cast_shadow=True)
         >>> sun.local.position = (3, -1.5, 3.5)
-        >>> behind = gfx.SpotLight(cast_shadow=True)  # at the cube's centre
-        >>> _ = scene.add(cube, sun, sun.target, behind, behind.target)
-        >>> [(type(r.light).__name__, r.skipped[:40]) for r in fit_scene_shadows(scene)]
-        [('DirectionalLight', ''), ('SpotLight', 'vertices: ...')]
+        >>> inside = gfx.SpotLight(cast_shadow=True)  # at the cube's centre, aimed down -z
+        >>> _ = scene.add(cube, sun, sun.target, inside, inside.target)
+        >>> fits = fit_scene_shadows(scene)
+        >>> [(type(r.light).__name__, r.skipped) for r in fits]
+        [('DirectionalLight', ''), ('SpotLight', '')]
+        >>> int(fits[1].fit.casters_used)  # the cube's triangles that reach into the cone
+        10
         >>> sun.local.position.tolist()  # the user's light, untouched
         [3.0, -1.5, 3.5]
     """
@@ -355,7 +360,7 @@ def _fit_light(light: Any, surfaces: SceneSurfaces, pcf_radius: int) -> LightFit
                 else SpotLight(position, aim, np.float64(light.angle))
             )
             fit = fit_shadow(
-                sm_light, surfaces.casters.vertices, PYGFX_SHADOW_MAP_SIZE,
+                sm_light, surfaces.casters, PYGFX_SHADOW_MAP_SIZE,
                 pcf_radius=pcf_radius, api="webgpu", receivers=receivers,
             )  # fmt: skip
         set_shadow_camera(light, fit)
