@@ -1,6 +1,7 @@
 """Twenty lights sharing every caster, some behind spot lights, beside them, crossing a spot's
 plane or outside its cone: each spot's fit selects its casters (render_atlas passes them as
-triangles) and every light's shadow mask agrees with the ray caster off the edge band.
+triangles) and every light's shadow mask agrees with the ray caster off the edge band, in
+OpenGL (``render_atlas``) and WebGPU (``render_atlas_wgpu``).
 
 The scene of ``test_render_atlas`` (a floor, four boxes, a torus; six point lights, six
 spots, four suns) with four more spot lights placed among the casters:
@@ -29,7 +30,18 @@ from shadowmath.render import render_atlas
 
 from .depth_scenes import compare
 from .scenes import world_mesh
-from .test_render_atlas import BODIES, CASTS, LIGHTS, PROJECTION, SIZE, VIEW, spot, truth
+from .test_render_atlas import (
+    BODIES,
+    CASTS,
+    LIGHTS,
+    PROJECTION,
+    SCENE,
+    SIZE,
+    VIEW,
+    renderer,
+    spot,
+    truth,
+)  # fmt: skip
 
 EXTRA = [
     spot((0.0, -1.0, 1.0), (3.0, -3.0, 0.0), 0.6),
@@ -39,6 +51,14 @@ EXTRA = [
 ]
 ALL = [*LIGHTS, *EXTRA]
 SHADOWING = [16, 17]  # of the extra lights, those whose casters shadow lit points
+#: The twenty lights as render_atlas and render_atlas_wgpu take them.
+SCENE_ALL = {**SCENE, "lights": ALL, "atlas_size": 4096}
+
+
+@pytest.fixture(params=["opengl", "webgpu"])
+def draw(request: Any) -> Any:
+    """The scene rendered by ``render_atlas`` (OpenGL) or ``render_atlas_wgpu`` (WebGPU)."""
+    return renderer(request, SCENE_ALL)
 
 
 def render(gl: Any) -> Any:
@@ -64,8 +84,8 @@ def test_the_scene_has_casters_behind_and_crossing_the_spots() -> None:
     assert (cos < np.cos(0.3)).all()  # every caster vertex outside the narrow cone
 
 
-def test_every_light_agrees_with_the_ray_caster(gl: Any) -> None:
-    frame = render(gl)
+def test_every_light_agrees_with_the_ray_caster(draw: Any) -> None:
+    frame = draw()
     assert len(ALL) >= 20
     result = counts(frame)
     for i, count in enumerate(result):
