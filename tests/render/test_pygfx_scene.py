@@ -250,14 +250,19 @@ def test_gather_scene_places_every_mesh_and_instance(gfx):  # noqa: F811 (the fi
 
 
 def test_a_light_with_nothing_to_shadow_is_skipped_and_reported(gfx):  # noqa: F811 (the fixtures)
-    """A spot light inside a caster cannot be fitted: it is reported and given back to
-    pygfx's own shadow camera; the sun beside it is fitted."""
+    """A spot light on a caster's corner cannot be fitted (the near plane would be rounding
+    noise): it is reported and given back to pygfx's own shadow camera; the sun and the
+    lamp beside it are fitted. (A spot inside a box is fitted: to the faces in its cone.)"""
     from shadowmath.integrations.pygfx import fit_scene_shadows
 
     scene, meshes, lit, group = build(gfx)
     animate(0.0, meshes, lit, group)
-    lit["spot"].local.position = meshes["box"].world.position  # inside the box
-    fit_scene_shadows(scene)  # fitted once, then the light moves into the caster
+    box = meshes["box"]
+    lit["spot"].local.position = box.world.position  # inside the box
+    inside = {type(r.light).__name__: r for r in fit_scene_shadows(scene)}["SpotLight"]
+    assert inside.skipped == "" and 0 < int(inside.fit.casters_used)
+    corner = box.world.matrix @ np.r_[box.geometry.positions.data[0], 1.0]
+    lit["spot"].local.position = corner[:3] / corner[3]  # on the box's corner
     reports = {type(r.light).__name__: r for r in fit_scene_shadows(scene)}
     assert reports["SpotLight"].fit is None
     assert "not strictly in front of the light" in reports["SpotLight"].skipped
