@@ -175,6 +175,24 @@ def fit(scene: Scene) -> Any:
     )
 
 
+def flat_mesh(vertices: np.ndarray, triangles: np.ndarray, *, cast: bool) -> Any:
+    """A flat-shaded grey pygfx mesh (unshared vertices: one face normal each) that
+    receives shadows, and casts them if ``cast``; ``vertices`` in its local coordinates."""
+    import pygfx as gfx
+
+    corners = vertices[triangles]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    geometry = gfx.Geometry(
+        positions=corners.reshape(-1, 3).astype(np.float32),
+        normals=np.repeat(n, 3, axis=0).astype(np.float32),
+        indices=np.arange(3 * len(corners), dtype=np.int32).reshape(-1, 3),
+    )
+    mesh = gfx.Mesh(geometry, gfx.MeshPhongMaterial(color="#808080", specular="#000000"))
+    mesh.cast_shadow, mesh.receive_shadow = cast, True
+    return mesh
+
+
 def pygfx_scene(scene: Scene, *, fitted: bool) -> tuple[Any, Any, Any]:
     """(scene, camera, light): flat-shaded grey meshes, one shadow-casting light."""
     import pygfx as gfx
@@ -183,17 +201,7 @@ def pygfx_scene(scene: Scene, *, fitted: bool) -> tuple[Any, Any, Any]:
 
     world = gfx.Scene()
     for b in scene.bodies:
-        corners = b.vertices[b.triangles]  # unshared vertices: one face normal each
-        n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        n /= np.linalg.norm(n, axis=1, keepdims=True)
-        geometry = gfx.Geometry(
-            positions=corners.reshape(-1, 3).astype(np.float32),
-            normals=np.repeat(n, 3, axis=0).astype(np.float32),
-            indices=np.arange(3 * len(corners), dtype=np.int32).reshape(-1, 3),
-        )
-        mesh = gfx.Mesh(geometry, gfx.MeshPhongMaterial(color="#808080", specular="#000000"))
-        mesh.cast_shadow, mesh.receive_shadow = b.cast, True
-        world.add(mesh)
+        world.add(flat_mesh(b.vertices, b.triangles, cast=b.cast))
     if scene.kind == "directional":
         light = gfx.DirectionalLight(intensity=8.0, cast_shadow=True)
         light.local.position = scene.aim + 10.0 * scene.light / np.linalg.norm(scene.light)
@@ -296,13 +304,19 @@ class Truth(NamedTuple):
     points: np.ndarray  # (H, W, 3) the surface point of each pixel (NaN off the bodies)
 
 
-def ground_truth(scene: Scene, camera: Any) -> Truth:
+class Surface(NamedTuple):
+    on: np.ndarray  # (H W,) the pixel's ray hits a body
+    p: np.ndarray  # (K, 3) the surface point of each of those pixels
+    n: np.ndarray  # (K, 3) its unit face normal, on the side the camera sees
+
+
+def visible_surface(bodies: list[Body], camera: Any) -> Surface:
+    """The surface each pixel shows: its camera ray's nearest hit (the costly part of the
+    ground truth; one per camera, whatever the light)."""
     origins, dirs = pixel_rays(camera)
-    vertices = np.concatenate([b.vertices for b in scene.bodies])
-    offsets = np.cumsum([0] + [len(b.vertices) for b in scene.bodies[:-1]])
-    triangles = np.concatenate(
-        [b.triangles + o for b, o in zip(scene.bodies, offsets, strict=True)]
-    )
+    vertices = np.concatenate([b.vertices for b in bodies])
+    offsets = np.cumsum([0] + [len(b.vertices) for b in bodies[:-1]])
+    triangles = np.concatenate([b.triangles + o for b, o in zip(bodies, offsets, strict=True)])
     tri, t = first_hits(origins, dirs, vertices, triangles)
     on = tri >= 0
     p = origins[on] + t[on, None] * dirs[on]
@@ -310,6 +324,15 @@ def ground_truth(scene: Scene, camera: Any) -> Truth:
     n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     n *= -np.sign(np.sum(n * dirs[on], axis=1))[:, None]  # the side the camera sees
     n /= np.linalg.norm(n, axis=1, keepdims=True)
+    return Surface(on, p, n)
+
+
+def ground_truth(scene: Scene, camera: Any, surface: Surface | None = None) -> Truth:
+    """The ray caster's picture of ``scene``'s light; ``surface``: the scene's
+    :func:`visible_surface` from ``camera``, if already cast."""
+    if surface is None:
+        surface = visible_surface(scene.bodies, camera)
+    on, p, n = surface
     if scene.kind == "directional":
         to_light, light = np.broadcast_to(scene.light, p.shape), np.append(scene.light, 0.0)
         inside = np.ones(len(p), dtype=bool)

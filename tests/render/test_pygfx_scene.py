@@ -34,6 +34,7 @@ from .test_pygfx import (  # noqa: F401  (the fixtures, used by name)
     _gl_current_after_pygfx,
     compare,
     draw,
+    flat_mesh,
     gfx,
     ground_truth,
     pygfx_canvas,
@@ -95,16 +96,7 @@ def build(gfx: Any) -> tuple[Any, dict[str, Any], dict[str, Any], Any]:  # noqa:
     scene, group = gfx.Scene(), gfx.Group()
     meshes = {}
     for name, part in PARTS.items():
-        corners = part.mesh.vertices[part.mesh.faces]  # one face normal per triangle
-        n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        n /= np.linalg.norm(n, axis=1, keepdims=True)
-        geometry = gfx.Geometry(
-            positions=corners.reshape(-1, 3).astype(np.float32),
-            normals=np.repeat(n, 3, axis=0).astype(np.float32),
-            indices=np.arange(3 * len(corners), dtype=np.int32).reshape(-1, 3),
-        )
-        mesh = gfx.Mesh(geometry, gfx.MeshPhongMaterial(color="#808080", specular="#000000"))
-        mesh.cast_shadow, mesh.receive_shadow = part.cast, True
+        mesh = flat_mesh(part.mesh.vertices, part.mesh.faces, cast=part.cast)
         meshes[name] = mesh
         (group if name == "torus" else scene).add(mesh)
     sun = gfx.DirectionalLight(intensity=8.0, cast_shadow=True)

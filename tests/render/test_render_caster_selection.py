@@ -95,24 +95,31 @@ def test_every_light_agrees_with_the_ray_caster(draw: Any) -> None:
         assert result[i].shadowed > 300, (i, result[i])
 
 
+def losing_box(real: Any) -> Any:
+    """``real`` (``spot_selection``) with the box at (2, -2) taken out of light 16's
+    casters (its triangles moved behind the light), for one light row ``(8,)`` (fit_shadow)
+    or a batch ``(n, 8)`` (fit_atlas); world triangles (no placement)."""
+
+    def losing(ctx: Any, light: Any, up: Any, B: Any, casters: Any, triangles: bool) -> Any:
+        mine = np.all(np.isclose(light[..., :3], ALL[16].position), axis=-1)
+        if triangles and mine.any():
+            shape = np.broadcast_shapes(light.shape[:-1], casters.shape[:-3])
+            casters = np.broadcast_to(casters, (*shape, *casters.shape[-3:])).copy()
+            centre = casters.mean(axis=-2)
+            box = np.linalg.norm(centre[..., :2] - [2.0, -2.0], axis=-1) < 1.3
+            behind = (light[..., :3] - light[..., 3:6])[..., None, None, :]
+            casters = np.where((box & mine[..., None])[..., None, None], behind, casters)
+        return real(ctx, light, up, B, casters, triangles)
+
+    return losing
+
+
 def test_dropping_a_caster_that_shadows_a_lit_point_loses_pixels(
     gl: Any, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Light 16's selection with the box at (2, -2) taken out (its triangles moved behind
     the light): the box is clipped out of its map and its shadow lost off the band."""
-    real = _spot_select.spot_selection
-
-    def losing(ctx: Any, light: Any, up: Any, B: Any, casters: Any, triangles: bool) -> Any:
-        mine = np.all(np.isclose(light[:, :3], ALL[16].position), axis=1)
-        if triangles and mine.any():
-            casters = np.broadcast_to(casters, (light.shape[0], *casters.shape[-3:])).copy()
-            centre = casters.mean(axis=-2)
-            box = np.linalg.norm(centre[..., :2] - [2.0, -2.0], axis=-1) < 1.3
-            behind = light[:, None, None, :3] - light[:, None, None, 3:6]
-            casters = np.where((box & mine[:, None])[..., None, None], behind, casters)
-        return real(ctx, light, up, B, casters, triangles)
-
-    monkeypatch.setattr(_atlas, "spot_selection", losing)
+    monkeypatch.setattr(_atlas, "spot_selection", losing_box(_spot_select.spot_selection))
     frame = render(gl)
     lost = compare(frame.shadow[16] > 0.5, truth(frame, ALL[16]))
     assert lost.differ_off_band > 100, lost
