@@ -37,8 +37,10 @@ shadow object's camera and the matrices pygfx draws and samples with change.
   looking down -Z, which loses every shadow cast toward +Y.
 
 The map size is one module-level constant in pygfx's private renderer code, the same
-for every light; fit with ``map_size=PYGFX_SHADOW_MAP_SIZE`` and ``pcf_radius=2``
-(pygfx filters with a 5 x 5-texel kernel), and ``api="webgpu"`` if you also use the
+for every light; fit with ``map_size=PYGFX_SHADOW_MAP_SIZE``, ``pcf_radius=2`` and
+``pcf_filter="bilinear"`` (pygfx filters with 17 taps up to 2 texels away through a
+linear comparison sampler, which reads one texel further: a 3-texel border, as
+:func:`shadowmath.pcf_border_texels` says), and ``api="webgpu"`` if you also use the
 fit's matrices yourself. The overrides are checked against pygfx's private API at every
 call (``_update_matrix``, the shadow's matrix buffer and the light uniform's
 ``light_view_proj_matrix``: :class:`RuntimeError` if one is gone) and pygfx versions
@@ -149,7 +151,8 @@ def set_shadow_camera(light: Any, fit: ShadowSetup | ShadowCamera | CubeDepthRan
         >>> import numpy as np, pygfx as gfx, shadowmath as sm
         >>> cube = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (0, 2)])
         >>> setup = sm.fit_shadow(sm.DirectionalLight([1.0, 0.5, 2.0]), cube,
-        ...                       PYGFX_SHADOW_MAP_SIZE, pcf_radius=2, api="webgpu")
+        ...                       PYGFX_SHADOW_MAP_SIZE, pcf_radius=2, pcf_filter="bilinear",
+        ...                       api="webgpu")
         >>> sun = gfx.DirectionalLight(cast_shadow=True)
         >>> camera = set_shadow_camera(sun, setup)
         >>> camera.width < 4 < 1000  # the cube's box, not pygfx's default 1000 x 1000
@@ -303,7 +306,8 @@ def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
 
     Arguments:
         scene: a pygfx ``WorldObject``, usually the ``gfx.Scene`` that is drawn.
-        pcf_radius: the border kept for pygfx's filter (its 5 x 5 kernel: 2).
+        pcf_radius: the kernel radius pygfx filters with (taps up to 2 texels away, each
+            bilinear: the border is ``pcf_border_texels(pcf_radius, "bilinear")``, 3).
 
     Returns:
         One :class:`LightFit` per shadow-casting light, in scene order.
@@ -361,7 +365,8 @@ def _fit_light(light: Any, surfaces: SceneSurfaces, pcf_radius: int) -> LightFit
             )
             fit = fit_shadow(
                 sm_light, surfaces.casters, PYGFX_SHADOW_MAP_SIZE,
-                pcf_radius=pcf_radius, api="webgpu", receivers=receivers,
+                pcf_radius=pcf_radius, pcf_filter="bilinear", api="webgpu",
+                receivers=receivers,
             )  # fmt: skip
         set_shadow_camera(light, fit)
     except ValueError as err:

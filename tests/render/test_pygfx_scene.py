@@ -252,7 +252,7 @@ def test_a_light_with_nothing_to_shadow_is_skipped_and_reported(gfx):  # noqa: F
     box = meshes["box"]
     lit["spot"].local.position = box.world.position  # inside the box
     inside = {type(r.light).__name__: r for r in fit_scene_shadows(scene)}["SpotLight"]
-    assert inside.skipped == "" and 0 < int(inside.fit.casters_used)
+    assert inside.skipped == "" and int(inside.fit.casters_used) > 0
     corner = box.world.matrix @ np.r_[box.geometry.positions.data[0], 1.0]
     lit["spot"].local.position = corner[:3] / corner[3]  # on the box's corner
     reports = {type(r.light).__name__: r for r in fit_scene_shadows(scene)}
