@@ -77,3 +77,14 @@ def same_map_elsewhere(drawn: np.ndarray, reference: np.ndarray, *, subpixel_bit
         f"{wrong.sum()} texels off by more than the rasterization bound, e.g. at "
         f"{np.argwhere(wrong)[:3].tolist()}: {drawn[wrong][:3]} vs {reference[wrong][:3]}"
     )
+
+
+def same_bodies_but_on_edges(body: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Assert two pictures of one scene (two APIs, or two places in the window) show the
+    same body at each pixel, but where a pixel's centre lies within a sub-pixel step of an
+    edge between bodies (there the tie rules and the snap may pick either: pixels whose
+    3 x 3 neighbourhood in ``reference`` holds another body). Returns where they agree."""
+    edge = neighbourhood(reference, np.minimum) != neighbourhood(reference, np.maximum)
+    same = body == reference
+    assert np.all(same | edge), f"{int((~same & ~edge).sum())} pixels differ off the edges"
+    return same

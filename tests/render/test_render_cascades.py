@@ -22,7 +22,7 @@ from shadowmath.meshes import box, grid
 from shadowmath.render import Body, Light, look_at, perspective, render_cascades
 
 from .depth_scenes import BAND, DepthScene, compare, ray_cast
-from .rasterization import same_map_elsewhere
+from .rasterization import same_bodies_but_on_edges, same_map_elsewhere
 from .scenes import place, rotation
 
 SIZE = (320, 200)
@@ -218,8 +218,8 @@ def test_webgpu_agrees_with_opengl(gl, wgpu_device):
 
     web, truth, _ = shadows("horizon", render_cascades_wgpu)
     ogl, _, _ = shadows("horizon", ctx=gl)
-    assert np.array_equal(web.body, ogl.body)
-    np.testing.assert_allclose(web.position, ogl.position, atol=1e-3)
+    same = same_bodies_but_on_edges(web.body, ogl.body)
+    np.testing.assert_allclose(web.position[same], ogl.position[same], atol=1e-3)
     assert (((web.shadow > 0.5) != (ogl.shadow > 0.5)) & ~truth.band).sum() == 0
     error = np.abs(web.shadow_maps[:, ::-1] - ogl.shadow_maps)
     print(f"{web.adapter}: {int((error > 1e-4).sum())} of {error.size} depth texels differ")
