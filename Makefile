@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck pytest docs notebooks bench bench-coverage fuzz clean
+.PHONY: demo test lint typecheck pytest docs notebooks bench bench-coverage fuzz gpu-check clean
 
 $(STAMP): pyproject.toml
 	@bash tools/ensure_gl.sh
@@ -48,6 +48,13 @@ bench-coverage: $(STAMP)
 ## The long fuzz run (2000 examples per fuzz test instead of 25); prints the cases tried.
 fuzz: $(STAMP)
 	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests/test_fuzz.py $(ARGS)
+
+## The render suite (SHADOWMATH_REQUIRE_GL=1) and bench's GPU section on this machine's GPU,
+## after printing what they run on; without a GPU it says so and runs nothing. Needs no
+## package registry: uses .venv if there is one, else GPU_PYTHON (docs/accuracy.md).
+GPU_PYTHON ?= $(if $(wildcard $(PY)),$(PY),$(PYTHON))
+gpu-check:
+	$(GPU_PYTHON) tools/gpu_check.py $(ARGS)
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis site out
