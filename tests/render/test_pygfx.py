@@ -296,7 +296,23 @@ class Truth(NamedTuple):
     points: np.ndarray  # (H, W, 3) the surface point of each pixel (NaN off the bodies)
 
 
+#: Each (scene, viewing camera matrix)'s truth, cast once per session (the scene is kept
+#: with it, so its id stays its own): several tests view the same torus scene.
+_TRUTHS: dict[tuple[int, bytes], tuple[Scene, Truth]] = {}
+
+
 def ground_truth(scene: Scene, camera: Any) -> Truth:
+    """The truth for the rays through ``camera``'s pixels (read-only arrays, shared)."""
+    key = (id(scene), np.asarray(camera.camera_matrix, dtype=np.float64).tobytes())
+    if key not in _TRUTHS:
+        truth = cast_truth(scene, camera)
+        for a in truth:
+            a.flags.writeable = False
+        _TRUTHS[key] = (scene, truth)
+    return _TRUTHS[key][1]
+
+
+def cast_truth(scene: Scene, camera: Any) -> Truth:
     origins, dirs = pixel_rays(camera)
     vertices = np.concatenate([b.vertices for b in scene.bodies])
     offsets = np.cumsum([0] + [len(b.vertices) for b in scene.bodies[:-1]])
