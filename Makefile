@@ -17,8 +17,11 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(PY) -m shadowmath $(ARGS)
 
-## The whole suite: lint, strict typing, tests, the docs site and the notebooks.
-test: lint typecheck pytest docs notebooks
+## The whole suite: lint, strict typing, tests, the docs site and the notebooks, two at a
+## time (pytest itself on every core: JOBS=auto workers, each with its own GL context;
+## JOBS=0 runs it in one process).
+test: $(STAMP)
+	$(MAKE) --no-print-directory -j2 --output-sync=target lint typecheck pytest docs notebooks
 
 lint: $(STAMP)
 	$(PY) -m ruff check .
@@ -27,8 +30,9 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(PY) -m mypy
 
+JOBS ?= auto
 pytest: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(JOBS) --dist loadfile
 
 docs: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
