@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck pytest docs notebooks bench bench-coverage fuzz clean
+.PHONY: demo test lint typecheck pytest docs notebooks bench bench-coverage fuzz gpu-check clean
 
 $(STAMP): pyproject.toml
 	@bash tools/ensure_gl.sh
@@ -17,8 +17,11 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(PY) -m shadowmath $(ARGS)
 
-## The whole suite: lint, strict typing, tests, the docs site and the notebooks.
-test: lint typecheck pytest docs notebooks
+## The whole suite: lint, strict typing, tests, the docs site and the notebooks, two at a
+## time (pytest itself on every core: JOBS=auto workers, each with its own GL context;
+## JOBS=0 runs it in one process).
+test: $(STAMP)
+	$(MAKE) --no-print-directory -j2 --output-sync=target lint typecheck pytest docs notebooks
 
 lint: $(STAMP)
 	$(PY) -m ruff check .
@@ -27,8 +30,9 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(PY) -m mypy
 
+JOBS ?= auto
 pytest: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(JOBS) --dist loadfile
 
 docs: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
@@ -48,6 +52,13 @@ bench-coverage: $(STAMP)
 ## The long fuzz run (2000 examples per fuzz test instead of 25); prints the cases tried.
 fuzz: $(STAMP)
 	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests/test_fuzz.py $(ARGS)
+
+## The render suite (SHADOWMATH_REQUIRE_GL=1) and bench's GPU section on this machine's GPU,
+## after printing what they run on; without a GPU it says so and runs nothing. Needs no
+## package registry: uses .venv if there is one, else GPU_PYTHON (docs/accuracy.md).
+GPU_PYTHON ?= $(if $(wildcard $(PY)),$(PY),$(PYTHON))
+gpu-check:
+	$(GPU_PYTHON) tools/gpu_check.py $(ARGS)
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis site out

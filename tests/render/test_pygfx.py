@@ -327,11 +327,27 @@ def visible_surface(bodies: list[Body], camera: Any) -> Surface:
     return Surface(on, p, n)
 
 
+#: Each (scene, viewing camera matrix)'s truth, cast once per session (the scene is kept
+#: with it, so its id stays its own): several tests view the same torus scene.
+_TRUTHS: dict[tuple[int, bytes], tuple[Scene, Truth]] = {}
+
+
 def ground_truth(scene: Scene, camera: Any, surface: Surface | None = None) -> Truth:
-    """The ray caster's picture of ``scene``'s light; ``surface``: the scene's
-    :func:`visible_surface` from ``camera``, if already cast."""
-    if surface is None:
-        surface = visible_surface(scene.bodies, camera)
+    """The ray caster's picture of ``scene``'s light (read-only arrays, shared);
+    ``surface``: the scene's :func:`visible_surface` from ``camera``, if already cast."""
+    if surface is not None:
+        return cast_truth(scene, surface)
+    key = (id(scene), np.asarray(camera.camera_matrix, dtype=np.float64).tobytes())
+    if key not in _TRUTHS:
+        truth = cast_truth(scene, visible_surface(scene.bodies, camera))
+        for a in truth:
+            a.flags.writeable = False
+        _TRUTHS[key] = (scene, truth)
+    return _TRUTHS[key][1]
+
+
+def cast_truth(scene: Scene, surface: Surface) -> Truth:
+    """The ray caster's shadow of ``scene``'s light on the ``surface`` its camera sees."""
     on, p, n = surface
     if scene.kind == "directional":
         to_light, light = np.broadcast_to(scene.light, p.shape), np.append(scene.light, 0.0)

@@ -22,6 +22,7 @@ from shadowmath.meshes import box, grid
 from shadowmath.render import Body, Light, look_at, perspective, render_cascades
 
 from .depth_scenes import BAND, DepthScene, compare, ray_cast
+from .rasterization import same_bodies_but_on_edges, same_map_elsewhere
 from .scenes import place, rotation
 
 SIZE = (320, 200)
@@ -217,8 +218,8 @@ def test_webgpu_agrees_with_opengl(gl, wgpu_device):
 
     web, truth, _ = shadows("horizon", render_cascades_wgpu)
     ogl, _, _ = shadows("horizon", ctx=gl)
-    assert np.array_equal(web.body, ogl.body)
-    np.testing.assert_allclose(web.position, ogl.position, atol=1e-3)
+    same = same_bodies_but_on_edges(web.body, ogl.body)
+    np.testing.assert_allclose(web.position[same], ogl.position[same], atol=1e-3)
     assert (((web.shadow > 0.5) != (ogl.shadow > 0.5)) & ~truth.band).sum() == 0
     error = np.abs(web.shadow_maps[:, ::-1] - ogl.shadow_maps)
     print(f"{web.adapter}: {int((error > 1e-4).sum())} of {error.size} depth texels differ")
@@ -246,13 +247,21 @@ def test_the_maps_are_layers_or_an_atlas(gl):
     assert layers.shadow_maps.shape == (4, 128, 256)
     assert atlas.shadow_maps.shape == (1, 256, 512)
     ports = np.asarray(atlas.cascades.viewports)
+    bits = gl.info["GL_SUBPIXEL_BITS"]
     for i, (x, y, w, h) in enumerate(ports):
         tile = atlas.shadow_maps[0, y : y + h, x : x + w]
-        # each tile holds its cascade's map exactly as its own layer: drawn, and nothing
-        # spilled across from a neighbour's viewport (depths to the rasterizer's rounding)
+        # each tile holds its cascade's map as its own layer: drawn, and nothing spilled
+        # across from a neighbour's viewport, to what the rasterization rules allow for a
+        # draw at another place in the window (tests/render/rasterization.py; NVIDIA's
+        # depths differ from the layer's in the last bits, llvmpipe's too)
         assert tile.min() < 1.0, i
-        assert np.array_equal(tile < 1.0, layers.shadow_maps[i] < 1.0), i
-        assert np.allclose(tile, layers.shadow_maps[i], rtol=0, atol=1e-6), i
+        same_map_elsewhere(tile, layers.shadow_maps[i], subpixel_bits=bits)
+        # and the bound still tells a tile read one texel off, on either axis
+        dx, dy = (1 if x == 0 else -1), (1 if y == 0 else -1)
+        for off in (np.s_[y : y + h, x + dx : x + w + dx], np.s_[y + dy : y + h + dy, x : x + w]):
+            with pytest.raises(AssertionError, match="rasterization bound"):
+                same_map_elsewhere(atlas.shadow_maps[0][off], layers.shadow_maps[i],
+                                   subpixel_bits=bits)  # fmt: skip
 
 
 @pytest.mark.parametrize(

@@ -6,7 +6,8 @@ hold every direction exactly once, where cube_face says, and samplerCube returns
 direction d the texel drawn for d. The shadows of blockers on all six sides of the light,
 in a room, agree with the ray caster except in the edge band of test_render_depth.
 The hardware breaks face ties as cube_face does (Vulkan's rule), and LINEAR comparison
-filtering with seamless cube filtering speckles the seams with acne, without it not."""
+filtering with seamless cube filtering speckles the seams with acne, NEAREST not; without
+seamless filtering a driver may or may not filter across the faces (both allowed)."""
 
 from __future__ import annotations
 
@@ -317,14 +318,28 @@ def seam_speckles(frame, truth: Truth) -> np.ndarray:
     return truth.on & ~truth.band & wrong
 
 
+def seam_acne(frame, truth: Truth, speckles: np.ndarray, n: int) -> None:
+    """Assert the speckles are seam acne: on lit points, within 1.5 texels of a face edge."""
+    assert not (speckles & truth.shadow).any(), "the speckles are acne on lit points"
+    _, s, t = sm.cube_face(frame.position[speckles].astype(np.float64) - LIGHT)
+    to_edge = np.minimum.reduce([s, 1 - s, t, 1 - t]) * n
+    assert to_edge.max(initial=0.0) < 1.5, f"speckles off the seams, {to_edge.max():.2f} texels"
+
+
 @pytest.mark.parametrize("name", list(SCENES))
 def test_linear_filtering_speckles_the_seams_only_when_seamless(gl, monkeypatch, name):
     """LINEAR comparison (2x2 hardware PCF) near a face edge: seamless filtering compares
     the receiver's depth along the selected face's axis with the neighbouring face's texels,
     which hold depths along the neighbour's axis, smaller there, so points on a wall the
     neighbour sees face-on (where the polygon offset's slope term is zero) are partly
-    shadowed: acne, within a texel of the seams. Non-seamless filtering stays on the
-    selected face and NEAREST reads one texel of it: no speckles."""
+    shadowed: acne, within a texel of the seams. NEAREST reads one texel of the selected
+    face (OpenGL 4.6 section 8.14.2, Vulkan "Cube Map Edge Handling"): no speckles.
+
+    Non-seamless LINEAR is either of two results: filtered on the face alone as
+    ARB_seamless_cube_map's "unextended" cube maps (no speckles: Mesa), or across the
+    faces anyway (seam acne: NVIDIA's driver showed 50 and 23 on these views, see
+    docs/cube-maps.md). Either way its speckles are seam acne and no more than seamless
+    filtering's."""
     scene = SCENES[name]
     n = 128
     counts = {}
@@ -338,12 +353,9 @@ def test_linear_filtering_speckles_the_seams_only_when_seamless(gl, monkeypatch,
         counts[label] = int(speckles.sum())
         if label == "linear, seamless":
             assert speckles.any(), "seamless LINEAR filtering shows no speckles"
-            assert not (speckles & truth.shadow).any(), "the speckles are acne on lit points"
-            _, s, t = sm.cube_face(frame.position[speckles].astype(np.float64) - LIGHT)
-            to_edge = np.minimum.reduce([s, 1 - s, t, 1 - t]) * n
-            assert to_edge.max() < 1.5, f"speckles off the seams, {to_edge.max():.2f} texels"
+        seam_acne(frame, truth, speckles, n)
         # Thresholded at one half, every filter agrees with the ray caster off the band.
         assert compare(frame.shadow[..., 0] > 0.5, truth).differ_off_band == 0
-    print(f"omni {name}, {n}² faces, seam speckles: {counts}")
-    assert counts["linear, non-seamless"] < counts["linear, seamless"]
-    assert counts["linear, non-seamless"] == counts["nearest (default)"] == 0
+    print(f"omni {name}, {n}² faces, seam speckles: {counts} on {gl.info['GL_RENDERER']}")
+    assert counts["nearest (default)"] == 0
+    assert counts["linear, non-seamless"] <= counts["linear, seamless"]

@@ -10,6 +10,7 @@ import pytest
 from shadowmath.render import render_scene
 
 from .depth_scenes import SCENES, SIZE, compare, ray_cast
+from .rasterization import same_bodies_but_on_edges
 
 CASES = [(256, 0), (512, 1)]  # (map size, PCF radius)
 MAX_ALL = 0.01
@@ -29,8 +30,8 @@ def test_wgpu_depth_map_agrees_with_ray_caster_and_opengl(gl, wgpu_device, name,
     truth = ray_cast(web.body, web.position, web.normal, scene)
     count = compare(web.shadow > 0.5, truth)
     # The same pixels show the same bodies at the same points in both APIs.
-    assert np.array_equal(web.body, ogl.body)
-    np.testing.assert_allclose(web.position, ogl.position, atol=1e-4)
+    same = same_bodies_but_on_edges(web.body, ogl.body)
+    np.testing.assert_allclose(web.position[same], ogl.position[same], atol=1e-4)
     differ = int(((web.shadow > 0.5) != (ogl.shadow[..., 0] > 0.5)).sum())
     # WebGPU's map: row 0 is t = 0, the top of the light's view; OpenGL's row 0 is the bottom.
     # A texel whose centre lies exactly on an edge may go either way (the rasterizers' tie
