@@ -67,56 +67,57 @@ def cube_depth_core(
     border ring, and the casters' triangles ``(*b, T, 3, 3)`` when they are surfaces (their
     corners are the points); ``ok`` is False where the nearest caster is within rounding
     of the light."""
-    offsets = xp.abs(vertices_t - light[..., :, None])
-    D = xp.maximum(xp.maximum(offsets[..., 0, :], offsets[..., 1, :]), offsets[..., 2, :])
+    D = _chebyshev(xp, *(vertices_t[..., c, :] - light[..., c, None] for c in range(3)))
     d_max = xp.max(D, axis=-1)
     # a triangle may pass nearer the light than its corners
     d_min = xp.min(D, axis=-1) if triangles is None else nearest_triangle(xp, triangles, light, eps)
     if corners is not None:  # a triangle's largest D is at a corner (D is convex)
         d_max = xp.maximum(d_max, xp.max(xp.abs(corners - light[..., None, :]), axis=(-2, -1)))
-    scale = xp.maximum(xp.max(xp.abs(vertices_t), axis=(-2, -1)), xp.max(xp.abs(light), axis=-1))
+    largest = xp.maximum(xp.max(vertices_t, axis=(-2, -1)), -xp.min(vertices_t, axis=(-2, -1)))
+    scale = xp.maximum(largest, xp.max(xp.abs(light), axis=-1))  # max |coordinate|
     ok = d_min > _AT_LIGHT_ULPS * eps * scale
     return k * d_min * (1 - NEAR_FAR_SLACK), d_max * (1 + NEAR_FAR_SLACK), ok
-
-
-def _corners_first(xp: Any, triangles: Array, light: Array) -> Array:
-    """``(3 corners, 3 components, *b, T)``: the triangles relative to the light, laid out
-    so that each corner's component is one contiguous array."""
-    R = triangles - light[..., None, None, :]
-    return xp.moveaxis(R, (-2, -1), (0, 1))
 
 
 def nearest_triangle(xp: Any, triangles: Array, light: Array, eps: float) -> Array:
     """``min D`` over all the triangles ``(*b, T, 3, 3)`` of each batch entry, ``(*b,)``.
 
-    NumPy computes :func:`triangle_min_chebyshev` only for the triangles that could come
-    nearer than the nearest corner (:func:`_candidates`); under JAX (traced shapes) every
-    triangle counts. Both give the same minimum: a triangle left out lies, box and all,
-    farther than a corner already found."""
+    The triangles relative to the light go components first, ``(3 corners, 3 components,
+    *b, T)``. NumPy computes :func:`triangle_min_chebyshev` only for the triangles that
+    could come nearer than the nearest corner (:func:`_candidates`); under JAX (traced
+    shapes) every triangle counts. Both give the same minimum: a triangle left out lies,
+    box and all, farther than a corner already found."""
+    nb = max(triangles.ndim - 3, light.ndim - 1)  # the batch's dimensions
+    triangles = xp.reshape(triangles, (1,) * (nb + 3 - triangles.ndim) + triangles.shape)
+    first = xp.moveaxis(triangles, (-2, -1), (0, 1))
+    L = xp.moveaxis(xp.reshape(light, (1,) * (nb + 1 - light.ndim) + light.shape), -1, 0)
+    L = L[..., None]  # (3, *b, 1)
     if xp is not np:
-        R = _corners_first(xp, triangles, light)
-        return xp.min(triangle_min_chebyshev(xp, R), axis=-1)
-    R = np.ascontiguousarray(_corners_first(np, triangles, light))
-    batch = R.shape[2:-1]
-    R = R.reshape(3, 3, -1, R.shape[-1])  # (corner, component, entry, triangle)
+        return xp.min(triangle_min_chebyshev(xp, first - L), axis=-1)
+    shape = (3, 3, *np.broadcast_shapes(first.shape[2:], L.shape[1:]))
+    R = np.subtract(first, L, out=np.empty(shape, dtype=triangles.dtype))  # contiguous
+    R = R.reshape(3, 3, -1, shape[-1])  # (corner, component, entry, triangle)
     upper, rows, cols = _candidates(R, eps)
     best = triangle_min_chebyshev(np, R[:, :, rows, cols])
     np.minimum.at(upper, rows, best)
-    return upper.reshape(batch)
+    return upper.reshape(shape[2:-1])
 
 
 def _candidates(R: Array, eps: float) -> tuple[Array, Array, Array]:
     """``(upper, rows, cols)``: the corners' smallest ``D`` of each entry (an upper bound of
     the answer) and the (entry, triangle) pairs whose bounding box comes nearer than it,
     ``D`` of the box being ``max_i max(lo_i, -hi_i, 0)``; a margin of a few ulps of the
-    triangle's size keeps the triangles whose candidates could round below the bound."""
-    a = np.abs(R)
-    corner_D = np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2])  # (3, entries, T)
-    upper = np.min(corner_D, axis=(0, 2))
-    lo = np.minimum(np.minimum(R[0], R[1]), R[2])
-    hi = np.maximum(np.maximum(R[0], R[1]), R[2])
-    gap = np.maximum(np.maximum(lo, -hi), 0).max(axis=0)  # (entries, T)
-    size = np.max(corner_D, axis=0)
+    triangle's size keeps the triangles whose candidates could round below the bound.
+    Row by row (``(entries, T)`` each): NumPy's large temporaries cost more than its
+    arithmetic."""
+    D = [_chebyshev(np, R[c, 0], R[c, 1], R[c, 2]) for c in range(3)]
+    upper = np.min(np.minimum(np.minimum(D[0], D[1]), D[2]), axis=-1)
+    size = np.maximum(np.maximum(D[0], D[1]), D[2])
+    gap = np.zeros_like(size)
+    for i in range(3):
+        lo = np.minimum(np.minimum(R[0, i], R[1, i]), R[2, i])
+        hi = np.maximum(np.maximum(R[0, i], R[1, i]), R[2, i])
+        np.maximum(gap, np.maximum(lo, -hi), out=gap)
     rows, cols = np.nonzero(gap <= upper[:, None] + _KEEP_ULPS * eps * size)
     return upper, rows, cols
 
