@@ -133,7 +133,7 @@ def _safe_divide(xp: Any, num: Array, den: Array, ok: Array) -> Array:
 
 #: The six planes ``r_i = sign r_j`` as index and sign rows, and the eight diagonal
 #: directions ``(+-1, +-1, +-1)`` (where three faces' depths are equal) as ``(3, 8)``.
-_PLANE_I, _PLANE_J = [0, 0, 1, 0, 0, 1], [1, 2, 2, 1, 2, 2]
+_PLANE_I, _PLANE_J = np.array([0, 0, 1, 0, 0, 1]), np.array([1, 2, 2, 1, 2, 2])
 _PLANE_SIGN = np.array([1.0, 1.0, 1.0, -1.0, -1.0, -1.0])
 _DIAGONALS = np.array(
     [(sx, sy, sz) for sx in (1.0, -1.0) for sy in (1.0, -1.0) for sz in (1.0, -1.0)]
@@ -176,16 +176,15 @@ def triangle_min_chebyshev(xp: Any, R: Array) -> Array:
     den = n[0] * sigma[0] + n[1] * sigma[1] + n[2] * sigma[2]  # (8, ...)
     ok = den != 0
     t = _safe_divide(xp, n[0] * A[0] + n[1] * A[1] + n[2] * A[2], den, ok)  # n.(t sigma - A) = 0
-    inside = ok & (t > 0)
-    for e in range(3):  # t sigma on the inner side of every edge: n . (d x (t sigma - P)) >= 0
-        q = [t * sigma[c] - P[e, c] for c in range(3)]
-        de = d[e]
-        side = (
-            n[0] * (de[1] * q[2] - de[2] * q[1])
-            + n[1] * (de[2] * q[0] - de[0] * q[2])
-            + n[2] * (de[0] * q[1] - de[1] * q[0])
-        )
-        inside = inside & (side >= 0)
+    # t sigma on the inner side of every edge: n . (d x (t sigma - P)) >= 0, (3 edges, 8, ...)
+    q = [t * sigma[c] - P[:, c, None] for c in range(3)]
+    e = [d[:, c, None] for c in range(3)]
+    side = (
+        n[0] * (e[1] * q[2] - e[2] * q[1])
+        + n[1] * (e[2] * q[0] - e[0] * q[2])
+        + n[2] * (e[0] * q[1] - e[1] * q[0])
+    )
+    inside = ok & (t > 0) & xp.all(side >= 0, axis=0)
     diagonals = xp.where(inside, t, inf)
     return xp.minimum(
         xp.minimum(xp.min(corners, axis=0), xp.min(edges, axis=(0, 1))), xp.min(diagonals, axis=0)
