@@ -106,8 +106,9 @@ def nearest_triangle(xp: Any, triangles: Array, light: Array, eps: float) -> Arr
 def _candidates(R: Array, eps: float) -> tuple[Array, Array, Array]:
     """``(upper, rows, cols)``: the corners' smallest ``D`` of each entry (an upper bound of
     the answer) and the (entry, triangle) pairs whose bounding box comes nearer than it,
-    ``D`` of the box being ``max_i max(lo_i, -hi_i, 0)``; a margin of a few ulps of the
-    triangle's size keeps the triangles whose candidates could round below the bound.
+    ``D`` of the box being ``max_i max(lo_i, -hi_i, 0)`` (a box exactly at the bound cannot
+    improve on it); a margin of a few ulps of the triangle's size keeps the triangles
+    whose candidates could round below the bound.
     Row by row (``(entries, T)`` each): NumPy's large temporaries cost more than its
     arithmetic."""
     D = [_chebyshev(np, R[c, 0], R[c, 1], R[c, 2]) for c in range(3)]
@@ -118,7 +119,8 @@ def _candidates(R: Array, eps: float) -> tuple[Array, Array, Array]:
         lo = np.minimum(np.minimum(R[0, i], R[1, i]), R[2, i])
         hi = np.maximum(np.maximum(R[0, i], R[1, i]), R[2, i])
         np.maximum(gap, np.maximum(lo, -hi), out=gap)
-    rows, cols = np.nonzero(gap <= upper[:, None] + _KEEP_ULPS * eps * size)
+    bound = upper[:, None]  # a floor right under the light: its triangles all tie at it
+    rows, cols = np.nonzero((gap != bound) & (gap <= bound + _KEEP_ULPS * eps * size))
     return upper, rows, cols
 
 
