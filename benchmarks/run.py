@@ -25,6 +25,8 @@ Sections (``--only NAME``, repeatable or comma-separated):
 * ``atlas``: ``benchmarks/bench_atlas.py``, ``allocate_atlas`` + ``fit_atlas`` for 64 lights per
   frame against a loop of public calls per light, the fraction of the atlas used, and the tiles
   moved over frames of small motion.
+* ``cube``: ``benchmarks/bench_cube_depth.py``, ``cube_depth_range`` on 1,000, 5,000 and 50,000
+  caster triangles against one flat NumPy read of the same array (and jitted JAX on 5,000).
 * ``pygfx``: ``benchmarks/bench_pygfx.py``, ``shadowmath.integrations.pygfx.fit_scene_shadows``
   once a frame on an animated scene (14 meshes, a sun, a spot and a point light) against the
   time pygfx takes to draw that frame offscreen (skipped without pygfx or a wgpu adapter).
@@ -55,6 +57,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import bench_atlas
 import bench_cascades
+import bench_cube_depth
 import bench_pygfx
 from speed import SECTIONS as SPEED_SECTIONS
 from speed._timing import Config, Section, table, target_line, targets
@@ -63,6 +66,7 @@ SECTIONS: dict[str, ModuleType] = {
     **SPEED_SECTIONS,
     bench_cascades.NAME: bench_cascades,
     bench_atlas.NAME: bench_atlas,
+    bench_cube_depth.NAME: bench_cube_depth,
     bench_pygfx.NAME: bench_pygfx,
 }
 

@@ -28,6 +28,7 @@ EXPECTED = [
     "coverage",
     "cascades",
     "atlas",
+    "cube",
     "pygfx",
 ]
 

@@ -270,6 +270,50 @@ def test_triangle_casters_count_their_whole_surface(seed):
     assert float(sm.cube_depth_range(light, mesh).near) == float(got.near)
 
 
+def crowd(seed: int, walls: int) -> tuple[np.ndarray, np.ndarray]:
+    """Three lights and 150 triangles around them: small ones (many passing nearer the
+    light than their corners by a little) and ``walls`` a few units across (nearer by a
+    lot)."""
+    rng = np.random.default_rng(seed)
+    lights = rng.uniform(-1, 1, (3, 3))
+    small = rng.uniform(-4, 4, (150 - walls, 1, 3)) + rng.normal(0, 0.5, (150 - walls, 3, 3))
+    big = rng.uniform(-3, 3, (walls, 1, 3)) + rng.uniform(-4, 4, (walls, 3, 3))
+    return lights, np.concatenate([small, big])[rng.permutation(150)]
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("walls", [0, 30])
+def test_the_nearest_of_many_triangles_is_never_skipped(seed, walls):
+    """Among many triangles, with the light batched: near is k (1 - s) times the smallest
+    linear-program minimum over all of them (the brute-force reference), for each light,
+    batched exactly as alone; jitted JAX (which weighs every triangle) agrees to the
+    coordinates' rounding."""
+    lights, triangles = crowd(seed, walls)
+    got = sm.cube_depth_range(lights, sm.Triangles(triangles))
+    for i, light in enumerate(lights):
+        want = min(lp_min_chebyshev(t, light) for t in triangles)
+        assert float(got.near[i]) == pytest.approx((1 - SLACK) * want, rel=1e-9)
+        assert float(got.near[i]) == float(sm.cube_depth_range(light, sm.Triangles(triangles)).near)
+    jax = pytest.importorskip("jax")  # in the dev extra: never skipped on CI
+    traced = jax.jit(lambda L, t: sm.cube_depth_range(L, sm.Triangles(t)).near)
+    rounding = 16 * np.finfo(float).eps * np.abs(triangles).max()  # of the coordinates
+    np.testing.assert_allclose(traced(lights, triangles), got.near, rtol=0, atol=rounding)
+
+
+def test_a_wall_a_hair_nearer_than_every_corner_counts():
+    """A wall in the plane x = 1 across the light's axis (its corners 5 away, its nearest
+    point 1 + 1e-9 away, the whole wall beyond x = 1 by that hair) beside pebbles whose
+    nearest corner is at 1 + 2e-9: near comes from the wall, among many triangles."""
+    light = np.zeros(3)
+    x = 1 + 1e-9
+    wall = np.array([[x, -5, -5], [x, 5, -5], [x, 0, 5]])
+    pebble = np.array([[-(1 + 2e-9), 0.2, 0.1], [-3, 2, 1], [-3, -2, 2]])
+    offsets = np.random.default_rng(0).uniform(0, 3, (200, 1, 3)) * [[-1, 1, 1]]
+    triangles = np.concatenate([wall[None], pebble + offsets, pebble[None]])
+    got = sm.cube_depth_range(light, sm.Triangles(triangles))
+    assert float(got.near) == (1 - SLACK) * x
+
+
 def test_each_kind_of_nearest_point():
     """The three places the minimum can lie: a corner, an edge crossing r_i = +-r_j, a
     diagonal piercing the triangle; each against the linear program."""
