@@ -141,7 +141,7 @@ CUBE = box((2.0, 2.0, 2.0))  # BOX's surface, about the origin
 def test_the_old_refusals_give_the_empty_fit(spot: Any, path: str) -> None:
     """Formerly BEHIND_LIGHT / OUTSIDE_CONE: now a finite fit with nothing in its frustum."""
     with PATHS[path]():
-        for casters in (BOX, sm.Mesh(CUBE.vertices + [0.0, 0.0, 5.0], CUBE.triangles)):
+        for casters in (BOX, sm.Mesh(CUBE.vertices + [0.0, 0.0, 5.0], CUBE.faces)):
             s = sm.fit_shadow(spot, casters, 64)
             assert int(s.casters_used) == 0
             assert all(np.isfinite(np.asarray(m)).all() for m in s[2:6])
@@ -255,7 +255,7 @@ def test_fit_atlas_fits_every_other_light_and_reports_the_failed_one() -> None:
     """A shared caster set behind one spot gives it the empty fit (no error); a cube light at
     a caster's corner is reported and its tiles draw nothing and sample lit, while every
     other light's tiles are those of the atlas without it."""
-    tris = np.array([CUBE.vertices[CUBE.triangles] + [0.0, 0.0, 5.0]])[0]
+    tris = np.array([CUBE.vertices[CUBE.faces] + [0.0, 0.0, 5.0]])[0]
     casters = sm.Triangles(tris)
     good = [
         sm.SpotLight(np.zeros(3), AXIS, np.array(0.4)),
