@@ -311,3 +311,28 @@ def test_a_non_finite_frame_drops_nothing_so_the_fit_names_the_cause() -> None:
         B[0, 3] = np.nan
         with pytest.raises(ValueError, match=r"^blocker_to_world: contains non-finite"):
             sm.fit_shadow(spot, casters, 64, blocker_to_world=B)
+
+
+def test_points_rounding_cannot_tell_are_kept_as_the_fit_read_them():
+    """A tiny float32 spot scene placed 2 units from its local origin (found by the fuzz
+    on a fresh clone): the planes in local coordinates carry rounding larger than the
+    points' distances from them, so no point is dropped on that noise; the float32 fit
+    keeps all 15 points and agrees with float64 to the scene's float32 conditioning."""
+    a, b = -3.44418295e-07, 4.82185613e-06
+    z = [-1.99999966, -2.00000999, -1.99999449]
+    local = np.array([[a, a, z[0]]] * 11 + [[a, a, z[1]], [b, a, z[0]], [a, b, z[0]], [a, a, z[2]]])
+    B = np.eye(4)
+    B[2, 3] = 2.0
+    fits = {}
+    for dtype in (np.float32, np.float64):
+        light = sm.SpotLight(
+            np.full(3, -1.15470054e-05, dtype), np.full(3, 1.15470054e-05, dtype),
+            dtype(np.pi / 12),
+        )  # fmt: skip
+        fits[dtype] = sm.fit_shadow(
+            light, local.astype(dtype), 16, blocker_to_world=B.astype(dtype)
+        )
+    assert int(fits[np.float32].casters_used) == int(fits[np.float64].casters_used) == 15
+    f32, f64 = fits[np.float32].frustum, fits[np.float64].frustum
+    for name in ("rx_max", "ry_max", "near", "far"):
+        assert np.isclose(float(getattr(f32, name)), float(getattr(f64, name)), rtol=0.05), name

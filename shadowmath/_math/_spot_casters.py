@@ -111,16 +111,18 @@ def points_kept(xp: ModuleType, planes: Array, q: Array, eps: float) -> Array:
 
     A point set is kept as the fit has always read it, the blocker's vertices (whose
     ratio box, clipped to the square, covers their hull's part in the cone), less the
-    points not in front of the light (``z <= tau``): the rest is kept when, for each
-    side plane, some of it lies strictly inside (``g_k > tau``: its ratio box meets the
-    square), and dropped as a whole otherwise (nothing of it reaches the cone). A point
-    at the light (every ``|g| <= tau``) is kept, for the fit to refuse. ``tau = 64 eps
-    (|n| . |q| + |d|)`` per plane ``(n, d)``: the rounding of ``g``.
+    points not in front of the light (``z <= 0``): the rest is kept unless, for some
+    side plane, all of it lies outside by more than rounding (``g_k <= -tau``: nothing
+    of it reaches the cone), when it is dropped as a whole. Where rounding cannot tell,
+    the points are kept (keeping a caster never loses a shadow): the fit then reads them
+    as it did before any selection, and refuses what lies within rounding of the light.
+    A point at the light (every ``|g| <= tau``) is kept, for the fit to refuse.
+    ``tau = 64 eps (|n| . |q| + |d|)`` per plane ``(n, d)``: the rounding of ``g``.
     """
     g = plane_values(xp, planes, q)
     tau = 64.0 * eps * plane_values(xp, xp.abs(planes), xp.abs(q))
-    front = g[..., 4:5] > tau[..., 4:5]
-    reaches = xp.all(xp.any(front & (g[..., :4] > tau[..., :4]), axis=-2), axis=-1)
+    front = g[..., 4:5] > 0
+    reaches = xp.all(xp.any(front & (g[..., :4] > -tau[..., :4]), axis=-2), axis=-1)
     at_light = xp.all(xp.abs(g) <= tau, axis=-1)
     return (front[..., 0] & reaches[..., None]) | at_light
 
