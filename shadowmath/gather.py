@@ -12,7 +12,15 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._boundary._validate import Array, Checks, Context, convert, is_tracer, non_finite
+from ._boundary._validate import (
+    Array,
+    Checks,
+    Context,
+    check_faces,
+    convert,
+    is_tracer,
+    non_finite,
+)
 from .receivers import Mesh, Triangles
 
 
@@ -53,11 +61,12 @@ def gather_meshes(meshes: Iterable[tuple[Any, Any]]) -> Mesh:
 
     Raises:
         ValueError: naming ``meshes[i]``: an entry that is not a pair, a mesh of another
-            type, vertices not ``(V, 3)``, faces not ``(F, 3)`` integers inside
-            ``[0, V)`` or not concrete (traced faces cannot be offset), a transform not
+            type, vertices not ``(V, 3)``, faces not ``(F, 3)`` or not inside ``[0, V)``
+            or not concrete (traced faces cannot be offset), a transform not
             ``(4, 4)``, non-finite vertices or transform, a projective transform (last row
             not ``(0, 0, 0, 1)``). Under JAX transformations the vertices of an entry
             with non-finite values or a projective transform are NaN instead.
+        TypeError: ``meshes[i].faces`` not integers (as for any :class:`Mesh`).
 
     Example:
         >>> quad = Mesh(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
@@ -127,15 +136,7 @@ def _faces(name: str, faces: Any, count: int) -> np.ndarray:
     if is_tracer(faces):
         raise ValueError(f"{name}: its faces must be concrete indices, not traced")
     f = np.asarray(faces)
-    if f.ndim != 2 or f.shape[1] != 3:
-        raise ValueError(f"{name}: expected faces (F, 3), three indices each, got {f.shape}")
-    if f.dtype.kind not in "iu":
-        raise ValueError(f"{name}: expected integer face indices, got dtype {f.dtype}")
-    if f.size and (f.min() < 0 or f.max() >= count):
-        raise ValueError(
-            f"{name}: face indices must lie in [0, {count}) (it has {count} vertices); got "
-            f"{int(f.min())} to {int(f.max())}"
-        )
+    check_faces(f"{name}.faces", f, count)
     return f.astype(np.int64)
 
 

@@ -107,8 +107,7 @@ def test_gather_refusals():
         ([(quad, np.eye(3))], r"meshes\[0\]: expected a \(4, 4\) transform, got \(3, 3\)"),
         ([quad], r"meshes\[0\]: expected a pair \(mesh, transform\)"),
         ([(np.zeros((3, 3)), None)], r"meshes\[0\]: expected an sm.Mesh"),
-        ([(sm.Mesh(v, f + 1), None)], r"meshes\[0\]: face indices .*\[0, 4\)"),
-        ([(sm.Mesh(v, f * 1.0), None)], r"meshes\[0\]: expected integer"),
+        ([(sm.Mesh(v, f + 1), None)], r"meshes\[0\]\.faces: indices must lie in \[0, 4\)"),
         ([(sm.Mesh(v[None], f), None)], r"meshes\[0\]: expected vertices \(V, 3\)"),
         ([(sm.Triangles(np.zeros((2, 3))), None)], r"meshes\[0\]: expected Triangles of shape"),
         ([(sm.Mesh(v * np.nan, f), None)], r"meshes\[0\].vertices: .*non-finite"),
@@ -116,3 +115,5 @@ def test_gather_refusals():
     for meshes, message in cases:
         with pytest.raises(ValueError, match=message):
             sm.gather_meshes(meshes)
+    with pytest.raises(TypeError, match=r"meshes\[0\]\.faces: expected integer indices"):
+        sm.gather_meshes([(sm.Mesh(v, f * 1.0), None)])

@@ -253,6 +253,24 @@ def shape_error(name: str, expected: str, got: tuple[int, ...], hint: str = "") 
     return ValueError(f"{message}; {hint}" if hint else message)
 
 
+def check_faces(name: str, faces: Any, count: int, *, concrete: bool = True) -> None:
+    """A mesh's ``faces``: ``(F, 3)`` integer indices into ``count`` vertices (their range
+    checked where ``concrete``; traced indices cannot raise)."""
+    shape = tuple(np.shape(faces))
+    if len(shape) != 2 or shape[-1] != 3:
+        raise shape_error(name, "(F, 3)", shape, "three indices per triangle")
+    dtype = np.dtype(faces.dtype)
+    if not np.issubdtype(dtype, np.integer):
+        raise TypeError(f"{name}: expected integer indices, got dtype {dtype}")
+    if concrete:
+        f = np.asarray(faces)
+        if f.size and (f.min() < 0 or f.max() >= count):
+            raise ValueError(
+                f"{name}: indices must lie in [0, {count}) (the mesh has {count} "
+                f"vertices); got {int(f.min())} to {int(f.max())}"
+            )
+
+
 def require_last(name: str, x: Array, size: int, *, min_ndim: int = 1, hint: str = "") -> None:
     """Shape check: ``x`` must be ``(*batch, size)`` (with at least ``min_ndim`` dims)."""
     if x.ndim < min_ndim or x.shape[-1] != size:

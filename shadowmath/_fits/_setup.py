@@ -29,6 +29,7 @@ from shadowmath._boundary._validate import (
     Context,
     all_finite,
     batch_shape,
+    check_faces,
     convert,
     is_tracer,
     non_finite,
@@ -437,18 +438,7 @@ def _mesh_corners(ctx: Context, vertices: Array, faces: Any, name: str = "receiv
     """A mesh's triangles' corners ``(*batch, F, 3, 3)``; faces checked (NaN under tracing)."""
     xp = ctx.xp
     F = xp.asarray(faces)
-    if F.ndim != 2 or F.shape[-1] != 3:
-        raise shape_error(f"{name}.faces", "(F, 3)", tuple(F.shape), "three indices per triangle")
-    if not np.issubdtype(np.dtype(F.dtype), np.integer):
-        raise TypeError(f"{name}.faces: expected integer indices, got dtype {F.dtype}")
-    count = vertices.shape[-2]
-    if not (ctx.lazy and is_tracer(F)):
-        f = np.asarray(F)
-        if f.size and (f.min() < 0 or f.max() >= count):
-            raise ValueError(
-                f"{name}.faces: indices must lie in [0, {count}) (the mesh has {count} "
-                f"vertices); got {int(f.min())} to {int(f.max())}"
-            )
+    check_faces(f"{name}.faces", F, vertices.shape[-2], concrete=not (ctx.lazy and is_tracer(F)))
     if ctx.is_jax:  # a traced index out of range fills NaN instead of clamping silently
         return xp.take(vertices, F, axis=-2, mode="fill", fill_value=xp.nan)
     return xp.take(vertices, F, axis=-2)
