@@ -726,9 +726,9 @@ class _Report:
     def __init__(self, ctx: Context, api: str, reversed_z: bool, count: int) -> None:
         N = np.zeros((4, 4))
         N[2, 3], N[3, 3] = -2.0, 1.0
-        C, TC = (np.array(r).reshape(4, 4) for r in api_rows(api, bool(reversed_z)))
-        self.clip, self.tex = (ctx.xp.asarray(m, dtype=ctx.dtype) for m in (C @ N, TC @ N))
         self.api = api_rows(api, bool(reversed_z))
+        C, TC = (np.array(r).reshape(4, 4) for r in self.api)
+        self.clip, self.tex = (ctx.xp.asarray(m, dtype=ctx.dtype) for m in (C @ N, TC @ N))
         self.reversed_z = reversed_z
         self.errors: list[str | None] = [None] * count
 
