@@ -268,13 +268,15 @@ def fit_shadow(
     given = (B is not None, R is not None, U is not None, n is not None, f is not None)
     key = _fit_key(directional, spot, aim == "bbox", spec, (*given, kind != "points"))
     _check_static(key, method, spec)
+    xp = ctx.xp
     if spot:
         selection = spot_selection(ctx, L, U, B, casters, c_kind != "points")
         a, used = a._replace(verts=selection.points), selection.kept
-    else:
-        used = casters.shape[-3 if c_kind != "points" else -2]
-    xp = ctx.xp
-    used = xp.broadcast_to(xp.asarray(used), shape)
+        if tuple(used.shape) != shape:
+            used = xp.broadcast_to(used, shape)
+    else:  # every caster, in every entry (a 0-d array costs a fraction of broadcast_to)
+        count = casters.shape[-3 if c_kind != "points" else -2]
+        used = np.array(count) if not shape and xp is np else xp.full(shape, count)
     return _fit(ctx, a, shape, key, method)._replace(casters_used=used)
 
 
