@@ -109,6 +109,7 @@ def loops() -> SimpleNamespace:
     import numba
     from numba.core import config as numba_config
 
+    from shadowmath._math import _fit_entry
     from shadowmath._math._specialize import scalar_primitives, specialize
 
     config: Any = numba_config
@@ -121,6 +122,8 @@ def loops() -> SimpleNamespace:
             "where": jit(_select),
             "rint": np.rint,
             "alloc": jit(_zeros),
+            "flag": jit(_fit_entry.flag),
+            "to_single": jit(_fit_entry.to_single),
         }
         return specialize(primitives, wrap=jit)
     finally:

@@ -936,7 +936,7 @@ class _Block:
         count = part.stop - part.start
         status = self.status[part]
         operands = _compiled.operands((count,), a, count == 1)
-        options = _compiled.options(key, self.ctx.dtype)
+        options, _ = _compiled.options(key, self.ctx.dtype)
         _kernels.loops().fit_loop(*operands, options, self.out[part], self.mats[part], status)
         errors = status & ~WIDE_WARNING
         if errors.any():

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import functools
 import math
+import typing
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -17,13 +19,16 @@ from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import Array, Context, flat_batch, raise_status
+from shadowmath._math._fit_entry import FitOptions
 from shadowmath._math._frame import LightFrame
-from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
+from shadowmath._math._frustum import Frustum
 from shadowmath._math._specialize import scalar_formulas
 
 from ._fit_arrays import Inputs
 from ._shadow_setup import ShadowSetup
-from ._spec import FitKey
+from ._spec import FitKey, fit_options
+
+_FIELDS = tuple(typing.get_type_hints(FitOptions).items())
 
 #: One output row: origin, X, Y, Z (3 each), then the eight numeric frustum fields;
 #: one matrix block (4, 4, 4): world_to_light, blocker_to_clip, world_to_texture, placement.
@@ -50,11 +55,13 @@ def fit(
     mats = np.empty((count, 4, 4, 4), dtype=ctx.dtype)
     status = np.empty(count, dtype=np.int32)
     one = count == 1
-    arrays = (*operands(shape, a, one), options(key, ctx.dtype))
+    arrays = operands(shape, a, one)
+    record, python_record = options(key, ctx.dtype)
     if python:
-        scalar_formulas().fit_loop(*(v.tolist() for v in arrays), out, mats, status)
+        lists = (v.tolist() for v in arrays)
+        scalar_formulas().fit_loop(*lists, [python_record], out, mats, status)
     else:
-        _kernels.loops().fit_loop(*arrays, out, mats, status)
+        _kernels.loops().fit_loop(*arrays, record, out, mats, status)
     if status[0] if one else status.any():
         errors = status & ~WIDE_WARNING
         if errors[0] if one else errors.any():
@@ -98,28 +105,20 @@ def _frustum(v: tuple[Array, ...], directional: bool) -> Frustum:
     return Frustum(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], directional)
 
 
+#: The compiled loop's options record: :class:`FitOptions`' fields by name, then the
+#: API's rows (``C`` and ``T C`` of :func:`api_convention`, 16 row-major floats each).
+OPTIONS = np.dtype(
+    [(name, np.bool_ if kind is bool else np.float64) for name, kind in _FIELDS]
+    + [("api_clip", np.float64, (16,)), ("api_texture", np.float64, (16,))]
+)
+
+
 @functools.lru_cache(maxsize=64)
-def options(key: FitKey, dtype: Any) -> Array:
-    """The loop's static options as one read-only float64 array (see :func:`._loops._unpack`)."""
-    values = (
-        key.aim_bbox,
-        key.has_placement,
-        key.has_receivers,
-        key.has_up,
-        dtype == np.float32,
-        *key.margins,
-        float(np.finfo(dtype).eps),
-        key.stable,
-        *key.texels,
-        key.directional,
-        key.has_near,
-        key.has_far,
-        NEAR_FAR_SLACK,
-        *key.api[0],
-        *key.api[1],
-        key.spot,
-        key.triangles,
-    )
-    opts = np.array(values, dtype=np.float64)
+def options(key: FitKey, dtype: Any) -> tuple[Array, Any]:
+    """The loop's options: a read-only one-row :data:`OPTIONS` array (for Numba: one
+    array is the cheapest operand to dispatch) and the same as a Python record."""
+    single = np.dtype(dtype) == np.float32
+    values = (*fit_options(key, float(np.finfo(dtype).eps), single), *key.api)
+    opts = np.array([values], dtype=OPTIONS)
     opts.flags.writeable = False
-    return opts
+    return opts, SimpleNamespace(**dict(zip(OPTIONS.fields or (), values, strict=True)))

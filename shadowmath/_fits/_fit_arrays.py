@@ -1,16 +1,18 @@
-"""The fits on whole arrays (NumPy or JAX): the drivers of :mod:`._fit_formulas`' steps.
+"""The fits on whole arrays (NumPy or JAX): the vertex passes of :func:`._fit_entry.fit_entry`.
 
-One driver for both kinds of light; the kind is static (``key.directional``), so
-only its fit is traced or run. Each pass is one expression over ``(*batch, N)``
-component arrays (under ``jax.jit`` XLA fuses it into one loop over the vertices);
-the per-entry steps are the formulas shared with the compiled loops of
-:mod:`._loops`. Every check is computed with safe divisors and handed to
-``Checks`` in the order of :data:`._status.FIT_CHECKS`, so the first failure is
-reported with the same message as the compiled loop's.
+:func:`fit_arrays` runs the one per-entry driver of the fit,
+:func:`shadowmath._math._fit_entry.fit_entry`, once on whole arrays: each per-entry
+value is an array of the batch shape, and the passes over the vertices are the
+reductions of :class:`ArrayPasses` over the last axis of ``(*batch, N)`` component
+arrays (under ``jax.jit`` XLA fuses each into one loop over the vertices). The kind
+of light is static (``key.directional``), so only its fit is traced or run. The
+status bits it returns are the compiled loop's: NumPy raises the message of the
+first failing one, JAX hands each to ``Checks`` (NaN outputs under a transformation).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from types import ModuleType, SimpleNamespace
 from typing import Any, NamedTuple
@@ -19,12 +21,23 @@ import numpy as np
 
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
-from shadowmath._boundary._status import FIT_CHECKS, FORMULA_CHECKS
-from shadowmath._boundary._validate import Array, Checks, Context, all_finite
-from shadowmath._math._frustum import NEAR_FAR_SLACK
-from shadowmath._math._specialize import formulas, scalar_formulas
+from shadowmath._boundary._status import (
+    OVERFLOW,
+    PROJECTIVE,
+    VERTICES,
+    WIDE_WARNING,
+    fit_messages,
+)
+from shadowmath._boundary._validate import Array, Checks, Context, all_finite, raise_status
+from shadowmath._math._specialize import (
+    array_primitives,
+    formulas,
+    scalar_formulas,
+    scalar_primitives,
+    specialize,
+)
 
-from ._spec import FitKey
+from ._spec import FitKey, fit_options
 
 Components = tuple[Array, Array, Array]
 
@@ -53,273 +66,223 @@ class Inputs(NamedTuple):
 
 
 class Driver(NamedTuple):
-    """How one call runs the steps: its namespace, and its formulas per vertex and per entry.
+    """How one call runs the fit: its namespace, and :func:`fit_entry` with its passes.
 
-    On whole arrays both are ``formulas(xp)`` and per-entry values are ``(*batch,)``
-    arrays (``expand`` broadcasts them against ``(*batch, N)``). For one NumPy
-    entry (batch shape ``()``) the per-entry steps run on Python floats
-    (``scalar_formulas()``), which costs microseconds instead of the 0-d array
-    overhead of hundreds of NumPy calls; the vertex passes stay NumPy.
+    On whole arrays per-entry values are ``(*batch,)`` arrays. For one NumPy entry
+    (batch shape ``()``, ``scalar``) they are Python floats, which costs microseconds
+    instead of the 0-d array overhead of hundreds of NumPy calls; the vertex passes
+    stay NumPy.
     """
 
     xp: ModuleType
-    Fv: SimpleNamespace  # per-vertex formulas (whole arrays)
-    Fe: SimpleNamespace  # per-entry formulas
+    F: SimpleNamespace  # the formulas and fit_entry, with this backend's passes
     eps: float
     scalar: bool
 
     def entry(self, v: Array) -> Array:
-        """A reduction's result as a per-entry value."""
+        """A per-entry value (a Python float for one NumPy entry)."""
         return float(v) if self.scalar else v
-
-    def expand(self, values: tuple[Array, ...]) -> tuple[Array, ...]:
-        """Per-entry values broadcast against ``(*batch, N)`` vertex components."""
-        return values if self.scalar else tuple(v[..., None] for v in values)
-
-    def bounds(self, x: Array) -> tuple[Array, Array]:
-        return self.entry(self.xp.max(x, axis=-1)), self.entry(self.xp.min(x, axis=-1))
-
-    def sums(self, c: Components) -> tuple[Array, ...]:
-        return tuple(self.entry(self.xp.sum(v, axis=-1)) for v in c)
-
-    def max_abs(self, *vs: Array) -> Array:
-        xp = self.xp
-        out = xp.max(xp.abs(vs[0]), axis=-1)
-        for v in vs[1:]:
-            out = xp.maximum(out, xp.max(xp.abs(v), axis=-1))
-        return self.entry(out)
 
 
 def driver(ctx: Context, scalar: bool) -> Driver:
     """The driver of one call; ``scalar`` for one NumPy entry."""
-    F = formulas(ctx.xp)
-    return Driver(ctx.xp, F, scalar_formulas() if scalar else F, ctx.eps, scalar)
+    return Driver(ctx.xp, _namespace(ctx.xp, scalar), ctx.eps, scalar)
+
+
+@functools.cache
+def _namespace(xp: ModuleType, scalar: bool) -> SimpleNamespace:
+    primitives = scalar_primitives() if scalar else {**array_primitives(xp), "flag": Flags.of}
+    passes = ArrayPasses(xp, scalar, primitives["flag"])
+    names = ("spread", "light_pass", "receiver_far", "enclosing_ball")
+    return specialize({**primitives, **{n: getattr(passes, n) for n in names}})
+
+
+class Flags:
+    """A fit's status on arrays: each status bit's check (True: passed), by bit.
+
+    ``flag(ok, bit)`` on arrays is ``Flags({bit: ok})`` and ``|`` merges them (a bit
+    set twice fails where either fails), so the driver hands each check to ``Checks``
+    as it is, instead of building and decoding integer words: the traced fit stays small.
+    """
+
+    __slots__ = ("checks",)
+
+    def __init__(self, checks: dict[int, Any]) -> None:
+        self.checks = checks
+
+    @staticmethod
+    def of(ok: Any, bit: int) -> Flags:
+        return Flags({bit: ok})
+
+    def __or__(self, other: Flags | int) -> Flags:
+        if isinstance(other, int):  # the 0 a status starts from
+            return self
+        merged = dict(self.checks)
+        for bit, ok in other.checks.items():
+            merged[bit] = merged[bit] & ok if bit in merged else ok
+        return Flags(merged)
+
+    __ror__ = __or__
+
+
+class ArrayPasses:
+    """The passes over the vertices as reductions over the last axis (NumPy or JAX).
+
+    The vertex source is ``(world, status)``: the world components ``(*batch, N)``
+    and the per-entry bits of non-finite and projectively placed vertices.
+    """
+
+    def __init__(self, xp: ModuleType, scalar: bool, flag: Any) -> None:
+        self.xp, self.scalar, self.flag = xp, scalar, flag
+
+    @property
+    def Fv(self) -> SimpleNamespace:
+        return formulas(self.xp)
+
+    def _e(self, v: Array) -> Array:
+        return float(v) if self.scalar else v
+
+    def _x(self, values: tuple[Array, ...]) -> tuple[Array, ...]:
+        """Per-entry values broadcast against ``(*batch, N)`` vertex components."""
+        return values if self.scalar else tuple(v[..., None] for v in values)
+
+    def _bounds(self, x: Array) -> tuple[Array, Array]:
+        xp = self.xp
+        return self._e(xp.max(x, axis=-1)), self._e(xp.min(x, axis=-1))
+
+    def _max_abs(self, *vs: Array) -> Array:
+        xp = self.xp
+        out = xp.max(xp.abs(vs[0]), axis=-1)
+        for v in vs[1:]:
+            out = xp.maximum(out, xp.max(xp.abs(v), axis=-1))
+        return self._e(out)
+
+    def spread(self, vs: Any, o: tuple[Array, ...]) -> tuple[Any, ...]:
+        world, st = vs
+        xp = self.xp
+        c = tuple(p - q for p, q in zip(world, self._x(o), strict=True))
+        sums = tuple(self._e(xp.sum(v, axis=-1)) for v in c)
+        (hx, lx), (hy, ly), (hz, lz) = (self._bounds(v) for v in c)
+        ok = self.Fv.isfinite(sums[0]) & self.Fv.isfinite(sums[1]) & self.Fv.isfinite(sums[2])
+        st = st | self.flag(ok, OVERFLOW)
+        reach, coords = self._max_abs(*c), self._max_abs(*world)
+        return sums, (lx, ly, lz), (hx, hy, hz), reach, coords, st, world[0].shape[-1]
+
+    def light_pass(self, vs: Any, o: tuple[Array, ...], a: tuple[Array, ...], ratios: bool) -> Any:
+        xp = self.xp
+        c = tuple(p - q for p, q in zip(vs[0], self._x(o), strict=True))
+        x, y, z = self.Fv.to_light(*c, self._x(a))
+        if ratios:  # one reciprocal per vertex, as the compiled loop computes it
+            inv_z = 1 / xp.where(z > 0, z, xp.ones_like(z))
+            x, y = x * inv_z, y * inv_z
+        (hx, lx), (hy, ly), (hz, lz) = self._bounds(x), self._bounds(y), self._bounds(z)
+        return (hx, lx, hy, ly, hz, lz), self._max_abs(*c)
+
+    def receiver_far(
+        self, R: Array, o: tuple[Array, ...], a: tuple[Array, ...], sides: Any, opts: Any
+    ) -> tuple[Array, Array, Array]:
+        xp, F = self.xp, self.Fv
+        s, org, ax = self._x(sides), self._x(o), self._x(a)
+        corners = []
+        for j in range(0, R.shape[-1], 3):  # one point, or a triangle's three corners
+            r = (R[..., j] - org[0], R[..., j + 1] - org[1], R[..., j + 2] - org[2])
+            corners.extend(F.to_light(*r, ax))
+        if opts.triangles:
+            z = F.triangle_far(tuple(corners), s, opts.directional, opts.eps)
+        else:
+            z = F.where(F.receiver_counted(*corners, s, opts.directional), corners[2], -math.inf)
+        return self._e(xp.max(z, axis=-1)), self._e(all_finite(xp, R, 2)), self._link(R)
+
+    def _link(self, R: Array) -> Array:
+        """0, or under JAX 0 times the receivers' non-finite entries (NaN exactly there):
+        the link of :func:`._fit_entry.receivers_far` (NumPy raises instead)."""
+        xp = self.xp
+        if xp is np:
+            return 0.0
+        return 0.0 * xp.sum(xp.where(xp.isfinite(R), 0.0, R), axis=(-2, -1))
+
+    def enclosing_ball(self, vs: Any) -> tuple[Array, Array, Array, Array]:
+        """The vertices' minimal enclosing sphere: centre (3) and ``r^2``, per entry.
+
+        Its support points (2 to 4 vertices) come from Welzl's algorithm on the host
+        (:func:`._kernels.sphere_support`; under JAX through ``pure_callback``: they are
+        piecewise constant), the sphere from :func:`sphere_through` on them, so values
+        and derivatives follow the support points.
+        """
+        xp, world = self.xp, vs[0]
+        points = xp.stack(world, axis=-1)
+        if xp is np:
+            support = _kernels.sphere_support(points)
+        else:
+            import jax
+
+            shape = jax.ShapeDtypeStruct((*points.shape[:-2], 5), np.int32)  # type: ignore[no-untyped-call]
+            support = jax.pure_callback(
+                _kernels.sphere_support, shape, jax.lax.stop_gradient(points),
+                vmap_method="expand_dims",
+            )  # fmt: skip
+        q = tuple(
+            xp.take_along_axis(w, support[..., j : j + 1], axis=-1)[..., 0]
+            for j in range(4)
+            for w in world
+        )
+        k = support[..., 4]
+        if self.scalar:
+            q, k = tuple(float(v) for v in q), int(k)
+        F = scalar_formulas() if self.scalar else self.Fv
+        cx, cy, cz, r2 = F.sphere_through(q, k)
+        return cx, cy, cz, r2
+
+
+_IDENTITY = tuple(float(i % 5 == 0) for i in range(16))
 
 
 def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs, d: Driver) -> FitEntries:
     """The fit of ``key`` on shape-checked arrays; every value check goes to ``checks``."""
+    comps = _components(d, a.light, 8 if key.spot else 3)
+    L, S = comps[:3], comps[3:] if key.spot else (0.0,) * 5
+    U = _components(d, a.U, 3) if a.U is not None else (0.0, 0.0, 0.0)
+    b = _IDENTITY if a.B is None else tuple(d.entry(a.B[..., i // 4, i % 4]) for i in range(16))
+    nf = tuple(0.0 if v is None else d.entry(v) for v in (a.near, a.far))
+    o = fit_options(key, d.eps)
+    e = d.F.fit_entry(L, S, U, b, _vertex_source(d, a.verts, a.B), a.R, nf, o, key.api)
+    _report(ctx, checks, e.status)
+    return FitEntries(e.origin, e.axes, e.box, e.W, e.clip, e.tex)
+
+
+#: The checks' bits and messages in report order (the vertices' check is exact here).
+_MESSAGES = fit_messages(False)
+
+
+def _report(ctx: Context, checks: Checks, status: Flags | int) -> None:
+    """The failed checks, in report order: raised (NumPy) or recorded (JAX: NaN outputs)."""
     xp = ctx.xp
-    flags: dict[str, Array] = {
-        "light": all_finite(xp, a.light, 1),
-        "vertices": all_finite(xp, a.verts, 2),
-    }
-    if a.B is not None:
-        flags["placement"] = all_finite(xp, a.B, 2)
-        b = tuple(a.B[..., i // 4, i % 4] for i in range(16))
-        flags["singular_placement"] = d.Fv.placement_ok(b, d.eps)
-    if a.R is not None:
-        flags["receivers"] = all_finite(xp, a.R, 2)
-    if a.U is not None:
-        flags["up"] = all_finite(xp, a.U, 1)
-    world = _world(d, a.verts, a.B, flags)
-    fit = _directional if key.directional else _point
-    entries = fit(d, key, a, world, flags)
-    for name, _ in FIT_CHECKS:  # in report order
-        ok = flags.get(name, True)
-        if ok is not True:
-            checks.require(ok, _MESSAGES[name])
-    calm = flags.get("wide_warning", True)
+    if isinstance(status, int):  # one NumPy entry on Python floats: the loop's status word
+        if status & ~WIDE_WARNING:
+            raise_status(np.asarray(status), _MESSAGES)
+        if status & WIDE_WARNING:
+            msg.warn_wide()
+        return
+    ok = status.checks
+    for bit, message in _MESSAGES:
+        if bit in ok and ok[bit] is not True:
+            checks.require(ok[bit], message)
+    calm = ok.get(WIDE_WARNING, True)
     if xp is np and calm is not True and not np.all(calm):  # (JAX: no warnings)
         msg.warn_wide()
-    return entries
 
 
-_MESSAGES = dict(FIT_CHECKS)
+def _components(d: Driver, v: Array, n: int) -> tuple[Array, ...]:
+    return tuple(d.entry(v[..., i]) for i in range(n))
 
 
-def _world(d: Driver, verts: Array, B: Array | None, flags: dict[str, Array]) -> Components:
-    """The vertices' world components, through the placement (checked: ``w > 0``)."""
+def _vertex_source(d: Driver, verts: Array, B: Array | None) -> tuple[Components, Any]:
+    """The vertices' world components (through the placement) and their status bits."""
+    xp, F = d.xp, d.F
     px, py, pz = verts[..., 0], verts[..., 1], verts[..., 2]
+    st = F.flag(d.entry(all_finite(xp, verts, 2)), VERTICES)
     if B is None:
-        return px, py, pz
+        return (px, py, pz), st
     b = tuple(B[..., None, i // 4, i % 4] for i in range(16))
-    x, y, z, w = d.Fv.place(b, px, py, pz)
-    flags["projective"] = d.xp.all(w > 0, axis=-1)
-    return x, y, z
-
-
-def _components(d: Driver, v: Array | None) -> Components:
-    if v is None:
-        return 0.0, 0.0, 0.0
-    return d.entry(v[..., 0]), d.entry(v[..., 1]), d.entry(v[..., 2])
-
-
-def _finite3(d: Driver, s: tuple[Array, ...]) -> Array:
-    return d.Fe.isfinite(s[0]) & d.Fe.isfinite(s[1]) & d.Fe.isfinite(s[2])
-
-
-def _point(
-    d: Driver, key: FitKey, a: Inputs, world: Components, flags: dict[str, Array]
-) -> FitEntries:
-    """The article's MDV fit of a point light (with or without ``up``), on whole arrays;
-    a spot light aims along its axis instead and clips the sides to its cone."""
-    xp, eps = d.xp, d.eps
-    L = _components(d, a.light)
-    o = tuple(p - lc for p, lc in zip(world, d.expand(L), strict=True))
-    sums = d.sums(o)
-    if key.spot:
-        aim = tuple(d.entry(a.light[..., i]) for i in (3, 4, 5))
-        angle = d.entry(a.light[..., 7])
-        flags["spot_angle"] = d.Fe.spot_angle_ok(angle)
-    elif key.aim_bbox:
-        aim = tuple(0.5 * (hi + lo) for hi, lo in (d.bounds(c) for c in o))
-    else:
-        aim = tuple(s / o[0].shape[-1] for s in sums)
-    flags["overflow"] = _finite3(d, sums)
-    reach = d.max_abs(*o)
-    # The position only: a spot light packs its direction and tan(angle) after it.
-    coords = xp.maximum(d.max_abs(*world), d.max_abs(a.light[..., :3]))
-    axes, ok_nonzero, ok_direction, flags["up_parallel"] = d.Fe.fit_axes(
-        aim, _components(d, a.U), key.has_up, coords, eps
-    )
-    flags["spot" if key.spot else "direction"] = ok_nonzero if key.spot else ok_direction
-    x, y, z = d.Fv.to_light(*o, d.expand(axes))
-    # One reciprocal per vertex, as the compiled loop and adaptive_frustum's pass compute it.
-    inv_z = 1 / xp.where(z > 0, z, xp.ones_like(z))
-    (hi_x, lo_x), (hi_y, lo_y) = d.bounds(x * inv_z), d.bounds(y * inv_z)
-    zb_max, zb_min = d.bounds(z)
-    if key.spot:
-        t = d.entry(a.light[..., 6])
-        *sides, flags["behind"], flags["outside_cone"], flags["silhouette"] = d.Fe.spot_sides(
-            (hi_x, lo_x, hi_y, lo_y), t, zb_min, reach, eps
-        )
-        sides = tuple(sides)
-    else:
-        half_x, half_y, flags["behind"], flags["silhouette"] = d.Fe.point_sides(
-            hi_x, lo_x, hi_y, lo_y, zb_min, reach, eps
-        )
-        zero = 0.0 * half_x
-        sides = (half_x, half_y, zero, zero)
-    flags["near_rounding"] = d.Fe.near_clear(zb_min, coords, eps)
-    flags["too_wide"], flags["wide_warning"] = d.Fe.fov_ok(sides, key.margins)
-    z_hi = _receivers(d, key, a, L, axes, sides, zb_max)
-    return _finish(d, key, a, flags, L, axes, sides, (zb_min, z_hi, zb_min, zb_max))
-
-
-def _directional(
-    d: Driver, key: FitKey, a: Inputs, world: Components, flags: dict[str, Array]
-) -> FitEntries:
-    """The orthographic fit of a directional light (box or stable), on whole arrays."""
-    eps = d.eps
-    toward = tuple(-c for c in _components(d, a.light))
-    coords = d.max_abs(*world)
-    axes, flags["zero_light"], _, flags["up_parallel"] = d.Fe.fit_axes(
-        toward, _components(d, a.U), key.has_up, coords, eps
-    )
-    sums = d.sums(world)
-    flags["overflow"] = _finite3(d, sums)
-    if key.stable:  # the minimal enclosing sphere: the shape's, whatever its vertices
-        cx, cy, cz, r2 = _enclosing_sphere(d, world)
-        c = (cx, cy, cz)
-    else:
-        c = tuple(0.5 * (hi + lo) for hi, lo in (d.bounds(p) for p in world))
-    o = tuple(p - cc for p, cc in zip(world, d.expand(c), strict=True))
-    reach = d.max_abs(*o)
-    x, y, z = d.Fv.to_light(*o, d.expand(axes))
-    zb_max, zb_min = d.bounds(z)
-    if key.stable:
-        texels = (*key.margins, *key.texels)
-        *sides, flags["silhouette"] = d.Fe.stable_sides(r2, c, axes, texels, reach, eps)
-    else:
-        *sides, flags["silhouette"] = d.Fe.box_sides(*d.bounds(x), *d.bounds(y), reach, eps)
-    z_hi = _receivers(d, key, a, c, axes, tuple(sides), zb_max)
-    *origin, shift = d.Fe.directional_origin(zb_min, z_hi, sides[0], sides[1], c, axes)
-    z = (zb_min - shift, z_hi - shift, zb_min - shift, zb_max - shift)
-    return _finish(d, key, a, flags, tuple(origin), axes, tuple(sides), z)
-
-
-def _enclosing_sphere(d: Driver, world: Components) -> tuple[Array, Array, Array, Array]:
-    """The vertices' minimal enclosing sphere: centre (3) and ``r^2``, per entry.
-
-    Its support points (2 to 4 vertices) come from Welzl's algorithm on the host
-    (:func:`._kernels.sphere_support`; under JAX through ``pure_callback``: they are
-    piecewise constant), the sphere from :func:`sphere_through` on them, so values
-    and derivatives follow the support points.
-    """
-    xp = d.xp
-    points = xp.stack(world, axis=-1)
-    if xp is np:
-        support = _kernels.sphere_support(points)
-    else:
-        import jax
-
-        shape = jax.ShapeDtypeStruct((*points.shape[:-2], 5), np.int32)  # type: ignore[no-untyped-call]
-        support = jax.pure_callback(
-            _kernels.sphere_support, shape, jax.lax.stop_gradient(points), vmap_method="expand_dims"
-        )
-    q = tuple(
-        xp.take_along_axis(w, support[..., j : j + 1], axis=-1)[..., 0]
-        for j in range(4)
-        for w in world
-    )
-    k = support[..., 4]
-    if d.scalar:
-        q, k = tuple(float(v) for v in q), int(k)
-    cx, cy, cz, r2 = d.Fe.sphere_through(q, k)
-    return cx, cy, cz, r2
-
-
-def _receivers(
-    d: Driver,
-    key: FitKey,
-    a: Inputs,
-    origin: tuple[Array, ...],
-    axes: tuple[Array, ...],
-    sides: tuple[Array, ...],
-    z_hi: Array,
-) -> Array:
-    """The far end widened over the receivers (points or triangles) inside the map's sides.
-
-    Receivers never move ``near``: one nearer than every caster cannot be shadowed.
-    """
-    if a.R is None:
-        return z_hi
-    xp = d.xp
-    half_x, half_y, cx, cy = sides
-    safe_hx = d.Fe.where(half_x > 0, half_x, 1.0)
-    safe_hy = d.Fe.where(half_y > 0, half_y, 1.0)
-    s = d.expand((key.margins[0] / safe_hx, key.margins[1] / safe_hy, cx, cy))
-    o, ax = d.expand(origin), d.expand(axes)
-    corners = []
-    for j in range(0, a.R.shape[-1], 3):  # one point, or a triangle's three corners
-        r = (a.R[..., j] - o[0], a.R[..., j + 1] - o[1], a.R[..., j + 2] - o[2])
-        corners.extend(d.Fv.to_light(*r, ax))
-    if key.triangles:
-        z = d.Fv.triangle_far(tuple(corners), s, key.directional, d.eps)
-    else:
-        counted = d.Fv.receiver_counted(*corners, s, key.directional)
-        z = d.Fv.where(counted, corners[2], -math.inf)
-    far = d.entry(xp.max(z, axis=-1))
-    return d.Fe.where(far > z_hi, far, z_hi)
-
-
-def _components_of(v: Array) -> tuple[Array, ...]:
-    return tuple(v[..., j] for j in range(v.shape[-1]))
-
-
-def _finish(
-    d: Driver,
-    key: FitKey,
-    a: Inputs,
-    flags: dict[str, Any],
-    origin: tuple[Array, ...],
-    axes: tuple[Array, ...],
-    sides: tuple[Array, ...],
-    z: tuple[Array, Array, Array, Array],
-) -> FitEntries:
-    """The depth range and its checks, then the matrices from safe values."""
-    given = tuple(None if v is None else d.entry(v) for v in (a.near, a.far))
-    F = d.Fe
-    near, far, ok = F.depth_range(z, given, (key.has_near, key.has_far), NEAR_FAR_SLACK)
-    flags.update(zip(FORMULA_CHECKS[5:], ok, strict=True))
-    half_x, half_y, cx, cy = sides
-    if a.R is not None and d.xp is not np:
-        # A non-finite receiver is only counted out (a where), which would give it a zero
-        # derivative: link it into the matrices by 0 * its non-finite entries (NaN exactly
-        # there, 0 elsewhere), so that its derivative is NaN too. JAX only: NumPy raises.
-        xp = d.xp
-        link = sum(xp.sum(xp.where(xp.isfinite(c), 0.0, c), axis=-1) for c in _components_of(a.R))
-        cx = cx + 0.0 * link
-    safe = F.safe_box(half_x, half_y, cx, cy, near, far)
-    W, clip, tex = F.fit_rows(origin, axes, safe, key.margins, key.directional, key.api)
-    return FitEntries(origin, axes, (half_x, half_y, near, far, cx, cy), W, clip, tex)
+    x, y, z, w = formulas(xp).place(b, px, py, pz)
+    return (x, y, z), st | F.flag(d.entry(xp.all(w > 0, axis=-1)), PROJECTIVE)

@@ -2,15 +2,15 @@
 
 A boundary: it reads the light's kind once (its type, or ``w`` of a homogeneous
 ``(x, y, z, w)``), makes the static :class:`._spec.FitKey`, converts and checks the
-arrays' shapes once, then runs one of three equivalent drivers of the same fit
-formulas on the trusted arrays:
+arrays' shapes once, then runs the one driver of the fit,
+:func:`shadowmath._math._fit_entry.fit_entry`, on the trusted arrays in one of
+three ways:
 
-* NumPy input with Numba installed: the compiled loop of the light's kind
-  (:mod:`._compiled`);
-* concrete JAX input: :func:`._fit_arrays.fit_arrays` under a ``jax.jit`` cached
-  per key, with the failed checks read back in one host sync;
-* NumPy without Numba, or JAX inside a transformation: :func:`._fit_arrays.fit_arrays`
-  directly, on whole arrays.
+* NumPy input with Numba installed: compiled, per batch entry (:mod:`._compiled`);
+  one small NumPy fit without Numba runs the same loop on Python floats;
+* concrete JAX input: on whole arrays (:func:`._fit_arrays.fit_arrays`) under a
+  ``jax.jit`` cached per key, with the failed checks read back in one host sync;
+* NumPy without Numba, or JAX inside a transformation: on whole arrays directly.
 """
 
 from __future__ import annotations

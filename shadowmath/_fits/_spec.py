@@ -24,7 +24,8 @@ from shadowmath._math._conventions import (
     _clip_from_gl,
     _texture_from_gl_clip,
 )
-from shadowmath._math._frustum import _margins, _texels
+from shadowmath._math._fit_entry import FitOptions
+from shadowmath._math._frustum import NEAR_FAR_SLACK, _margins, _texels
 from shadowmath._math._pcf import _border_texels
 
 
@@ -216,6 +217,33 @@ class FitKey(NamedTuple):
     has_near: bool
     has_far: bool
     triangles: bool = False  # receivers given as triangles (rows of 9), not points
+
+
+@functools.lru_cache(maxsize=256)
+def fit_options(key: FitKey, eps: float, single: bool = False) -> FitOptions:
+    """The options record of :func:`._fit_entry.fit_entry` for ``key``: its fields by name.
+
+    ``eps``: the input dtype's; ``single``: float32 input computed in float64 (per entry).
+    """
+    return FitOptions(
+        directional=key.directional,
+        spot=key.spot,
+        aim_bbox=key.aim_bbox,
+        stable=key.stable,
+        has_placement=key.has_placement,
+        has_receivers=key.has_receivers,
+        has_up=key.has_up,
+        has_near=key.has_near,
+        has_far=key.has_far,
+        triangles=key.triangles,
+        single=single,
+        margin_x=key.margins[0],
+        margin_y=key.margins[1],
+        texels_x=float(key.texels[0]),
+        texels_y=float(key.texels[1]),
+        eps=eps,
+        slack=NEAR_FAR_SLACK,
+    )
 
 
 @functools.lru_cache(maxsize=256)

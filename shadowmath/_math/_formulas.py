@@ -23,6 +23,7 @@ where: Callable[..., Any] = np.where
 sqrt: Callable[..., Any] = np.sqrt
 fabs: Callable[..., Any] = np.abs
 isfinite: Callable[..., Any] = np.isfinite
+maximum: Callable[..., Any] = np.maximum
 
 
 def normalize3(x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any]:

@@ -19,11 +19,21 @@ from typing import Any
 
 import numpy as np
 
-from . import _cascade_formulas, _cascade_loop, _fit_formulas, _formulas, _loops
+from . import (
+    _cascade_formulas,
+    _cascade_loop,
+    _fit_entry,
+    _fit_formulas,
+    _formulas,
+    _loops,
+    _vertex_passes,
+)
 
 _MODULES = (
     (_formulas, _formulas.FUNCTIONS),
     (_fit_formulas, _fit_formulas.FUNCTIONS),
+    (_vertex_passes, _vertex_passes.FUNCTIONS),
+    (_fit_entry, _fit_entry.FUNCTIONS),
     (_loops, _loops.FUNCTIONS),
     (_cascade_formulas, _cascade_formulas.FUNCTIONS),
     (_cascade_loop, _cascade_loop.FUNCTIONS),
@@ -37,6 +47,8 @@ def specialize(
 
     ``wrap`` (e.g. ``numba.njit``) is applied to each copy; the copies call one
     another through the same namespace, so a compiled formula calls compiled ones.
+    A primitive named like a function replaces it (the array backends' vertex passes
+    replace the loops of :mod:`._vertex_passes`).
     """
     namespace: dict[str, Any] = {}
     for module, _ in _MODULES:
@@ -48,6 +60,8 @@ def specialize(
             f"formulas defined twice: {sorted(n for n in set(names) if names.count(n) > 1)}"
         )
     for name in names:
+        if name in primitives:
+            continue
         func = namespace[name]
         copy = types.FunctionType(func.__code__, namespace, name, func.__defaults__)
         namespace[name] = wrap(copy) if wrap is not None else copy
@@ -55,16 +69,28 @@ def specialize(
     return types.SimpleNamespace(**{name: namespace[name] for name in exported})
 
 
-_PRIMITIVES = ("where", "sqrt", "fabs", "rint", "isfinite")
+_PRIMITIVES = ("where", "sqrt", "fabs", "rint", "isfinite", "maximum", "flag")
 
 
 @functools.cache
 def formulas(xp: ModuleType) -> types.SimpleNamespace:
     """The formulas specialized to the array namespace ``xp`` (NumPy or ``jax.numpy``)."""
+    return specialize(array_primitives(xp))
+
+
+def array_primitives(xp: ModuleType) -> dict[str, Any]:
+    """The primitives on arrays of the namespace ``xp``."""
     where = xp.where if xp is not np else _numpy_where
-    return specialize(
-        {"where": where, "sqrt": xp.sqrt, "fabs": xp.abs, "rint": xp.round, "isfinite": xp.isfinite}
-    )
+
+    return {
+        "where": where,
+        "sqrt": xp.sqrt,
+        "fabs": xp.abs,
+        "rint": xp.round,
+        "isfinite": xp.isfinite,
+        "maximum": xp.maximum,
+        "to_single": _same,
+    }
 
 
 @functools.cache
@@ -81,8 +107,15 @@ def scalar_primitives() -> dict[str, Any]:
         "fabs": abs,
         "rint": _rint,
         "isfinite": math.isfinite,
+        "maximum": max,
+        "flag": _fit_entry.flag,
+        "to_single": _fit_entry.to_single,
         "alloc": _zeros_list,
     }
+
+
+def _same(x: Any) -> Any:
+    return x
 
 
 def _zeros_list(n: int) -> list[float]:

@@ -1,0 +1,252 @@
+"""One fit of :func:`fit_shadow` per entry: the single driver of :mod:`._fit_formulas`' steps.
+
+Every step of the fit (aim, frame, sides, receivers, depth range, checks, matrices)
+is written here once, and every backend runs this code:
+
+* **per entry** (Numba, or Python floats for one small fit): :func:`._loops.fit_loop`
+  calls :func:`fit_entry` for each batch entry with Python/Numba floats;
+* **on whole arrays** (NumPy, JAX under ``jit``, ``vmap``, ``grad``):
+  :func:`shadowmath._fits._fit_arrays.fit_arrays` calls it once, and each per-entry
+  value is an array of the batch shape.
+
+So the code uses no data-dependent Python branch: a choice between values is the
+``where`` primitive, and a failed check sets its status bit through ``flag``
+(``0 if ok else bit``, elementwise on arrays); the static options of the record ``o``
+(:class:`FitOptions` on arrays; the same fields as a NumPy record for Numba) are
+plain branches. The O(N) work over the vertices is the only thing with one form per
+backend: the passes ``spread``, ``light_pass``, ``receiver_far`` and ``enclosing_ball``
+(loops over the vertices in :mod:`._loops`, reductions over the last axis in
+:mod:`shadowmath._fits._fit_arrays`), both calling the same per-vertex formulas. The
+vertex source ``vs`` and the receivers ``R`` are whatever the backend's passes read.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from shadowmath._boundary._status import (
+    FORMULA_BITS,
+    LIGHT,
+    NEAR_ROUNDING,
+    OUTSIDE_CONE,
+    PLACEMENT,
+    RECEIVERS,
+    SINGULAR_PLACEMENT,
+    SPOT,
+    SPOT_ANGLE,
+    TOO_WIDE,
+    UP,
+    WIDE_WARNING,
+)
+
+from ._fit_formulas import (
+    box_sides,
+    depth_range,
+    directional_origin,
+    fit_axes,
+    fit_rows,
+    fov_ok,
+    near_clear,
+    placement_ok,
+    point_sides,
+    safe_box,
+    spot_angle_ok,
+    spot_sides,
+    stable_sides,
+)
+from ._formulas import axes_from_z, fabs, isfinite, maximum, normalize3, where
+from ._vertex_passes import enclosing_ball, light_pass, receiver_far, spread
+
+
+class FitOptions(NamedTuple):
+    """The static options of one fit, by name (a NumPy record with these fields for Numba)."""
+
+    directional: bool
+    spot: bool
+    aim_bbox: bool
+    stable: bool
+    has_placement: bool
+    has_receivers: bool
+    has_up: bool
+    has_near: bool
+    has_far: bool
+    triangles: bool  # receiver rows are triangles (9 numbers), not points
+    single: bool  # float32 input computed in float64 (per entry): Z is rounded to float32
+    margin_x: float
+    margin_y: float
+    texels_x: float
+    texels_y: float
+    eps: float
+    slack: float
+
+
+class Entry(NamedTuple):
+    """One fit's results (per-entry values): what the drivers store or assemble."""
+
+    status: Any
+    origin: tuple[Any, ...]  # 3
+    axes: tuple[Any, ...]  # X, Y, Z: 9
+    box: tuple[Any, ...]  # half_x, half_y, near, far, x_offset, y_offset
+    W: tuple[Any, ...]  # 12
+    clip: tuple[Any, ...]  # 16 (placement not applied)
+    tex: tuple[Any, ...]  # 16
+
+
+# Primitives of the backends (specialize binds each backend's own; these are Python's).
+def flag(ok: Any, bit: int) -> Any:
+    """``bit`` where the check ``ok`` failed, else 0."""
+    return 0 if ok else bit
+
+
+def to_single(x: float) -> float:
+    """``x`` rounded to float32 (a per-entry loop computing a float32 fit in float64)."""
+    return float(np.float32(x))
+
+
+def fit_entry(L: Any, S: Any, U: Any, b: Any, vs: Any, R: Any, nf: Any, o: Any, api: Any) -> Any:
+    """One entry's fit: ``L`` light (3), ``S`` spot axis, ``tan``, angle (5), ``U`` up (3),
+    ``b`` placement (16), ``vs`` the casters, ``R`` receivers, ``nf`` given near, far;
+    ``api = (C, T C)`` rows. Returns an :class:`Entry`."""
+    if o.directional:
+        st, origin, a, sides, z = directional_entry(L, U, vs, R, o)
+    else:
+        st, origin, a, sides, z = point_entry(L, S, U, vs, R, o)
+    st = st | input_checks(L, S, U, b, o)
+    n, f, ok = depth_range(z, nf, (o.has_near, o.has_far), o.slack)
+    st = st | flags(ok, 5)
+    hx, hy, cx, cy = sides
+    safe = safe_box(hx, hy, cx, cy, n, f)
+    W, clip, tex = fit_rows(origin, a, safe, (o.margin_x, o.margin_y), o.directional, api)
+    return Entry(st, origin, a, (hx, hy, n, f, cx, cy), W, clip, tex)
+
+
+def flags(ok: Any, first: int) -> Any:
+    """Status bits of the formula checks ``ok`` (starting at ``FORMULA_BITS[first]``)."""
+    st = 0
+    for j in range(len(ok)):
+        st = st | flag(ok[j], FORMULA_BITS[first + j])
+    return st
+
+
+def input_checks(L: Any, S: Any, U: Any, b: Any, o: Any) -> Any:
+    """The given numbers' checks: finite light (and spot), up and placement; a placement
+    that is invertible beyond rounding."""
+    st = flag(isfinite(L[0]) & isfinite(L[1]) & isfinite(L[2]), LIGHT)
+    if o.spot:
+        ok = isfinite(S[0])
+        for j in range(1, 5):
+            ok = ok & isfinite(S[j])
+        st = st | flag(ok, LIGHT)
+    if o.has_up:
+        st = st | flag(isfinite(U[0]) & isfinite(U[1]) & isfinite(U[2]), UP)
+    if o.has_placement:
+        ok = isfinite(b[0])
+        for j in range(1, 16):
+            ok = ok & isfinite(b[j])
+        st = st | flag(ok, PLACEMENT) | flag(placement_ok(b, o.eps), SINGULAR_PLACEMENT)
+    return st
+
+
+def point_entry(L: Any, S: Any, U: Any, vs: Any, R: Any, o: Any) -> Any:
+    """One point (or spot) light's fit: the article's MDV frame aimed at the casters'
+    mean (or box centre), or a spot light's axis with its sides clipped to the cone."""
+    eps = o.eps
+    s, lo, hi, reach, coords, st, n = spread(vs, L)
+    if o.spot:
+        d = (S[0], S[1], S[2])
+        st = st | flag(spot_angle_ok(S[4]), SPOT_ANGLE)
+    elif o.aim_bbox:
+        d = (0.5 * (hi[0] + lo[0]), 0.5 * (hi[1] + lo[1]), 0.5 * (hi[2] + lo[2]))
+    else:
+        d = (s[0] / n, s[1] / n, s[2] / n)
+    coords = maximum(maximum(coords, fabs(L[0])), maximum(fabs(L[1]), fabs(L[2])))
+    a, ok_nonzero, ok_dir, ok_up = fit_axes(d, U, o.has_up, coords, eps)
+    if o.spot:
+        st = st | flag(ok_nonzero, SPOT) | flags((ok_up,), 2)
+    else:
+        st = st | flags((ok_dir, ok_up), 1)
+    if o.single and not o.has_up:
+        # The helper axis is decided on Z as returned (rounded to float32), as a
+        # float32 fit on arrays decides it, so the documented rule holds for that frame.
+        zx, zy, zz, _ = normalize3(d[0], d[1], d[2])
+        zx, zy, zz = to_single(zx), to_single(zy), to_single(zz)
+        a = axes_from_z(zx, zy, zz) + (zx, zy, zz)  # noqa: RUF005 (Numba: tuple concatenation)
+    bounds, _ = light_pass(vs, L, a, True)
+    hx, lx, hy, ly, zb_max, zb_min = bounds
+    if o.spot:
+        half_x, half_y, cx, cy, ok_behind, ok_cone, ok_sil = spot_sides(
+            (hx, lx, hy, ly), S[3], zb_min, reach, eps
+        )
+        st = st | flag(ok_cone, OUTSIDE_CONE)
+    else:
+        half_x, half_y, ok_behind, ok_sil = point_sides(hx, lx, hy, ly, zb_min, reach, eps)
+        cx = cy = 0.0 * half_x
+    st = st | flags((ok_behind, ok_sil), 3) | flag(near_clear(zb_min, coords, eps), NEAR_ROUNDING)
+    ok_fov, calm = fov_ok((half_x, half_y, cx, cy), (o.margin_x, o.margin_y))
+    # (Not an error: the boundary warns, unless a failed check raises first.)
+    st = st | flag(ok_fov, TOO_WIDE) | flag(calm, WIDE_WARNING)
+    z_hi, st, link = receivers_far(R, L, a, (half_x, half_y, cx, cy), zb_max, st, o)
+    return (
+        st,
+        (L[0], L[1], L[2]),
+        a,
+        (half_x, half_y, cx + link, cy),
+        (zb_min, z_hi, zb_min, zb_max),
+    )
+
+
+def directional_entry(L: Any, U: Any, vs: Any, R: Any, o: Any) -> Any:
+    """One directional light's fit: the casters' box (or, ``stable``, their minimal
+    enclosing sphere snapped to whole texels) across the light's direction."""
+    eps = o.eps
+    zero = 0.0 * L[0]
+    _, lo, hi, _, coords, st, _ = spread(vs, (zero, zero, zero))
+    a, ok_light, _, ok_up = fit_axes((-L[0], -L[1], -L[2]), U, o.has_up, coords, eps)
+    st = st | flags((ok_light,), 0) | flags((ok_up,), 2)
+    if o.stable:  # the minimal enclosing sphere: the shape's, whatever its vertices
+        sphere = enclosing_ball(vs)
+        c = (sphere[0], sphere[1], sphere[2])
+    else:
+        sphere = (zero, zero, zero, zero)
+        c = (0.5 * (hi[0] + lo[0]), 0.5 * (hi[1] + lo[1]), 0.5 * (hi[2] + lo[2]))
+    bounds, reach = light_pass(vs, c, a, False)
+    hx, lx, hy, ly, zb_max, zb_min = bounds
+    if o.stable:
+        texels4 = (o.margin_x, o.margin_y, o.texels_x, o.texels_y)
+        half_x, half_y, cx, cy, ok_sil = stable_sides(sphere[3], c, a, texels4, reach, eps)
+    else:
+        half_x, half_y, cx, cy, ok_sil = box_sides(hx, lx, hy, ly, reach, eps)
+    st = st | flags((ok_sil,), 4)
+    z_hi, st, link = receivers_far(R, c, a, (half_x, half_y, cx, cy), zb_max, st, o)
+    ox, oy, oz, shift = directional_origin(zb_min, z_hi, half_x, half_y, c, a)
+    z = (zb_min - shift, z_hi - shift, zb_min - shift, zb_max - shift)
+    return st, (ox, oy, oz), a, (half_x, half_y, cx + link, cy), z
+
+
+def receivers_far(R: Any, origin: Any, a: Any, sides: Any, z_hi: Any, st: Any, o: Any) -> Any:
+    """``far`` widened over the receivers inside the map's sides (and their check).
+
+    Receivers never move ``near``: one nearer than every caster cannot be shadowed.
+    ``link``: 0, or under JAX NaN where a receiver is not finite. A non-finite receiver
+    is only counted out (a ``where``), which would give it a zero derivative; the
+    entries add the link to the map's x offset (which no ``where`` guards), so that
+    the matrices and their derivatives are NaN there.
+    """
+    if not o.has_receivers:
+        return z_hi, st, 0.0
+    half_x, half_y, cx, cy = sides
+    s = (o.margin_x / where(half_x > 0, half_x, 1.0), o.margin_y / where(half_y > 0, half_y, 1.0))
+    far, ok, link = receiver_far(R, origin, a, (s[0], s[1], cx, cy), o)
+    return where(far > z_hi, far, z_hi), st | flag(ok, RECEIVERS), link
+
+
+FUNCTIONS = (
+    "fit_entry",
+    "flags",
+    "input_checks",
+    "point_entry",
+    "directional_entry",
+    "receivers_far",
+)
