@@ -58,6 +58,8 @@ from ._fits._cube_depth import CubeDepthRange as CubeDepthRange
 from ._fits._cube_depth import cube_depth_range as cube_depth_range
 from ._fits._fitting import FrustumFit as FrustumFit
 from ._fits._fitting import optimize_frustum as optimize_frustum
+from ._fits._prepared import PreparedFit as PreparedFit
+from ._fits._prepared import ShadowFitter as ShadowFitter
 from ._fits._setup import fit_shadow as fit_shadow
 from ._fits._setup import receiver_texture_matrix as receiver_texture_matrix
 from ._fits._shadow_setup import ShadowSetup as ShadowSetup
@@ -126,9 +128,11 @@ __all__ = [
     "LightFrame",
     "Mesh",
     "PointLight",
+    "PreparedFit",
     "ShadowAtlas",
     "ShadowCamera",
     "ShadowFitWarning",
+    "ShadowFitter",
     "ShadowMapSpec",
     "ShadowSetup",
     "SpotLight",

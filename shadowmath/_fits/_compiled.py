@@ -11,7 +11,7 @@ import functools
 import math
 import typing
 from types import SimpleNamespace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -45,30 +45,60 @@ _NO_VECTOR = np.zeros((1, 3))
 PYTHON_LOOP_POINTS = 64
 
 
+class Buffers(NamedTuple):
+    """The compiled loop's output blocks for ``count`` batch entries (caller-owned for
+    :class:`shadowmath.ShadowFitter`): rows of :data:`ROW` numbers (frame and frustum
+    fields), four matrices per entry (world_to_light, blocker_to_clip, world_to_texture,
+    placement) and the status words."""
+
+    rows: Array  # (count, ROW)
+    mats: Array  # (count, 4, 4, 4)
+    status: Array  # (count,) int32
+
+
+def buffers(count: int, dtype: Any) -> Buffers:
+    """Empty :class:`Buffers` for ``count`` entries of ``dtype``."""
+    return Buffers(
+        np.empty((count, ROW), dtype=dtype),
+        np.empty((count, 4, 4, 4), dtype=dtype),
+        np.empty(count, dtype=np.int32),
+    )
+
+
 def fit(
     ctx: Context, key: FitKey, shape: tuple[int, ...], a: Inputs, *, python: bool = False
 ) -> ShadowSetup:
     """The fit of ``key`` for every batch entry, from the compiled loop (or, ``python``,
     the same loop run by Python on lists: one small fit without Numba)."""
-    count = math.prod(shape)
-    out = np.empty((count, ROW), dtype=ctx.dtype)
-    mats = np.empty((count, 4, 4, 4), dtype=ctx.dtype)
-    status = np.empty(count, dtype=np.int32)
-    one = count == 1
+    out = buffers(math.prod(shape), ctx.dtype)
+    run(ctx, key, shape, a, out, python=python)
+    return _views(key, shape, out.rows, out.mats)
+
+
+def run(
+    ctx: Context, key: FitKey, shape: tuple[int, ...], a: Inputs, out: Buffers, *,
+    python: bool = False, record: Array | None = None,
+) -> None:  # fmt: skip
+    """Fill ``out`` with every entry's fit; raise the first failed check (warn if wide).
+
+    ``record``: :func:`options`' record of ``key`` and the dtype, if known.
+    """
+    status = out.status
+    one = len(status) == 1
     arrays = operands(shape, a, one)
-    record, python_record = options(key, ctx.dtype)
     if python:
         lists = (v.tolist() for v in arrays)
-        scalar_formulas().fit_loop(*lists, [python_record], out, mats, status)
+        python_record = options(key, ctx.dtype)[1]
+        scalar_formulas().fit_loop(*lists, [python_record], out.rows, out.mats, status)
     else:
-        _kernels.loops().fit_loop(*arrays, record, out, mats, status)
+        record = options(key, ctx.dtype)[0] if record is None else record
+        _kernels.loops().fit_loop(*arrays, record, out.rows, out.mats, status)
     if status[0] if one else status.any():
         errors = status & ~WIDE_WARNING
         if errors[0] if one else errors.any():
             finite = bool(np.isfinite(a.verts).all())
             raise_status(errors.reshape(shape), fit_messages(finite))
         msg.warn_wide()
-    return _views(key, shape, out, mats)
 
 
 def operands(shape: tuple[int, ...], a: Inputs, one: bool) -> tuple[Array, ...]:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any, Literal
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
@@ -232,52 +232,83 @@ def fit_shadow(
     spec = map_spec(map_size, border_texels=border_texels, pcf_radius=pcf_radius,
                     pcf_filter=pcf_filter, margin=margin, api=api, reversed_z=reversed_z,
                     stable=stable)  # fmt: skip
+    operands = Operands(light, blocker_vertices, blocker_to_world, receivers, up, near, far)
+    door = open_door(operands, spec, aim == "bbox")
+    _check_static(door.key, method, spec)
+    a, used = select_casters(door)
+    return _fit(door.ctx, a, door.shape, door.key, method)._replace(casters_used=used)
+
+
+class Operands(NamedTuple):
+    """:func:`fit_shadow`'s arrays as given (before the door)."""
+
+    light: Any
+    blocker_vertices: Any
+    blocker_to_world: Any = None
+    receivers: Any = None
+    up: Any = None
+    near: Any = None
+    far: Any = None
+
+
+class Door(NamedTuple):
+    """What the door of :func:`fit_shadow` read: trusted arrays, batch shape, static key."""
+
+    ctx: Context
+    a: Inputs
+    shape: tuple[int, ...]
+    key: FitKey
+    casters: Array  # (*batch, N, 3) points or (*batch, M, 3, 3) triangles
+    triangles: bool  # casters are triangles
+
+
+def open_door(g: Operands, spec: ShadowMapSpec, aim_bbox: bool) -> Door:
+    """Convert and check :func:`fit_shadow`'s arrays once: kinds, dtypes and shapes."""
+    light = g.light
     spot = isinstance(light, SpotLight)
     if spot:
         named = {"light.position": light[0], "light.direction": light[1], "light.angle": light[2]}
     else:
         named = {"light": light[0] if isinstance(light, PointLight | DirectionalLight) else light}
-    kind, r_name, r_array = _receiver_kind(receivers)
-    c_kind, c_name, c_array = _receiver_kind(blocker_vertices, "blocker_vertices")
+    kind, r_name, r_array = _receiver_kind(g.receivers)
+    c_kind, c_name, c_array = _receiver_kind(g.blocker_vertices, "blocker_vertices")
     ctx, (*parts, verts, B, n, f, R, U) = convert(
-        **named,
-        **{c_name: c_array},
-        blocker_to_world=blocker_to_world,
-        near=near,
-        far=far,
-        **{r_name: r_array},
-        up=up,
-    )
+        **named, **{c_name: c_array}, blocker_to_world=g.blocker_to_world, near=g.near,
+        far=g.far, **{r_name: r_array}, up=g.up,
+    )  # fmt: skip
     if R is not None:
-        R = _receiver_rows(ctx, kind, R, receivers)
+        R = _receiver_rows(ctx, kind, R, g.receivers)
     if spot:
         directional, L = False, _spot_array(ctx, *parts)
     else:
-        typed = (
-            isinstance(light, DirectionalLight)
-            if isinstance(light, PointLight | DirectionalLight)
-            else None
-        )
+        typed = None  # a raw array: its kind is read from w
+        if isinstance(light, PointLight | DirectionalLight):
+            typed = isinstance(light, DirectionalLight)
         directional, L = _light_kind(ctx, typed, parts[0])
     casters = verts
     if c_kind != "points":
-        casters = caster_triangles(ctx, c_kind, verts, blocker_vertices, "blocker_vertices")
+        casters = caster_triangles(ctx, c_kind, verts, g.blocker_vertices, "blocker_vertices")
         verts = ctx.xp.reshape(casters, (*casters.shape[:-3], -1, 3))
     a = Inputs(L, verts, B, R, U, n, f)
     shape = _check_shapes(a)
     given = (B is not None, R is not None, U is not None, n is not None, f is not None)
-    key = _fit_key(directional, spot, aim == "bbox", spec, (*given, kind != "points"))
-    _check_static(key, method, spec)
+    key = _fit_key(directional, spot, aim_bbox, spec, (*given, kind != "points"))
+    return Door(ctx, a, shape, key, casters, c_kind != "points")
+
+
+def select_casters(door: Door) -> tuple[Inputs, Array]:
+    """The casters the fit uses (a spot light's, clipped to its cone) and their count."""
+    ctx, a, shape = door.ctx, door.a, door.shape
     xp = ctx.xp
-    if spot:
-        selection = spot_selection(ctx, L, U, B, casters, c_kind != "points")
-        a, used = a._replace(verts=selection.points), selection.kept
+    if door.key.spot:
+        selection = spot_selection(ctx, a.light, a.U, a.B, door.casters, door.triangles)
+        used = selection.kept
         if tuple(used.shape) != shape:
             used = xp.broadcast_to(used, shape)
-    else:  # every caster, in every entry (a 0-d array costs a fraction of broadcast_to)
-        count = casters.shape[-3 if c_kind != "points" else -2]
-        used = np.array(count) if not shape and xp is np else xp.full(shape, count)
-    return _fit(ctx, a, shape, key, method)._replace(casters_used=used)
+        return a._replace(verts=selection.points), used
+    # every caster, in every entry (a 0-d array costs a fraction of broadcast_to)
+    count = door.casters.shape[-3 if door.triangles else -2]
+    return a, np.array(count) if not shape and xp is np else xp.full(shape, count)
 
 
 def _fit(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey, method: str) -> ShadowSetup:
