@@ -937,7 +937,7 @@ class _Block:
         status = self.status[part]
         operands = _compiled.operands((count,), a, count == 1)
         options, _ = _compiled.options(key, self.ctx.dtype)
-        _kernels.loops().fit_loop(*operands, options, self.out[part], self.mats[part], status)
+        _kernels.loops().fit_loop(operands, options, (self.out[part], self.mats[part], status))
         errors = status & ~WIDE_WARNING
         if errors.any():
             messages = fit_messages(bool(np.isfinite(a.verts).all()))

@@ -87,12 +87,12 @@ def run(
     one = len(status) == 1
     arrays = operands(shape, a, one)
     if python:
-        lists = (v.tolist() for v in arrays)
+        lists = tuple(v.tolist() for v in arrays)
         python_record = options(key, ctx.dtype)[1]
-        scalar_formulas().fit_loop(*lists, [python_record], out.rows, out.mats, status)
+        scalar_formulas().fit_loop(lists, [python_record], out)
     else:
         record = options(key, ctx.dtype)[0] if record is None else record
-        _kernels.loops().fit_loop(*arrays, record, out.rows, out.mats, status)
+        _kernels.loops().fit_loop(arrays, record, out)
     if status[0] if one else status.any():
         errors = status & ~WIDE_WARNING
         if errors[0] if one else errors.any():

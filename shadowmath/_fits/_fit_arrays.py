@@ -245,7 +245,7 @@ def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs, d: Driver) 
     b = _IDENTITY if a.B is None else tuple(d.entry(a.B[..., i // 4, i % 4]) for i in range(16))
     nf = tuple(0.0 if v is None else d.entry(v) for v in (a.near, a.far))
     o = fit_options(key, d.eps)
-    e = d.F.fit_entry(L, S, U, b, _vertex_source(d, a.verts, a.B), a.R, nf, o, key.api)
+    e = d.F.fit_entry((L, S, U, b, nf), _vertex_source(d, a.verts, a.B), a.R, o, key.api)
     _report(ctx, checks, e.status)
     return FitEntries(e.origin, e.axes, e.box, e.W, e.clip, e.tex)
 

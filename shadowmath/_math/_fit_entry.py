@@ -105,15 +105,18 @@ def to_single(x: float) -> float:
     return float(np.float32(x))
 
 
-def fit_entry(L: Any, S: Any, U: Any, b: Any, vs: Any, R: Any, nf: Any, o: Any, api: Any) -> Any:
-    """One entry's fit: ``L`` light (3), ``S`` spot axis, ``tan``, angle (5), ``U`` up (3),
-    ``b`` placement (16), ``vs`` the casters, ``R`` receivers, ``nf`` given near, far;
-    ``api = (C, T C)`` rows. Returns an :class:`Entry`."""
+def fit_entry(given: Any, vs: Any, R: Any, o: Any, api: Any) -> Any:
+    """One entry's fit. ``given = (L, S, U, b, nf)``: the light (3: a position, or a
+    direction toward the light), a spot light's axis, ``tan`` and angle (5), up (3),
+    the placement (16) and the given near and far; ``vs`` the casters, ``R`` the
+    receivers (as the backend's passes read them); ``api = (C, T C)`` rows.
+    Returns an :class:`Entry`."""
+    nf = given[4]
     if o.directional:
-        st, origin, a, sides, z = directional_entry(L, U, vs, R, o)
+        st, origin, a, sides, z = directional_entry(given, vs, R, o)
     else:
-        st, origin, a, sides, z = point_entry(L, S, U, vs, R, o)
-    st = st | input_checks(L, S, U, b, o)
+        st, origin, a, sides, z = point_entry(given, vs, R, o)
+    st = st | input_checks(given, o)
     n, f, ok = depth_range(z, nf, (o.has_near, o.has_far), o.slack)
     st = st | flags(ok, 5)
     hx, hy, cx, cy = sides
@@ -130,9 +133,10 @@ def flags(ok: Any, first: int) -> Any:
     return st
 
 
-def input_checks(L: Any, S: Any, U: Any, b: Any, o: Any) -> Any:
+def input_checks(given: Any, o: Any) -> Any:
     """The given numbers' checks: finite light (and spot), up and placement; a placement
     that is invertible beyond rounding."""
+    L, S, U, b, _ = given
     st = flag(isfinite(L[0]) & isfinite(L[1]) & isfinite(L[2]), LIGHT)
     if o.spot:
         ok = isfinite(S[0])
@@ -149,9 +153,10 @@ def input_checks(L: Any, S: Any, U: Any, b: Any, o: Any) -> Any:
     return st
 
 
-def point_entry(L: Any, S: Any, U: Any, vs: Any, R: Any, o: Any) -> Any:
+def point_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
     """One point (or spot) light's fit: the article's MDV frame aimed at the casters'
     mean (or box centre), or a spot light's axis with its sides clipped to the cone."""
+    L, S, U, _, _ = given
     eps = o.eps
     s, lo, hi, reach, coords, st, n = spread(vs, L)
     if o.spot:
@@ -187,7 +192,8 @@ def point_entry(L: Any, S: Any, U: Any, vs: Any, R: Any, o: Any) -> Any:
     ok_fov, calm = fov_ok((half_x, half_y, cx, cy), (o.margin_x, o.margin_y))
     # (Not an error: the boundary warns, unless a failed check raises first.)
     st = st | flag(ok_fov, TOO_WIDE) | flag(calm, WIDE_WARNING)
-    z_hi, st, link = receivers_far(R, L, a, (half_x, half_y, cx, cy), zb_max, st, o)
+    z_hi, bits, link = receivers_far(R, (L, a), (half_x, half_y, cx, cy), zb_max, o)
+    st = st | bits
     return (
         st,
         (L[0], L[1], L[2]),
@@ -197,9 +203,10 @@ def point_entry(L: Any, S: Any, U: Any, vs: Any, R: Any, o: Any) -> Any:
     )
 
 
-def directional_entry(L: Any, U: Any, vs: Any, R: Any, o: Any) -> Any:
+def directional_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
     """One directional light's fit: the casters' box (or, ``stable``, their minimal
     enclosing sphere snapped to whole texels) across the light's direction."""
+    L, _, U, _, _ = given
     eps = o.eps
     zero = 0.0 * L[0]
     _, lo, hi, _, coords, st, _ = spread(vs, (zero, zero, zero))
@@ -219,14 +226,16 @@ def directional_entry(L: Any, U: Any, vs: Any, R: Any, o: Any) -> Any:
     else:
         half_x, half_y, cx, cy, ok_sil = box_sides(hx, lx, hy, ly, reach, eps)
     st = st | flags((ok_sil,), 4)
-    z_hi, st, link = receivers_far(R, c, a, (half_x, half_y, cx, cy), zb_max, st, o)
+    z_hi, bits, link = receivers_far(R, (c, a), (half_x, half_y, cx, cy), zb_max, o)
+    st = st | bits
     ox, oy, oz, shift = directional_origin(zb_min, z_hi, half_x, half_y, c, a)
     z = (zb_min - shift, z_hi - shift, zb_min - shift, zb_max - shift)
     return st, (ox, oy, oz), a, (half_x, half_y, cx + link, cy), z
 
 
-def receivers_far(R: Any, origin: Any, a: Any, sides: Any, z_hi: Any, st: Any, o: Any) -> Any:
-    """``far`` widened over the receivers inside the map's sides (and their check).
+def receivers_far(R: Any, frame: Any, sides: Any, z_hi: Any, o: Any) -> Any:
+    """``far`` widened over the receivers inside the map's sides (``frame``: the
+    frame's origin and axes), the receivers' check bit, and a link.
 
     Receivers never move ``near``: one nearer than every caster cannot be shadowed.
     ``link``: 0, or under JAX NaN where a receiver is not finite. A non-finite receiver
@@ -235,11 +244,12 @@ def receivers_far(R: Any, origin: Any, a: Any, sides: Any, z_hi: Any, st: Any, o
     the matrices and their derivatives are NaN there.
     """
     if not o.has_receivers:
-        return z_hi, st, 0.0
+        return z_hi, 0, 0.0
+    origin, a = frame
     half_x, half_y, cx, cy = sides
     s = (o.margin_x / where(half_x > 0, half_x, 1.0), o.margin_y / where(half_y > 0, half_y, 1.0))
     far, ok, link = receiver_far(R, origin, a, (s[0], s[1], cx, cy), o)
-    return where(far > z_hi, far, z_hi), st | flag(ok, RECEIVERS), link
+    return where(far > z_hi, far, z_hi), flag(ok, RECEIVERS), link
 
 
 FUNCTIONS = (

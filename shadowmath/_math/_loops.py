@@ -89,27 +89,31 @@ def _tuple16(v: Any, k: int) -> Any:
     )  # fmt: skip
 
 
-def fit_loop(
-    light: Any, verts: Any, placement: Any, recv: Any, ups: Any, near: Any, far: Any,
-    opts: Any, out: Any, mats: Any, status: Any,
-) -> None:  # fmt: skip
-    """Every batch entry's :func:`fit_entry`; operands are ``(count or 1, ...)``, read at
-    ``i % len``. ``near``, ``far``: ``(count or 1,)`` (ignored unless given); ``opts``:
-    the options record (one row of :data:`shadowmath._fits._compiled.OPTIONS`: the fields
-    of :class:`._fit_entry.FitOptions`, then the API's rows ``C`` and ``T C``)."""
+def fit_loop(operands: Any, opts: Any, out: Any) -> None:
+    """Every batch entry's :func:`fit_entry`.
+
+    ``operands = (light, verts, placement, recv, ups, near, far)``, each
+    ``(count or 1, ...)`` and read at ``i % len`` (``near``, ``far``: ``(count or
+    1,)``, ignored unless given); ``opts``: the options record (one row of
+    :data:`shadowmath._fits._compiled.OPTIONS`: the fields of
+    :class:`._fit_entry.FitOptions`, then the API's rows ``C`` and ``T C``);
+    ``out = (rows, mats, status)``: the output blocks.
+    """
+    light, verts, placement, recv, ups, near, far = operands
+    rows, mats, status = out
     o = opts[0]
     api = (_tuple16(o.api_clip, 0), _tuple16(o.api_texture, 0))
-    for i in range(len(out)):
+    for i in range(len(rows)):
         Lr, Ur = _row(light, i), _row(ups, i)
         L = (float(Lr[0]), float(Lr[1]), float(Lr[2]))
-        S = _spot(Lr, o.spot)
         U = (float(Ur[0]), float(Ur[1]), float(Ur[2]))
         b = _entries(placement, i)
         nf = (float(_row(near, i)), float(_row(far, i)))
-        e = fit_entry(L, S, U, b, (_row(verts, i), b, o.has_placement), _row(recv, i), nf, o, api)
+        given = (L, _spot(Lr, o.spot), U, b, nf)
+        e = fit_entry(given, (_row(verts, i), b, o.has_placement), _row(recv, i), o, api)
         status[i] = e.status
         clip = compose_rows(e.clip, b) if o.has_placement else e.clip
-        _store(out[i], mats[i], e, (e.W, clip, e.tex, b), (o.margin_x, o.margin_y))
+        _store(rows[i], mats[i], e, (e.W, clip, e.tex, b), (o.margin_x, o.margin_y))
 
 
 def _store(row: Any, mat: Any, e: Any, matrices: Any, margins: Any) -> None:
