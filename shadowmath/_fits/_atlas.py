@@ -28,6 +28,9 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from shadowmath._api._adaptive_frustum import border_margin
+from shadowmath._api._api_convention import _check_api
+from shadowmath._api._depth_bias import _check_kernel
 from shadowmath._backends import _kernels
 from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import (
@@ -44,11 +47,10 @@ from shadowmath._boundary._validate import (
     shape_error,
 )
 from shadowmath._math import _atlas_tiles as tiles
-from shadowmath._math._bias import PcfFilter, _check_kernel
-from shadowmath._math._conventions import GraphicsApi, _check_api, _texture_from_clip
+from shadowmath._math._bias import PcfFilter
+from shadowmath._math._conventions import GraphicsApi, _texture_from_clip
 from shadowmath._math._cube import _APIS, _cube_face_views, _depth_row
 from shadowmath._math._frame import stack_matrix
-from shadowmath._math._frustum import border_margin
 from shadowmath._math._pcf import _border_texels
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 

@@ -16,15 +16,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._api._adaptive_frustum import _margins, _texels
+from shadowmath._api._api_convention import _check_api
+from shadowmath._api._depth_bias import _check_kernel
 from shadowmath._boundary._messages import ShadowFitWarning
-from shadowmath._math._bias import PcfFilter, _check_kernel
-from shadowmath._math._conventions import (
-    GraphicsApi,
-    _check_api,
-    _clip_from_gl,
-    _texture_from_gl_clip,
-)
-from shadowmath._math._frustum import _margins, _texels
+from shadowmath._math._bias import PcfFilter
+from shadowmath._math._conventions import GraphicsApi, _clip_from_gl, _texture_from_gl_clip
 from shadowmath._math._pcf import _border_texels
 
 

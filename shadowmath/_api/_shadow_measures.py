@@ -25,10 +25,11 @@ from shadowmath._boundary._validate import (
     require_last,
     require_matrix,
 )
+from shadowmath._math._bias import _texel_size_on_surface
+from shadowmath._math._frustum import Frustum
+from shadowmath._math._vector import dot
 
-from ._bias import _texel_size_on_surface
-from ._frustum import Frustum, _texels, frustum_arrays
-from ._vector import dot
+from ._adaptive_frustum import _texels, frustum_arrays
 
 
 def cross_section_area(frustum: Frustum) -> Array:
