@@ -47,6 +47,8 @@ from ._api._api_convention import api_convention as api_convention
 from ._api._area_light import area_light_samples as area_light_samples
 from ._api._area_light import area_light_samples_jax as area_light_samples_jax
 from ._api._area_light import pyramid_to_unit_cube as pyramid_to_unit_cube
+from ._api._checks import check_finite as check_finite
+from ._api._checks import check_projection as check_projection
 from ._api._column_major import column_major_bytes as column_major_bytes
 from ._api._cube_faces import cube_face as cube_face
 from ._api._cube_faces import cube_face_depth as cube_face_depth
@@ -72,7 +74,6 @@ from ._api._smooth_frustum import offcenter_frustum as offcenter_frustum
 from ._api._smooth_frustum import rolled_light_frame as rolled_light_frame
 from ._api._smooth_frustum import smooth_frustum as smooth_frustum
 from ._api._smooth_frustum import smooth_max as smooth_max
-from ._boundary._checks import check_finite as check_finite
 from ._boundary._messages import ShadowFitWarning as ShadowFitWarning
 from ._fits._atlas import AtlasFit as AtlasFit
 from ._fits._atlas import ShadowAtlas as ShadowAtlas
@@ -81,9 +82,6 @@ from ._fits._atlas import atlas_tile_transforms as atlas_tile_transforms
 from ._fits._atlas import atlas_viewports as atlas_viewports
 from ._fits._atlas import fit_atlas as fit_atlas
 from ._fits._atlas_redraw import atlas_redraw as atlas_redraw
-from ._fits._camera import ShadowCamera as ShadowCamera
-from ._fits._camera import camera_to_world as camera_to_world
-from ._fits._camera import shadow_camera as shadow_camera
 from ._fits._cascade_splits import cascade_splits as cascade_splits
 from ._fits._cascades import Cascades as Cascades
 from ._fits._cascades import fit_cascades as fit_cascades
@@ -93,6 +91,9 @@ from ._fits._fitting import FrustumFit as FrustumFit
 from ._fits._fitting import optimize_frustum as optimize_frustum
 from ._fits._setup import fit_shadow as fit_shadow
 from ._fits._setup import receiver_texture_matrix as receiver_texture_matrix
+from ._fits._shadow_camera import ShadowCamera as ShadowCamera
+from ._fits._shadow_camera import camera_to_world as camera_to_world
+from ._fits._shadow_camera import shadow_camera as shadow_camera
 from ._fits._shadow_setup import ShadowSetup as ShadowSetup
 from ._fits._spec import ShadowMapSpec as ShadowMapSpec
 from ._math._conventions import GRAPHICS_APIS as GRAPHICS_APIS
@@ -146,6 +147,7 @@ __all__ = [
     "camera_to_world",
     "cascade_splits",
     "check_finite",
+    "check_projection",
     "column_major_bytes",
     "cross_section_area",
     "cube_depth_range",
