@@ -38,7 +38,7 @@ from shadowmath._math._specialize import formulas
 from ._light_frame import frame_arrays
 
 
-def _texels(name: str, value: Any) -> tuple[int, int]:
+def texel_counts(name: str, value: Any) -> tuple[int, int]:
     """``map_size`` as ``(width, height)`` of positive Python ints."""
     is_pair = isinstance(value, tuple | list) or (isinstance(value, np.ndarray) and value.ndim == 1)
     values = tuple(value) if is_pair else (value, value)
@@ -85,7 +85,7 @@ def border_margin(
         >>> border_margin((512, 256), border_texels=2)
         (0.9921875, 0.984375)
     """
-    w, h = _texels("map_size", map_size)
+    w, h = texel_counts("map_size", map_size)
     b = integer("border_texels", border_texels, 0)
     if min(w, h) <= 2 * b:
         raise ValueError(
@@ -102,7 +102,7 @@ def margins(map_size: Any, border_texels: int, margin: Any) -> tuple[float, floa
     )
     if plain:  # exactly typed Python values: safe to cache (True is not 1 here)
         return _margins_cached(map_size, border_texels, margin)
-    return _margins(map_size, border_texels, margin)
+    return derived_margins(map_size, border_texels, margin)
 
 
 def _ints(values: tuple[Any, ...]) -> bool:
@@ -111,10 +111,10 @@ def _ints(values: tuple[Any, ...]) -> bool:
 
 @functools.lru_cache(maxsize=256)
 def _margins_cached(map_size: Any, border_texels: int, margin: Any) -> tuple[float, float]:
-    return _margins(map_size, border_texels, margin)
+    return derived_margins(map_size, border_texels, margin)
 
 
-def _margins(map_size: Any, border_texels: int, margin: Any) -> tuple[float, float]:
+def derived_margins(map_size: Any, border_texels: int, margin: Any) -> tuple[float, float]:
     derived = border_margin(map_size, border_texels=border_texels)
     if margin is None:
         return derived

@@ -7,16 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from shadowmath._math._conventions import (
-    GRAPHICS_APIS,
-    ApiConvention,
-    _clip_from_gl,
-    _texture_from_clip,
-    _texture_from_gl_clip,
-)
+from shadowmath._math import _conventions
+from shadowmath._math._conventions import GRAPHICS_APIS, ApiConvention
 
 
-def _check_api(api: object, reversed_z: object) -> None:
+def check_api(api: object, reversed_z: object) -> None:
     """Raise ``ValueError`` for an unknown ``api`` or a non-boolean ``reversed_z``."""
     if not isinstance(api, str) or api not in GRAPHICS_APIS:
         valid = ", ".join(repr(a) for a in GRAPHICS_APIS)
@@ -72,13 +67,13 @@ def api_convention(*, api: str = "opengl", reversed_z: bool = False) -> ApiConve
         >>> api_convention(api="vulkan", reversed_z=True).near_depth
         1.0
     """
-    _check_api(api, reversed_z)
+    check_api(api, reversed_z)
     rz = bool(reversed_z)
     near, far = (1.0, 0.0) if rz else (0.0, 1.0)
     return ApiConvention(
-        gl_clip_to_clip=np.array(_clip_from_gl(api, rz)),
-        clip_to_texture=np.array(_texture_from_clip(api, rz)),
-        gl_clip_to_texture=np.array(_texture_from_gl_clip(api, rz)),
+        gl_clip_to_clip=np.array(_conventions.clip_from_gl(api, rz)),
+        clip_to_texture=np.array(_conventions.texture_from_clip(api, rz)),
+        gl_clip_to_texture=np.array(_conventions.texture_from_gl_clip(api, rz)),
         near_depth=near,
         far_depth=far,
     )

@@ -18,7 +18,7 @@ from shadowmath._boundary._validate import (
     non_finite,
     require_last,
 )
-from shadowmath._math._soft import _DEGENERATE, _area_light_samples, _grid, _pyramid_to_unit_cube
+from shadowmath._math import _soft
 from shadowmath._math._vector import cross, dot, norm
 
 
@@ -105,14 +105,14 @@ def pyramid_to_unit_cube(apex: Any, corner: Any, edge_u: Any, edge_v: Any) -> Ar
     )
     if checks.invalid is not None:
         checks.invalid = xp.broadcast_to(checks.invalid, shape)
-    M = xp.broadcast_to(_pyramid_to_unit_cube(xp, a, b, eu, ev), (*shape, 4, 4))
+    M = xp.broadcast_to(_soft.pyramid_to_unit_cube(xp, a, b, eu, ev), (*shape, 4, 4))
     return checks.poison(M, 2)
 
 
 def _require_parallelogram(ctx: Context, checks: Checks, eu: Array, ev: Array) -> None:
     xp = ctx.xp
     area = norm(xp, cross(xp, eu, ev))
-    checks.require(area > 16 * ctx.eps * norm(xp, eu) * norm(xp, ev), _DEGENERATE)
+    checks.require(area > 16 * ctx.eps * norm(xp, eu) * norm(xp, ev), _soft.DEGENERATE)
 
 
 def _checked_light(
@@ -135,7 +135,7 @@ def _checked_light(
     _require_parallelogram(ctx, checks, eu, ev)
     if checks.invalid is not None:
         checks.invalid = xp.broadcast_to(checks.invalid, shape)
-    return ctx, checks, c, eu, ev, shape, _grid(int(count))
+    return ctx, checks, c, eu, ev, shape, _soft.grid(int(count))
 
 
 def area_light_samples(
@@ -194,7 +194,7 @@ def area_light_samples(
     rng = np.random.default_rng(seed)
     jitter_np = rng.random((*shape, rows * cols, 2), dtype=np.dtype(ctx.dtype).type)
     jitter = ctx.xp.asarray(jitter_np, dtype=ctx.dtype)
-    return checks.poison(_area_light_samples(ctx.xp, c, eu, ev, jitter, rows, cols), 2)
+    return checks.poison(_soft.area_light_samples(ctx.xp, c, eu, ev, jitter, rows, cols), 2)
 
 
 def area_light_samples_jax(key: Any, corner: Any, edge_u: Any, edge_v: Any, count: int) -> Array:
@@ -227,4 +227,4 @@ def area_light_samples_jax(key: Any, corner: Any, edge_u: Any, edge_v: Any, coun
     c, eu, ev = (v if is_jax(v) else jnp.asarray(np.asarray(v)) for v in (corner, edge_u, edge_v))
     ctx, checks, c, eu, ev, shape, (rows, cols) = _checked_light(c, eu, ev, count)
     jitter = jax.random.uniform(key, (*shape, rows * cols, 2), dtype=ctx.dtype)
-    return checks.poison(_area_light_samples(ctx.xp, c, eu, ev, jitter, rows, cols), 2)
+    return checks.poison(_soft.area_light_samples(ctx.xp, c, eu, ev, jitter, rows, cols), 2)

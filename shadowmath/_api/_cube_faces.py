@@ -19,22 +19,12 @@ from shadowmath._boundary._validate import (
     non_finite,
     require_last,
 )
+from shadowmath._math import _cube
 from shadowmath._math._conventions import GraphicsApi
-from shadowmath._math._cube import (
-    _APIS,
-    CubeFaceCoords,
-    CubeFaceDepth,
-    _cube_face,
-    _cube_face_direction,
-    _cube_face_projection,
-    _cube_face_projection_scalar,
-    _cube_face_views,
-    _face_depth,
-    _major_face,
-)
+from shadowmath._math._cube import CubeFaceCoords, CubeFaceDepth
 from shadowmath._math._vector import norm
 
-from ._api_convention import _check_api
+from ._api_convention import check_api
 
 
 def _require_finite(checks: Checks, x: Array, trailing: int, name: str) -> None:
@@ -120,7 +110,7 @@ def cube_face_views(light_position: Any) -> Array:
     require_last("light_position", light, 3, hint="a point light is (x, y, z)")
     checks = Checks(ctx)
     _require_finite(checks, light, 1, "light_position")
-    return checks.poison(_cube_face_views(ctx.xp, light), 3)
+    return checks.poison(_cube.cube_face_views(ctx.xp, light), 3)
 
 
 def cube_face_projection(
@@ -189,22 +179,22 @@ def cube_face_projection(
         >>> cube_face_projection(0.5, 10.0, map_size=256, api="direct3d")[1, 1]
         np.float64(-1.0)
     """
-    _check_api(api, reversed_z)
-    zero_to_one, flip_y = _APIS[api]
+    check_api(api, reversed_z)
+    zero_to_one, flip_y = _cube.APIS[api]
     scale = face_scale(map_size, border_texels)
     n, f = _numpy_scalar(near), _numpy_scalar(far)
     if n is not None and type(n) is type(f) and math.isfinite(n) and math.isfinite(f) and 0 < n < f:
         # One light's NumPy scalars that pass the checks below: no conversion to
         # arrays, no per-check round trips. Anything else, failures included
         # (which the checks below report), takes the general path.
-        return _cube_face_projection_scalar(n, f, scale, zero_to_one, flip_y, reversed_z)
+        return _cube.cube_face_projection_scalar(n, f, scale, zero_to_one, flip_y, reversed_z)
     ctx, (n, f) = convert(near=near, far=far)
     xp = ctx.xp
     shape = batch_shape(tuple(n.shape), tuple(f.shape), names=("near", "far"))
     n, f = xp.broadcast_to(n, shape), xp.broadcast_to(f, shape)
     checks = Checks(ctx)
     _check_near_far(checks, xp, n, f)
-    P = _cube_face_projection(xp, n, f, scale, zero_to_one, flip_y, reversed_z)
+    P = _cube.cube_face_projection(xp, n, f, scale, zero_to_one, flip_y, reversed_z)
     return checks.poison(P, 2)
 
 
@@ -280,7 +270,7 @@ def cube_face(directions: Any) -> CubeFaceCoords:
         xp.any(d != 0, axis=-1),
         "directions: a direction is zero (the point is at the light); it selects no face",
     )
-    face, s, t = _cube_face(xp, d)
+    face, s, t = _cube.cube_face(xp, d)
     if checks.invalid is not None:
         face = xp.where(checks.invalid, xp.asarray(-1, dtype=face.dtype), face)
     return CubeFaceCoords(face, checks.poison(s, 0), checks.poison(t, 0))
@@ -323,7 +313,7 @@ def cube_face_direction(face: Any, s: Any, t: Any) -> Array:
     checks.require(xp.isfinite(s_), non_finite("s"))
     checks.require(xp.isfinite(t_), non_finite("t"))
     safe_face = xp.where(xp.isfinite(f), f, xp.zeros_like(f))
-    return checks.poison(_cube_face_direction(xp, safe_face, s_, t_), 1)
+    return checks.poison(_cube.cube_face_direction(xp, safe_face, s_, t_), 1)
 
 
 def cube_face_depth(
@@ -395,10 +385,10 @@ def cube_face_depth(
         xp.any(r != 0, axis=-1),
         "points: a point coincides with light_position; it has no direction from the light",
     )
-    face = xp.broadcast_to(_major_face(xp, r), shape)
+    face = xp.broadcast_to(_cube.major_face(xp, r), shape)
     D = xp.max(xp.abs(r), axis=-1)
     safe_D = xp.where(D == 0, xp.ones_like(D), D)
-    depth = xp.broadcast_to(_face_depth(xp, safe_D, n, f, reversed_z), shape)
+    depth = xp.broadcast_to(_cube.face_depth(xp, safe_D, n, f, reversed_z), shape)
     distance = xp.broadcast_to(norm(xp, r), shape)
     if checks.invalid is not None:
         checks.invalid = xp.broadcast_to(checks.invalid, shape)

@@ -19,16 +19,8 @@ from shadowmath._boundary._validate import (
     require_last,
     require_matrix,
 )
-from shadowmath._math._bias import (
-    DEFAULT_CONSTANT_BIAS,
-    PcfFilter,
-    _normal_offset,
-    _reach,
-    _slope_scaled_bias,
-    _texel_size,
-    _texel_size_on_surface,
-    _texture_gradients,
-)
+from shadowmath._math import _bias
+from shadowmath._math._bias import DEFAULT_CONSTANT_BIAS, PcfFilter
 from shadowmath._math._vector import cross, dot
 
 
@@ -43,7 +35,7 @@ def _map_size(map_size: object) -> tuple[int, int]:
     return ints[0], ints[1]
 
 
-def _check_kernel(
+def check_kernel(
     radius: object, filter: object, names: tuple[str, str] = ("radius", "filter")
 ) -> tuple[int, PcfFilter]:
     """The kernel checked; ``names`` are the caller's argument names for the messages."""
@@ -76,7 +68,7 @@ def _prepare(
     checks.require(q > 0, "points: a receiver point is at or behind the light (q <= 0)")
     # (Invalid entries are computed anyway, then poisoned: the batch entries are
     # independent, so their NaNs reach neither the valid values nor their derivatives.)
-    gs, gt, _ = _texture_gradients(xp, M, p)
+    gs, gt, _ = _bias.texture_gradients(xp, M, p)
     D = cross(xp, gs, gt)
     checks.require(
         xp.max(xp.abs(D), axis=-1) > 0,  # not D . D: its square leaves float32's range
@@ -138,7 +130,11 @@ def texel_world_size(
     """
     W, H = _map_size(map_size)
     checks, xp, M, p, n, _ = _prepare(world_to_texture, points, normals)
-    size = _texel_size(xp, M, p, W, H) if n is None else _texel_size_on_surface(xp, M, p, n, W, H)
+    size = (
+        _bias.texel_size(xp, M, p, W, H)
+        if n is None
+        else _bias.texel_size_on_surface(xp, M, p, n, W, H)
+    )
     return checks.poison(xp.asarray(size), 0)
 
 
@@ -222,8 +218,8 @@ def slope_scaled_bias(
         0.01
     """
     W, H = _map_size(map_size)
-    k, filt = _check_kernel(radius, filter)
-    factor = 2 * _reach(k, filt) if slope_factor is None else slope_factor
+    k, filt = check_kernel(radius, filter)
+    factor = 2 * _bias.kernel_reach(k, filt) if slope_factor is None else slope_factor
     if not (isinstance(factor, int | float) and math.isfinite(factor) and factor >= 0):
         raise ValueError(f"slope_factor: expected a finite number >= 0, got {slope_factor!r}")
     if not (isinstance(constant, int | float) and math.isfinite(constant) and constant >= 0):
@@ -237,7 +233,7 @@ def slope_scaled_bias(
     if normals is None:
         raise ValueError("normals: required (the slope is along the receiver's surface)")
     checks, xp, M, p, n, _ = _prepare(world_to_texture, points, normals)
-    bias = _slope_scaled_bias(xp, M, p, n, W, H, float(constant), float(factor), r_min)
+    bias = _bias.slope_scaled_bias(xp, M, p, n, W, H, float(constant), float(factor), r_min)
     return checks.poison(xp.asarray(bias), 0)
 
 
@@ -315,9 +311,9 @@ def normal_offset(
         array([0.025, 0.   , 0.025])
     """
     W, H = _map_size(map_size)
-    k, filt = _check_kernel(radius, filter)
+    k, filt = check_kernel(radius, filter)
     if not (isinstance(scale, int | float) and math.isfinite(scale) and scale >= 0):
         raise ValueError(f"scale: expected a finite number >= 0, got {scale!r}")
     checks, xp, M, p, n, _ = _prepare(world_to_texture, points, normals)
-    offset = _normal_offset(xp, M, p, n, W, H, _reach(k, filt), float(scale))
+    offset = _bias.normal_offset(xp, M, p, n, W, H, _bias.kernel_reach(k, filt), float(scale))
     return checks.poison(offset, 1)

@@ -99,7 +99,7 @@ def helper_axis(z_axis: Any) -> Array:
     return checks.poison(ctx.xp.stack(v, axis=-1), 1)
 
 
-def _frame(
+def frame_along(
     ctx: Context, checks: Checks, light: Array, direction: Array, noise: Array | float = 0.0
 ) -> LightFrame:
     """The frame with ``Z`` along ``direction`` (trusted); ``noise`` bounds its rounding error."""
@@ -164,7 +164,7 @@ def light_frame(
     checks = Checks(ctx)
     _check_points(checks, light, verts)
     s = spread(ctx.xp, light, verts, aim=aim)
-    return _frame(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
+    return frame_along(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
 
 
 def light_frame_from_direction(light_position: Any, direction: Any) -> LightFrame:
@@ -195,7 +195,7 @@ def light_frame_from_direction(light_position: Any, direction: Any) -> LightFram
     checks = Checks(ctx)
     checks.require(all_finite(ctx.xp, light, 1), non_finite("light_position"))
     checks.require(all_finite(ctx.xp, d, 1), non_finite("direction"))
-    return _frame(ctx, checks, light, d)
+    return frame_along(ctx, checks, light, d)
 
 
 def frame_arrays(

@@ -18,10 +18,10 @@ from shadowmath._boundary._validate import (
     require_last,
     shape_error,
 )
+from shadowmath._math import _pcf
 from shadowmath._math._bias import PcfFilter
-from shadowmath._math._pcf import _border_texels, _pcf
 
-from ._depth_bias import _check_kernel
+from ._depth_bias import check_kernel
 
 
 def pcf_border_texels(radius: int, filter: PcfFilter = "box") -> int:
@@ -56,8 +56,8 @@ def pcf_border_texels(radius: int, filter: PcfFilter = "box") -> int:
         >>> pcf_border_texels(0), pcf_border_texels(2), pcf_border_texels(2, "bilinear")
         (1, 2, 3)
     """
-    k, filt = _check_kernel(radius, filter)
-    return _border_texels(k, filt)
+    k, filt = check_kernel(radius, filter)
+    return _pcf.border_texels(k, filt)
 
 
 def pcf(
@@ -134,7 +134,7 @@ def pcf(
         >>> pcf(depth_map, [[0.375, 0.5], [0.625, 0.5]], [0.5, 0.5], radius=1)
         array([0.33333333, 0.66666667])
     """
-    k, filt = _check_kernel(radius, filter)
+    k, filt = check_kernel(radius, filter)
     if not isinstance(reversed_z, bool | np.bool_):
         raise ValueError(f"reversed_z: expected True or False, got {reversed_z!r}")
     if not (isinstance(softness, int | float) and math.isfinite(softness) and softness >= 0):
@@ -158,7 +158,7 @@ def pcf(
         names=("depth_map", "coords", "depths"),
     )
     H, W = Z.shape[-2:]
-    border = _border_texels(k, filt)
+    border = _pcf.border_texels(k, filt)
     if min(H, W) <= 2 * border:
         raise ValueError(
             f"radius: a {filt} kernel of radius {k} needs {border} empty border texels "
@@ -168,6 +168,6 @@ def pcf(
     checks.require(all_finite(xp, Z, 2), non_finite("depth_map"))
     checks.require(all_finite(xp, c, 1), non_finite("coords"))
     checks.require(xp.isfinite(d), non_finite("depths"))
-    lit = _pcf(xp, Z, c, d, k, filt, bool(reversed_z), float(softness))
+    lit = _pcf.pcf(xp, Z, c, d, k, filt, bool(reversed_z), float(softness))
     del shape
     return checks.poison(xp.asarray(lit), 0)

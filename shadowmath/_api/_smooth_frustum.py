@@ -16,10 +16,11 @@ from shadowmath._boundary._validate import (
     non_finite,
     require_last,
 )
+from shadowmath._math import _smooth
 from shadowmath._math._frame import LightFrame
 from shadowmath._math._frustum import Frustum, blocker_reach
 from shadowmath._math._passes import extent
-from shadowmath._math._smooth import _smooth_max, soft_bounds
+from shadowmath._math._smooth import soft_bounds
 from shadowmath._math._specialize import formulas
 
 from ._adaptive_frustum import bounded_frustum, check_blocker, margins
@@ -61,7 +62,9 @@ def smooth_max(values: Any, temperature: Any) -> Array:
     checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
     shape = batch_shape(tuple(x.shape[:-1]), tuple(T.shape), names=("values", "temperature"))
     x = xp.broadcast_to(x, (*shape, x.shape[-1]))
-    return checks.poison(xp.broadcast_to(_smooth_max(xp, x, nan_unless(xp, T > 0, T)), shape), 0)
+    return checks.poison(
+        xp.broadcast_to(_smooth.smooth_max(xp, x, nan_unless(xp, T > 0, T)), shape), 0
+    )
 
 
 def _ratio_frustum(

@@ -38,7 +38,7 @@ PCF_FILTERS: tuple[PcfFilter, ...] = ("box", "bilinear")
 DEFAULT_CONSTANT_BIAS = 2.0
 
 
-def _reach(radius: int, filter: PcfFilter) -> float:
+def kernel_reach(radius: int, filter: PcfFilter) -> float:
     """How far, in texels along each map axis, a lookup compares from the receiver point.
 
     A box kernel of radius ``k`` reads the centres of texels ``-k..k`` around the
@@ -55,7 +55,7 @@ def _reach(radius: int, filter: PcfFilter) -> float:
 # ---------------------------------------------------------------------------
 
 
-def _texture_gradients(xp: ModuleType, M: Array, p: Array) -> tuple[Array, Array, Array]:
+def texture_gradients(xp: ModuleType, M: Array, p: Array) -> tuple[Array, Array, Array]:
     """``(grad s, grad t, grad r)`` at ``p``, each ``(*batch, 3)``; requires ``q > 0``."""
     hom = xp.sum(M[..., :3] * p[..., None, :], axis=-1) + M[..., 3]  # (*batch, 4)
     q = hom[..., 3:]
@@ -64,16 +64,16 @@ def _texture_gradients(xp: ModuleType, M: Array, p: Array) -> tuple[Array, Array
     return grads[..., 0, :], grads[..., 1, :], grads[..., 2, :]
 
 
-def _texel_size(xp: ModuleType, M: Array, p: Array, W: int, H: int) -> Array:
+def texel_size(xp: ModuleType, M: Array, p: Array, W: int, H: int) -> Array:
     """``sqrt(1 / (W H |grad s x grad t|))``: the texel's width across the ray."""
-    gs, gt, _ = _texture_gradients(xp, M, p)
+    gs, gt, _ = texture_gradients(xp, M, p)
     D = cross(xp, gs, gt)
     return 1 / xp.sqrt(W * H * norm(xp, D))  # |D| without squaring it (float32's range)
 
 
-def _texel_size_on_surface(xp: ModuleType, M: Array, p: Array, n: Array, W: int, H: int) -> Array:
+def texel_size_on_surface(xp: ModuleType, M: Array, p: Array, n: Array, W: int, H: int) -> Array:
     """``sqrt(1 / (W H |(grad s x grad t) . n|))`` with ``n`` unit: the texel on the surface."""
-    gs, gt, _ = _texture_gradients(xp, M, p)
+    gs, gt, _ = texture_gradients(xp, M, p)
     det = xp.abs(dot(xp, cross(xp, gs, gt), n))
     edge_on = det == 0
     size = 1 / xp.sqrt(W * H * xp.where(edge_on, xp.ones_like(det), det))
@@ -89,7 +89,7 @@ def _depth_slope(xp: ModuleType, M: Array, p: Array, n: Array, W: int, H: int) -
     one texel is ``1/W`` in ``s`` and ``1/H`` in ``t``. Infinite where the surface is
     seen edge-on (``det = 0``).
     """
-    gs, gt, gr = _texture_gradients(xp, M, p)
+    gs, gt, gr = texture_gradients(xp, M, p)
     det = dot(xp, cross(xp, gs, gt), n)
     dr_ds = dot(xp, gr, cross(xp, gt, n))
     dr_dt = dot(xp, gr, cross(xp, n, gs))
@@ -101,7 +101,7 @@ def _depth_slope(xp: ModuleType, M: Array, p: Array, n: Array, W: int, H: int) -
     return xp.stack([x, y], axis=-1)
 
 
-def _slope_scaled_bias(
+def slope_scaled_bias(
     xp: ModuleType,
     M: Array,
     p: Array,
@@ -116,12 +116,12 @@ def _slope_scaled_bias(
     return constant * depth_resolution + slope_factor * slope
 
 
-def _normal_offset(
+def normal_offset(
     xp: ModuleType, M: Array, p: Array, n: Array, W: int, H: int, reach: float, scale: float
 ) -> Array:
     """``n * scale * reach * (|grad r . (grad t x n)| / W + |grad r . (n x grad s)| / H)
     / (|D| |grad r . d|)`` with ``n`` unit, ``D = grad s x grad t``, ``d = D / |D|``."""
-    gs, gt, gr = _texture_gradients(xp, M, p)
+    gs, gt, gr = texture_gradients(xp, M, p)
     D = cross(xp, gs, gt)
     length = xp.sqrt(dot(xp, D, D))
     along_ray = xp.abs(dot(xp, gr, D)) / length

@@ -86,7 +86,7 @@ class ApiConvention(NamedTuple):
     far_depth: float
 
 
-def _clip_from_gl(api: str, reversed_z: bool) -> Matrix4:
+def clip_from_gl(api: str, reversed_z: bool) -> Matrix4:
     """``C``: OpenGL clip coordinates to ``api``'s clip coordinates (trusted inputs).
 
     Nested tuples of exact floats: convert with ``ctx.constant(...)``.
@@ -99,10 +99,10 @@ def _clip_from_gl(api: str, reversed_z: bool) -> Matrix4:
     return ((1.0, 0.0, 0.0, 0.0), (0.0, y, 0.0, 0.0), depth, (0.0, 0.0, 0.0, 1.0))
 
 
-def _texture_from_clip(api: str, reversed_z: bool) -> Matrix4:
+def texture_from_clip(api: str, reversed_z: bool) -> Matrix4:
     """``T``: ``api``'s clip coordinates to ``(s q, t q, r q, q)`` (trusted inputs).
 
-    ``reversed_z`` does not change ``T`` (the reversal is in :func:`_clip_from_gl`);
+    ``reversed_z`` does not change ``T`` (the reversal is in :func:`clip_from_gl`);
     it is taken so that both cores have one signature.
     """
     del reversed_z
@@ -111,9 +111,9 @@ def _texture_from_clip(api: str, reversed_z: bool) -> Matrix4:
     return ((0.5, 0.0, 0.0, 0.5), (0.0, t, 0.0, 0.5), depth, (0.0, 0.0, 0.0, 1.0))
 
 
-def _texture_from_gl_clip(api: str, reversed_z: bool) -> Matrix4:
+def texture_from_gl_clip(api: str, reversed_z: bool) -> Matrix4:
     """``T @ C``: OpenGL clip coordinates straight to ``api``'s texture coordinates."""
-    product = np.asarray(_texture_from_clip(api, reversed_z)) @ np.asarray(
-        _clip_from_gl(api, reversed_z)
+    product = np.asarray(texture_from_clip(api, reversed_z)) @ np.asarray(
+        clip_from_gl(api, reversed_z)
     )
     return tuple(tuple(float(v) for v in row) for row in product)

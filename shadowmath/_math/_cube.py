@@ -45,7 +45,7 @@ from shadowmath._boundary._validate import Array
 # OpenGL (lower-left window origin) and Vulkan (y-down NDC, upper-left origin)
 # both put NDC y = -1 at the first row in memory; Direct3D, Metal and WebGPU
 # put NDC y = +1 there (the table of _conventions).
-_APIS: dict[str, tuple[bool, bool]] = {
+APIS: dict[str, tuple[bool, bool]] = {
     "opengl": (False, False),
     "vulkan": (True, False),
     "direct3d": (True, True),
@@ -166,7 +166,7 @@ def _select_face(xp: ModuleType, face: Array, candidates: Array) -> Array:
     return xp.sum(xp.where(onehot[..., None], candidates, zero), axis=-2)
 
 
-def _major_face(xp: ModuleType, d: Array) -> Array:
+def major_face(xp: ModuleType, d: Array) -> Array:
     """The face index (int32) of ``d``: the major axis, ties by Vulkan's rule (z, then y, then x).
 
     The one face selection of the package: :func:`cube_face` and
@@ -184,14 +184,14 @@ def _major_face(xp: ModuleType, d: Array) -> Array:
 # ------------------------------------------------------------------ cores
 
 
-def _cube_face_views(xp: ModuleType, light: Array) -> Array:
+def cube_face_views(xp: ModuleType, light: Array) -> Array:
     A, index, sign = _view_constants(light.dtype)
     if xp is not np:
         A, sign = xp.asarray(A), xp.asarray(sign)
     return A + light[..., index] * sign  # (*batch, 6, 4, 4)
 
 
-def _depth_row(near: Array, far: Array, zero_to_one: bool, reversed_z: bool) -> tuple[Array, Array]:
+def depth_row(near: Array, far: Array, zero_to_one: bool, reversed_z: bool) -> tuple[Array, Array]:
     """The depth row ``(0, 0, a, b)`` of the projection: clip ``z = a z_v + b``, ``w = -z_v = D``.
 
     Plain arithmetic: ``near, far`` may be arrays or NumPy scalars.
@@ -207,7 +207,7 @@ def _depth_row(near: Array, far: Array, zero_to_one: bool, reversed_z: bool) -> 
     return -(f + n) / span, -2 * f * n / span  # glFrustum: NDC -1 at near, +1 at far
 
 
-def _cube_face_projection(
+def cube_face_projection(
     xp: ModuleType,
     near: Array,
     far: Array,
@@ -217,24 +217,24 @@ def _cube_face_projection(
     reversed_z: bool,
 ) -> Array:
     """``(*batch, 4, 4)`` from ``(*batch,)`` arrays ``near, far``."""
-    a, b = _depth_row(near, far, zero_to_one, reversed_z)
+    a, b = depth_row(near, far, zero_to_one, reversed_z)
     P0, at_a, at_b = (xp.asarray(c) for c in _projection_constants(a.dtype, scale, flip_y))
     # where, not P0 + a * mask: b overflows to inf for an extreme far * near, and inf * 0 is NaN.
     return xp.where(at_a, a[..., None, None], xp.where(at_b, b[..., None, None], P0))
 
 
-def _cube_face_projection_scalar(
+def cube_face_projection_scalar(
     near: Any, far: Any, scale: float, zero_to_one: bool, flip_y: bool, reversed_z: bool
 ) -> Array:
-    """:func:`_cube_face_projection` of one light's NumPy scalars, entry by entry."""
-    a, b = _depth_row(near, far, zero_to_one, reversed_z)
+    """:func:`cube_face_projection` of one light's NumPy scalars, entry by entry."""
+    a, b = depth_row(near, far, zero_to_one, reversed_z)
     sy = -scale if flip_y else scale
     entries = (scale, 0, 0, 0, 0, sy, 0, 0, 0, 0, a, b, 0, 0, -1, 0)
     return np.array(entries, dtype=a.dtype).reshape(4, 4)
 
 
-def _cube_face(xp: ModuleType, d: Array) -> tuple[Array, Array, Array]:
-    face = _major_face(xp, d)
+def cube_face(xp: ModuleType, d: Array) -> tuple[Array, Array, Array]:
+    face = major_face(xp, d)
     R = _rotations(xp, d.dtype)
     view = xp.sum(R * d[..., None, None, :], axis=-1)  # (*batch, 6, 3): (s_c, t_c, -|m_a|)
     sc, tc, minus_ma = xp.unstack(_select_face(xp, face, view), axis=-1)
@@ -243,7 +243,7 @@ def _cube_face(xp: ModuleType, d: Array) -> tuple[Array, Array, Array]:
     return face, (sc / ma + 1) / 2, (tc / ma + 1) / 2
 
 
-def _cube_face_direction(xp: ModuleType, face: Array, s: Array, t: Array) -> Array:
+def cube_face_direction(xp: ModuleType, face: Array, s: Array, t: Array) -> Array:
     sc, tc = 2 * s - 1, 2 * t - 1
     v = xp.stack([sc, tc, -xp.ones_like(sc)], axis=-1)  # view coordinates, |m_a| = 1
     R = _rotations(xp, v.dtype)
@@ -252,7 +252,7 @@ def _cube_face_direction(xp: ModuleType, face: Array, s: Array, t: Array) -> Arr
     return _select_face(xp, xp.astype(face, xp.int32), world)
 
 
-def _face_depth(xp: ModuleType, D: Array, near: Array, far: Array, reversed_z: bool) -> Array:
+def face_depth(xp: ModuleType, D: Array, near: Array, far: Array, reversed_z: bool) -> Array:
     span = far - near
     if reversed_z:
         return near * (far - D) / (span * D)

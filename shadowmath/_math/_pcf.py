@@ -33,11 +33,11 @@ import numpy as np
 
 from shadowmath._boundary._validate import Array
 
-from ._bias import PcfFilter, _reach
+from ._bias import PcfFilter, kernel_reach
 
 
-def _border_texels(radius: int, filter: PcfFilter) -> int:
-    return max(1, math.ceil(_reach(radius, filter) - 0.5))
+def border_texels(radius: int, filter: PcfFilter) -> int:
+    return max(1, math.ceil(kernel_reach(radius, filter) - 0.5))
 
 
 def _compare(
@@ -51,7 +51,7 @@ def _compare(
     return x * x * (3 - 2 * x)
 
 
-def _pcf(
+def pcf(
     xp: ModuleType,
     depth_map: Array,
     coords: Array,

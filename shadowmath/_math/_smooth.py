@@ -23,9 +23,7 @@ from types import ModuleType
 from shadowmath._boundary._validate import Array
 
 
-def _smooth_max(
-    xp: ModuleType, x: Array, temperature: Array, weights: Array | None = None
-) -> Array:
+def smooth_max(xp: ModuleType, x: Array, temperature: Array, weights: Array | None = None) -> Array:
     """``T log sum_i w_i exp(x_i / T)`` over the last axis, shifted by the hard max for range.
 
     The shift ``m = max x`` cancels mathematically (its derivative is
@@ -56,12 +54,12 @@ def soft_bounds(
     if symmetric:
         # The soft max of (r, -r): a smooth upper bound of max |r| (abs is not smooth at 0).
         w2 = None if weights is None else xp.concat([weights, weights], axis=-1)
-        hi_x = _smooth_max(xp, xp.concat([rx, -rx], axis=-1), T, w2)
-        hi_y = _smooth_max(xp, xp.concat([ry, -ry], axis=-1), T, w2)
+        hi_x = smooth_max(xp, xp.concat([rx, -rx], axis=-1), T, w2)
+        hi_y = smooth_max(xp, xp.concat([ry, -ry], axis=-1), T, w2)
         return hi_x, -hi_x, hi_y, -hi_y
     return (
-        _smooth_max(xp, rx, T, weights),
-        -_smooth_max(xp, -rx, T, weights),
-        _smooth_max(xp, ry, T, weights),
-        -_smooth_max(xp, -ry, T, weights),
+        smooth_max(xp, rx, T, weights),
+        -smooth_max(xp, -rx, T, weights),
+        smooth_max(xp, ry, T, weights),
+        -smooth_max(xp, -ry, T, weights),
     )

@@ -21,7 +21,7 @@ from shadowmath._boundary._validate import Array
 
 from ._vector import cross, dot
 
-_DEGENERATE = (
+DEGENERATE = (
     "edge_u, edge_v: the parallelogram is degenerate (a zero edge, or parallel edges "
     "relative to their lengths); the two edges must span a plane"
 )
@@ -37,7 +37,7 @@ def _row(xp: ModuleType, normal: Array, point: Array, denominator: Array) -> Arr
     return xp.concat([normal, offset], axis=-1) / denominator[..., None]
 
 
-def _pyramid_to_unit_cube(xp: ModuleType, a: Array, b: Array, eu: Array, ev: Array) -> Array:
+def pyramid_to_unit_cube(xp: ModuleType, a: Array, b: Array, eu: Array, ev: Array) -> Array:
     ew = b - a  # apex to the base corner
     n_x = cross(xp, ew, ev)  # normal of the side through a, b, b + ev   (x = 0)
     n_y = cross(xp, eu, ew)  # normal of the side through a, b, b + eu   (y = 0)
@@ -50,13 +50,13 @@ def _pyramid_to_unit_cube(xp: ModuleType, a: Array, b: Array, eu: Array, ev: Arr
     return xp.stack(xp.broadcast_arrays(row_x, row_y, row_z, row_w), axis=-2)
 
 
-def _grid(count: int) -> tuple[int, int]:
+def grid(count: int) -> tuple[int, int]:
     """``(rows, cols)``: the most nearly square factorization, ``rows <= cols``."""
     rows = max(d for d in range(1, math.isqrt(count) + 1) if count % d == 0)
     return rows, count // rows
 
 
-def _area_light_samples(
+def area_light_samples(
     xp: ModuleType, corner: Array, eu: Array, ev: Array, jitter: Array, rows: int, cols: int
 ) -> Array:
     k = xp.arange(rows * cols)
