@@ -39,7 +39,41 @@ CONVENTIONS
   wrong matrix.
 """
 
-from ._boundary._checks import check_finite as check_finite
+from ._api._adaptive_frustum import adaptive_frustum as adaptive_frustum
+from ._api._adaptive_frustum import blocker_projection as blocker_projection
+from ._api._adaptive_frustum import border_margin as border_margin
+from ._api._adaptive_frustum import receiver_projection as receiver_projection
+from ._api._api_convention import api_convention as api_convention
+from ._api._area_light import area_light_samples as area_light_samples
+from ._api._area_light import area_light_samples_jax as area_light_samples_jax
+from ._api._area_light import pyramid_to_unit_cube as pyramid_to_unit_cube
+from ._api._checks import check_finite as check_finite
+from ._api._checks import check_projection as check_projection
+from ._api._column_major import column_major_bytes as column_major_bytes
+from ._api._cube_faces import cube_face as cube_face
+from ._api._cube_faces import cube_face_depth as cube_face_depth
+from ._api._cube_faces import cube_face_direction as cube_face_direction
+from ._api._cube_faces import cube_face_projection as cube_face_projection
+from ._api._cube_faces import cube_face_views as cube_face_views
+from ._api._depth_bias import normal_offset as normal_offset
+from ._api._depth_bias import slope_scaled_bias as slope_scaled_bias
+from ._api._depth_bias import texel_world_size as texel_world_size
+from ._api._light_frame import helper_axis as helper_axis
+from ._api._light_frame import light_frame as light_frame
+from ._api._light_frame import light_frame_from_direction as light_frame_from_direction
+from ._api._light_frame import light_to_world as light_to_world
+from ._api._light_frame import mean_direction_vector as mean_direction_vector
+from ._api._light_frame import world_to_light as world_to_light
+from ._api._pcf_lookup import pcf as pcf
+from ._api._pcf_lookup import pcf_border_texels as pcf_border_texels
+from ._api._planar_projection import planar_projection as planar_projection
+from ._api._shadow_measures import cross_section_area as cross_section_area
+from ._api._shadow_measures import receiver_texel_size as receiver_texel_size
+from ._api._shadow_measures import silhouette_coverage as silhouette_coverage
+from ._api._smooth_frustum import offcenter_frustum as offcenter_frustum
+from ._api._smooth_frustum import rolled_light_frame as rolled_light_frame
+from ._api._smooth_frustum import smooth_frustum as smooth_frustum
+from ._api._smooth_frustum import smooth_max as smooth_max
 from ._boundary._messages import ShadowFitWarning as ShadowFitWarning
 from ._fits._atlas import AtlasFit as AtlasFit
 from ._fits._atlas import ShadowAtlas as ShadowAtlas
@@ -48,9 +82,6 @@ from ._fits._atlas import atlas_tile_transforms as atlas_tile_transforms
 from ._fits._atlas import atlas_viewports as atlas_viewports
 from ._fits._atlas import fit_atlas as fit_atlas
 from ._fits._atlas_redraw import atlas_redraw as atlas_redraw
-from ._fits._camera import ShadowCamera as ShadowCamera
-from ._fits._camera import camera_to_world as camera_to_world
-from ._fits._camera import shadow_camera as shadow_camera
 from ._fits._cascade_splits import cascade_splits as cascade_splits
 from ._fits._cascades import Cascades as Cascades
 from ._fits._cascades import fit_cascades as fit_cascades
@@ -62,48 +93,18 @@ from ._fits._prepared import PreparedFit as PreparedFit
 from ._fits._prepared import ShadowFitter as ShadowFitter
 from ._fits._setup import fit_shadow as fit_shadow
 from ._fits._setup import receiver_texture_matrix as receiver_texture_matrix
+from ._fits._shadow_camera import ShadowCamera as ShadowCamera
+from ._fits._shadow_camera import camera_to_world as camera_to_world
+from ._fits._shadow_camera import shadow_camera as shadow_camera
 from ._fits._shadow_setup import ShadowSetup as ShadowSetup
 from ._fits._spec import ShadowMapSpec as ShadowMapSpec
-from ._math._bias import normal_offset as normal_offset
-from ._math._bias import slope_scaled_bias as slope_scaled_bias
-from ._math._bias import texel_world_size as texel_world_size
 from ._math._conventions import GRAPHICS_APIS as GRAPHICS_APIS
 from ._math._conventions import ApiConvention as ApiConvention
-from ._math._conventions import api_convention as api_convention
 from ._math._cube import CubeFaceCoords as CubeFaceCoords
 from ._math._cube import CubeFaceDepth as CubeFaceDepth
-from ._math._cube import cube_face as cube_face
-from ._math._cube import cube_face_depth as cube_face_depth
-from ._math._cube import cube_face_direction as cube_face_direction
-from ._math._cube import cube_face_projection as cube_face_projection
-from ._math._cube import cube_face_views as cube_face_views
 from ._math._frame import LightFrame as LightFrame
-from ._math._frame import helper_axis as helper_axis
-from ._math._frame import light_frame as light_frame
-from ._math._frame import light_frame_from_direction as light_frame_from_direction
-from ._math._frame import light_to_world as light_to_world
-from ._math._frame import mean_direction_vector as mean_direction_vector
-from ._math._frame import world_to_light as world_to_light
 from ._math._frustum import NEAR_FAR_SLACK as NEAR_FAR_SLACK
 from ._math._frustum import Frustum as Frustum
-from ._math._frustum import adaptive_frustum as adaptive_frustum
-from ._math._frustum import blocker_projection as blocker_projection
-from ._math._frustum import border_margin as border_margin
-from ._math._frustum import receiver_projection as receiver_projection
-from ._math._layout import column_major_bytes as column_major_bytes
-from ._math._measures import cross_section_area as cross_section_area
-from ._math._measures import receiver_texel_size as receiver_texel_size
-from ._math._measures import silhouette_coverage as silhouette_coverage
-from ._math._pcf import pcf as pcf
-from ._math._pcf import pcf_border_texels as pcf_border_texels
-from ._math._planar import planar_projection as planar_projection
-from ._math._smooth import offcenter_frustum as offcenter_frustum
-from ._math._smooth import rolled_light_frame as rolled_light_frame
-from ._math._smooth import smooth_frustum as smooth_frustum
-from ._math._smooth import smooth_max as smooth_max
-from ._math._soft import area_light_samples as area_light_samples
-from ._math._soft import area_light_samples_jax as area_light_samples_jax
-from ._math._soft import pyramid_to_unit_cube as pyramid_to_unit_cube
 from .gather import gather_meshes as gather_meshes
 from .lights import DirectionalLight as DirectionalLight
 from .lights import PointLight as PointLight
@@ -150,6 +151,7 @@ __all__ = [
     "camera_to_world",
     "cascade_splits",
     "check_finite",
+    "check_projection",
     "column_major_bytes",
     "cross_section_area",
     "cube_depth_range",

@@ -13,7 +13,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from shadowmath import GRAPHICS_APIS, api_convention
-from shadowmath._math._conventions import _clip_from_gl, _texture_from_clip, _texture_from_gl_clip
+from shadowmath._math._conventions import clip_from_gl, texture_from_clip, texture_from_gl_clip
 
 TOP_LEFT_APIS = ("direct3d", "metal", "webgpu")
 
@@ -226,12 +226,12 @@ def test_opengl_is_the_identity_and_the_standard_bias() -> None:
 def test_private_cores_are_nested_tuples() -> None:
     for api in GRAPHICS_APIS:
         for rz in (False, True):
-            for core in (_clip_from_gl, _texture_from_clip, _texture_from_gl_clip):
+            for core in (clip_from_gl, texture_from_clip, texture_from_gl_clip):
                 m = core(api, rz)
                 assert isinstance(m, tuple)
                 assert np.asarray(m).shape == (4, 4)
     np.testing.assert_array_equal(
-        np.asarray(_texture_from_gl_clip("vulkan", True)),
+        np.asarray(texture_from_gl_clip("vulkan", True)),
         api_convention(api="vulkan", reversed_z=True).gl_clip_to_texture,
     )
 

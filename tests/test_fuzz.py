@@ -327,6 +327,38 @@ def test_fuzz_projections_of_any_frustum(data: st.DataObject) -> None:
 
 
 @given(
+    shape=st.lists(st.integers(1, 3), min_size=0, max_size=2),
+    near=st.floats(1e-3, 10),
+    ratio=st.floats(1.01, 1e4),
+    orthographic=st.booleans(),
+    wrong=st.sampled_from(["none", "transposed", "scaled"]),
+    scale=st.floats(1.5, 8),
+)
+def test_fuzz_check_projection(
+    shape: list[int], near: float, ratio: float, orthographic: bool, wrong: str, scale: float
+) -> None:
+    """A projection built from glFrustum's and glOrtho's formulas passes unchanged; its
+    transpose (row-major memory read as column-major) or a multiple of it is refused."""
+    CASES["check_projection"] += 1
+    n, f = near, near * ratio
+    if orthographic:
+        rows = [[0.5, 0, 0, 0.1], [0, 0.7, 0, 0], [0, 0, -2 / (f - n), -(f + n) / (f - n)]]
+        P = np.array([*rows, [0, 0, 0, 1.0]])
+    else:
+        rows = [[1.2, 0, 0.1, 0], [0, 1.6, 0, 0], [0, 0, -(f + n) / (f - n), -2 * f * n / (f - n)]]
+        P = np.array([*rows, [0, 0, -1.0, 0]])
+        # The transpose's last row (0, 0, -2fn/(f-n), 0) is a camera's where 2fn = f - n.
+        assume(wrong != "transposed" or abs(2 * f * n / (f - n) - 1) > 1e-6)
+    M = np.broadcast_to(P, (*shape, 4, 4))
+    if wrong == "none":
+        np.testing.assert_array_equal(sm.check_projection(M), M)
+        return
+    bad = np.swapaxes(M, -1, -2) if wrong == "transposed" else scale * M
+    with pytest.raises(ValueError, match="projection: its last row is neither"):
+        sm.check_projection(bad)
+
+
+@given(
     shape=st.lists(st.integers(0, 3), min_size=0, max_size=2),
     nan_at=st.integers(-1, 50),
 )
@@ -2492,6 +2524,7 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "blocker_projection": ("test_fuzz_projections_of_any_frustum",),
     "border_margin": ("test_fuzz_border_margin", "test_fuzz_shadow_map_spec"),
     "check_finite": ("test_fuzz_check_finite",),
+    "check_projection": ("test_fuzz_check_projection",),
     "column_major_bytes": ("test_fuzz_fit_shadow",),
     "cross_section_area": ("test_fuzz_cross_section_area", "test_fuzz_optimize_frustum"),
     "cube_depth_range": ("test_fuzz_cube_depth_range",),

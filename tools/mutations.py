@@ -113,7 +113,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "frustum-near-slack",
-        "shadowmath/_math/_frustum.py",
+        "shadowmath/_api/_adaptive_frustum.py",
         "near = z_min * (1 - NEAR_FAR_SLACK) if given_near is None else given_near",
         "near = z_min * (1 + NEAR_FAR_SLACK) if given_near is None else given_near",
         "adaptive_frustum's default near plane behind the nearest vertex (slack added)",

@@ -28,6 +28,9 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from shadowmath._api._adaptive_frustum import border_margin
+from shadowmath._api._api_convention import check_api as _check_api
+from shadowmath._api._depth_bias import check_kernel as _check_kernel
 from shadowmath._backends import _kernels
 from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import (
@@ -44,12 +47,14 @@ from shadowmath._boundary._validate import (
     shape_error,
 )
 from shadowmath._math import _atlas_tiles as tiles
-from shadowmath._math._bias import PcfFilter, _check_kernel
-from shadowmath._math._conventions import GraphicsApi, _check_api, _texture_from_clip
-from shadowmath._math._cube import _APIS, _cube_face_views, _depth_row
+from shadowmath._math._bias import PcfFilter
+from shadowmath._math._conventions import GraphicsApi
+from shadowmath._math._conventions import texture_from_clip as _texture_from_clip
+from shadowmath._math._cube import APIS as _APIS
+from shadowmath._math._cube import cube_face_views as _cube_face_views
+from shadowmath._math._cube import depth_row as _depth_row
 from shadowmath._math._frame import stack_matrix
-from shadowmath._math._frustum import border_margin
-from shadowmath._math._pcf import _border_texels
+from shadowmath._math._pcf import border_texels as _border_texels
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 
 from . import _compiled

@@ -21,6 +21,7 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
+from shadowmath._api._api_convention import check_api as _check_api
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._projection import check_projection
@@ -40,7 +41,8 @@ from shadowmath._boundary._validate import (
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._cascade_formulas import EDGES
 from shadowmath._math._cascade_loop import CHECKS, ROW
-from shadowmath._math._conventions import GraphicsApi, _check_api, _clip_from_gl
+from shadowmath._math._conventions import GraphicsApi
+from shadowmath._math._conventions import clip_from_gl as _clip_from_gl
 from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
 from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath.lights import DirectionalLight

@@ -13,6 +13,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._api._cube_faces import face_scale
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -24,7 +25,6 @@ from shadowmath._boundary._validate import (
     require_no_new_batch,
     require_vertices,
 )
-from shadowmath._math._cube import face_scale
 from shadowmath._math._frustum import NEAR_FAR_SLACK
 
 from ._setup import _receiver_kind, _receiver_rows, caster_triangles

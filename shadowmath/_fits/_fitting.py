@@ -30,6 +30,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._api._adaptive_frustum import bounded_frustum, check_blocker, margins
+from shadowmath._api._light_frame import frame_along
+from shadowmath._api._smooth_frustum import rolled_frame
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -39,16 +42,10 @@ from shadowmath._boundary._validate import (
     non_finite,
     require_last,
 )
-from shadowmath._math._frame import LightFrame, _frame, zero_direction_noise
-from shadowmath._math._frustum import (
-    Frustum,
-    blocker_reach,
-    bounded_frustum,
-    check_blocker,
-    margins,
-)
+from shadowmath._math._frame import LightFrame, zero_direction_noise
+from shadowmath._math._frustum import Frustum, blocker_reach
 from shadowmath._math._passes import extent, spread
-from shadowmath._math._smooth import rolled_frame, soft_bounds
+from shadowmath._math._smooth import soft_bounds
 from shadowmath._math._specialize import formulas
 
 from ._shadow_setup import ShadowSetup, setup_from
@@ -205,7 +202,7 @@ def _optimize_core(
     check_blocker(checks, verts, near, far)
     # The MDV frame and frustum: the starting point and the scale of the parameters.
     s = spread(xp, light, verts, aim="mean")
-    ref = _frame(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
+    ref = frame_along(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
     ext = extent(xp, light, verts, ref.x_axis, ref.y_axis, ref.z_axis)
     ref_frustum = bounded_frustum(ctx, checks, ext, s.reach, m, None, None)
 

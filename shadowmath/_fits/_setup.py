@@ -21,6 +21,7 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
+from shadowmath._api._light_frame import check_aim
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._validate import (
@@ -43,7 +44,7 @@ from shadowmath._boundary._validate import (
 )
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi
-from shadowmath._math._frame import LightFrame, check_aim, stack_matrix
+from shadowmath._math._frame import LightFrame, stack_matrix
 from shadowmath._math._frustum import Frustum
 from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight

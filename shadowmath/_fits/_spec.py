@@ -16,17 +16,15 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._api._adaptive_frustum import derived_margins, texel_counts
+from shadowmath._api._api_convention import check_api
+from shadowmath._api._depth_bias import check_kernel
 from shadowmath._boundary._messages import ShadowFitWarning
-from shadowmath._math._bias import PcfFilter, _check_kernel
-from shadowmath._math._conventions import (
-    GraphicsApi,
-    _check_api,
-    _clip_from_gl,
-    _texture_from_gl_clip,
-)
+from shadowmath._math._bias import PcfFilter
+from shadowmath._math._conventions import GraphicsApi, clip_from_gl, texture_from_gl_clip
 from shadowmath._math._fit_entry import FitOptions
-from shadowmath._math._frustum import NEAR_FAR_SLACK, _margins, _texels
-from shadowmath._math._pcf import _border_texels
+from shadowmath._math._frustum import NEAR_FAR_SLACK
+from shadowmath._math._pcf import border_texels
 
 
 @dataclasses.dataclass(frozen=True)
@@ -90,7 +88,7 @@ class ShadowMapSpec:
         if isinstance(m, list | np.ndarray):  # hashable, as a spec must be
             m = tuple(float(v) for v in m)
         values = {
-            "size": _texels("map_size", size),
+            "size": texel_counts("map_size", size),
             "border_texels": border_texels,
             "pcf_radius": pcf_radius,
             "pcf_filter": pcf_filter,
@@ -114,7 +112,7 @@ class ShadowMapSpec:
         if self.border_texels is not None:
             return self.border_texels
         if self.pcf_radius is not None:
-            return _border_texels(*_check_kernel(self.pcf_radius, self.pcf_filter, _PCF_NAMES))
+            return border_texels(*check_kernel(self.pcf_radius, self.pcf_filter, _PCF_NAMES))
         return 1
 
 
@@ -122,10 +120,10 @@ _PCF_NAMES = ("pcf_radius", "pcf_filter")
 
 
 def _check(spec: ShadowMapSpec) -> None:
-    _check_api(spec.api, spec.reversed_z)
+    check_api(spec.api, spec.reversed_z)
     if not isinstance(spec.stable, bool | np.bool_):
         raise ValueError(f"stable: expected True or False, got {spec.stable!r}")
-    _check_kernel(0 if spec.pcf_radius is None else spec.pcf_radius, spec.pcf_filter, _PCF_NAMES)
+    check_kernel(0 if spec.pcf_radius is None else spec.pcf_radius, spec.pcf_filter, _PCF_NAMES)
     given = [n for n in ("border_texels", "pcf_radius", "margin") if getattr(spec, n) is not None]
     if len(given) > 1:
         raise ValueError(
@@ -159,7 +157,7 @@ def _check(spec: ShadowMapSpec) -> None:
 
 @functools.lru_cache(maxsize=256)
 def _spec_margins(spec: ShadowMapSpec) -> tuple[float, float]:
-    return _margins(spec.size, spec.border, spec.margin)
+    return derived_margins(spec.size, spec.border, spec.margin)
 
 
 def map_spec(map_size: Any, **options: Any) -> ShadowMapSpec:
@@ -249,6 +247,6 @@ def fit_options(key: FitKey, eps: float, single: bool = False) -> FitOptions:
 @functools.lru_cache(maxsize=256)
 def api_rows(api: str, reversed_z: bool) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """``C`` and ``T C`` of :func:`api_convention` as 16 row-major floats each."""
-    C = tuple(v for row in _clip_from_gl(api, reversed_z) for v in row)
-    TC = tuple(v for row in _texture_from_gl_clip(api, reversed_z) for v in row)
+    C = tuple(v for row in clip_from_gl(api, reversed_z) for v in row)
+    TC = tuple(v for row in texture_from_gl_clip(api, reversed_z) for v in row)
     return C, TC

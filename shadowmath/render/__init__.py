@@ -39,8 +39,6 @@ picture: :class:`GLUnavailableError` names the Debian packages to install
 (:data:`DEBIAN_PACKAGES`).
 """
 
-from ._camera import look_at as look_at
-from ._camera import perspective as perspective
 from ._context import DEBIAN_PACKAGES as DEBIAN_PACKAGES
 from ._context import GLUnavailableError as GLUnavailableError
 from ._context import standalone_context as standalone_context
@@ -58,6 +56,8 @@ from ._resources import Light as Light
 from ._scene import Frame as Frame
 from ._scene import render_scene as render_scene
 from ._shadow_map import render_shadow_map as render_shadow_map
+from ._viewer_camera import look_at as look_at
+from ._viewer_camera import perspective as perspective
 
 __all__ = [
     "CASCADE_COLORS",

@@ -9,9 +9,7 @@ import moderngl
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath import column_major_bytes
-from shadowmath._boundary._projection import check_projection
-from shadowmath._boundary._validate import Checks, convert
+from shadowmath import check_projection, column_major_bytes
 
 #: Debian packages that provide a headless EGL context (Mesa's llvmpipe without a GPU):
 #: the EGL loader, the GL library glcontext opens beside it, and Mesa's drivers.
@@ -118,10 +116,9 @@ def check_matrix(name: str, matrix: Any) -> NDArray[np.float64]:
 
 def check_camera_projection(projection: Any) -> NDArray[np.float64]:
     """A viewing camera's ``(4, 4)`` projection, refused unless it is one (the fits' check:
-    :func:`shadowmath._boundary._projection.check_projection`)."""
+    :func:`shadowmath.check_projection`)."""
     p = check_matrix("projection", projection)
-    ctx, (converted,) = convert(projection=p)
-    check_projection(Checks(ctx), converted)
+    check_projection(p)
     return p
 
 

@@ -187,7 +187,7 @@ def shadow_camera(fit: ShadowSetup | Cascades) -> ShadowCamera:
             "fit: expected a ShadowSetup (from fit_shadow) or Cascades (from fit_cascades), "
             f"got {type(fit).__name__}"
         )
-    camera = _camera(ctx, frame, frustum)
+    camera = _camera_from_frustum(ctx, frame, frustum)
     poisoned = {
         name: checks.poison(getattr(camera, name), 1 if name in _VECTORS else 0)
         for name in ShadowCamera._fields[:-1]
@@ -264,7 +264,7 @@ def _frustum(ctx: Context, fields: Any, fr: Frustum) -> Frustum:
     return Frustum._make((*fields, ortho))
 
 
-def _camera(ctx: Context, frame: LightFrame, fr: Frustum) -> ShadowCamera:
+def _camera_from_frustum(ctx: Context, frame: LightFrame, fr: Frustum) -> ShadowCamera:
     """The camera of a trusted frame and frustum (the formula of :func:`shadow_camera`)."""
     xp = ctx.xp
     o, X, Y, Z = frame

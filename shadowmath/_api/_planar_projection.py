@@ -21,9 +21,8 @@ from shadowmath._boundary._validate import (
     raise_status,
     require_last,
 )
-
-from ._frame import stack_matrix
-from ._specialize import formulas
+from shadowmath._math._frame import stack_matrix
+from shadowmath._math._specialize import formulas
 
 
 def planar_projection(plane: Any, light: Any) -> Array:

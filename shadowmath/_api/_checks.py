@@ -1,4 +1,5 @@
-"""Turning shadowmath's NaN-marked invalid outputs back into errors.
+"""The public checks: a camera projection read at the door, and shadowmath's NaN-marked
+invalid outputs turned back into errors.
 
 With NumPy (or concrete JAX) inputs every function raises ``ValueError`` on bad
 values. Inside JAX transformations (``jit``, ``vmap``, ``grad``) raising on a
@@ -30,7 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from ._validate import is_jax, is_tracer
+from shadowmath._boundary import _projection
+from shadowmath._boundary._validate import Array, Checks, convert, is_jax, is_tracer
 
 
 def _leaves(value: Any, name: str) -> list[tuple[str, Any]]:
@@ -94,3 +96,40 @@ def check_finite(value: Any, *, name: str = "value") -> Any:
                 "(or inside jax.experimental.checkify.checkify) to get the specific error"
             )
     return value
+
+
+def check_projection(projection: Any) -> Array:
+    """A camera's projection, refused unless it is one; the check :func:`fit_cascades` makes.
+
+    A projection maps view to clip coordinates with ``w`` the view depth
+    (perspective: last row ``(0, 0, -1, 0)``, or ``(0, 0, 1, 0)`` for a camera
+    looking down ``+z``) or ``1`` (orthographic: ``(0, 0, 0, 1)``); every graphics
+    API writes that row so, whatever its depth range or reversed Z. The row is
+    checked exactly, to rounding, not up to scale: the transpose of a perspective
+    projection (a row-major matrix read as column-major) is refused, as is a scaled one.
+
+    Arguments:
+        projection: ``(*batch, 4, 4)`` column-vector projection (``clip = P @ view``).
+
+    Returns:
+        ``projection`` converted (NumPy or JAX, float32 or float64), unchanged in value.
+
+    Raises:
+        ValueError: a wrong shape; non-finite entries; a last row that is neither a
+            perspective nor an orthographic projection's. Under JAX transformations
+            the returned matrices are NaN instead.
+
+    Example:
+        >>> import numpy as np
+        >>> P = np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, -0.2], [0, 0, -1, 0]])
+        >>> check_projection(P)[3]
+        array([ 0.,  0., -1.,  0.])
+        >>> check_projection(P.T)
+        Traceback (most recent call last):
+        ...
+        ValueError: projection: its last row is neither a perspective projection's ...
+    """
+    ctx, (P,) = convert(projection=projection)
+    checks = Checks(ctx)
+    _projection.check_projection(checks, P)
+    return checks.poison(P, 2)

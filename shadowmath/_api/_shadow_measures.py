@@ -25,10 +25,11 @@ from shadowmath._boundary._validate import (
     require_last,
     require_matrix,
 )
+from shadowmath._math import _bias
+from shadowmath._math._frustum import Frustum
+from shadowmath._math._vector import dot
 
-from ._bias import _texel_size_on_surface
-from ._frustum import Frustum, _texels, frustum_arrays
-from ._vector import dot
+from ._adaptive_frustum import frustum_arrays, texel_counts
 
 
 def cross_section_area(frustum: Frustum) -> Array:
@@ -126,7 +127,7 @@ def receiver_texel_size(
         >>> float(receiver_texel_size(s.world_to_texture, [0, 0, 8], [0, 0, 1], 100).round(6))
         0.040816
     """
-    W, H = _texels("map_size", map_size)
+    W, H = texel_counts("map_size", map_size)
     ctx, (M, p, n) = convert(world_to_texture=world_to_texture, points=points, normals=normals)
     xp = ctx.xp
     require_matrix("world_to_texture", M)
@@ -147,5 +148,5 @@ def receiver_texel_size(
     q = xp.sum(M[..., 3, :3] * p, axis=-1) + M[..., 3, 3]
     checks.require(q > 0, "points: a receiver point is behind the light (q <= 0)")
     unit_n = n / xp.sqrt(n_sq)[..., None]
-    size = _texel_size_on_surface(xp, M, p, unit_n, W, H)
+    size = _bias.texel_size_on_surface(xp, M, p, unit_n, W, H)
     return checks.poison(xp.broadcast_to(size, shape), 0)

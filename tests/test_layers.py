@@ -1,0 +1,140 @@
+"""The package's layers, read from every module's imports (lazy ones included).
+
+Bottom to top: ``_boundary`` (argument checks) -> ``_math`` (trusted cores) ->
+``_backends`` (the compiled loops) -> ``_api`` (the public functions, each at its
+door, with the public modules ``lights``, ``receivers``, ``meshes``, ``gather`` and
+``groundtruth``) -> ``_fits`` -> ``shadowmath`` (the re-exports) -> ``render`` and
+``integrations`` -> ``cli`` -> ``__main__``. A module imports its own layer or lower
+ones, never a higher one; the clients on top import public names only; the cores take
+types and constants from the boundary, never its checks. ``docs/architecture.md``
+draws the picture.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+from typing import NamedTuple
+
+from .test_layout import ROOT, _module
+
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("_boundary",),
+    ("_math",),
+    ("_backends",),
+    ("_api", "lights", "receivers", "meshes", "gather", "groundtruth"),
+    ("_fits",),
+    ("",),  # shadowmath/__init__.py
+    ("render", "integrations"),
+    ("cli",),
+    ("__main__",),
+)
+CLIENTS = ("render", "integrations", "cli", "__main__")
+#: What a core may take from the boundary besides UPPER_CASE constants: types.
+BOUNDARY_TYPES = {"Array", "Context"}
+
+
+class Import(NamedTuple):
+    importer: str  # "shadowmath._math._frame"
+    module: str  # "shadowmath._boundary._validate"
+    names: tuple[str, ...]  # ("Array",); () for ``import module``
+
+
+def _part(module: str) -> str:
+    """The package's top part a module belongs to: ``"_math"``, ``"render"``, ``""``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def layer(module: str) -> int:
+    part = _part(module)
+    return next(i for i, parts in enumerate(LAYERS) if part in parts)
+
+
+def _imports(path: Path, name: str) -> list[Import]:
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: list[Import] = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*parts, base] if base else parts)
+            found.append(Import(name, base, tuple(a.name for a in node.names)))
+        elif isinstance(node, ast.Import):
+            found += [Import(name, a.name, ()) for a in node.names]
+    return [i for i in found if i.module.split(".")[0] == "shadowmath"]
+
+
+def package_imports() -> list[Import]:
+    return [i for p in sorted(ROOT.rglob("*.py")) for i in _imports(p, _module(p))]
+
+
+def upward(imports: list[Import]) -> list[Import]:
+    """Imports of a module from a higher layer than the importer's."""
+    return [i for i in imports if layer(i.module) > layer(i.importer)]
+
+
+def private_to_clients(imports: list[Import]) -> list[Import]:
+    """A client's imports of another part's private module or name (leading underscore)."""
+    return [
+        i
+        for i in imports
+        if _part(i.importer) in CLIENTS
+        and _part(i.module) != _part(i.importer)
+        and any(p.startswith("_") for p in (*i.module.split(".")[1:], *i.names))
+    ]
+
+
+def checks_in_cores(imports: list[Import]) -> list[Import]:
+    """A core's imports from the boundary of anything but its types and constants."""
+    return [
+        i
+        for i in imports
+        if _part(i.importer) == "_math"
+        and _part(i.module) == "_boundary"
+        and any(n not in BOUNDARY_TYPES and not n.isupper() for n in i.names or ("*",))
+    ]
+
+
+def test_every_module_has_a_layer_and_the_imports_are_read() -> None:
+    imports = package_imports()
+    for module in {i.importer for i in imports} | {i.module for i in imports}:
+        layer(module)  # StopIteration: a new top-level part needs its place in LAYERS
+    assert Import(
+        "shadowmath._api._planar_projection", "shadowmath._backends", ("_kernels",)
+    ) in imports  # fmt: skip
+
+
+def test_no_layer_imports_a_higher_one() -> None:
+    assert upward(package_imports()) == []
+
+
+def test_render_cli_and_integrations_import_public_names_only() -> None:
+    assert private_to_clients(package_imports()) == []
+
+
+def test_the_cores_take_types_and_constants_from_the_boundary_not_its_checks() -> None:
+    assert checks_in_cores(package_imports()) == []
+
+
+def test_the_rules_find_what_they_forbid() -> None:
+    """Each rule flags a planted violation (and leaves its allowed neighbour alone)."""
+    core_to_backend = Import("shadowmath._math._planar", "shadowmath._backends", ("_kernels",))
+    door_to_backend = Import("shadowmath._api._planar_projection", "shadowmath._backends", ())
+    boundary_to_core = Import("shadowmath._boundary._x", "shadowmath._math._frame", ("f",))
+    assert upward([core_to_backend, door_to_backend, boundary_to_core]) == [
+        core_to_backend,
+        boundary_to_core,
+    ]
+    private = Import("shadowmath.render._context", "shadowmath._boundary._projection", ("f",))
+    name = Import("shadowmath.cli._run", "shadowmath.render", ("_context",))
+    public = Import("shadowmath.cli._run", "shadowmath", ("fit_shadow", "meshes"))
+    own = Import("shadowmath.render._pass_lit", "shadowmath.render._context", ("program",))
+    assert private_to_clients([private, name, public, own]) == [private, name]
+    check = Import(
+        "shadowmath._math._frame", "shadowmath._boundary._validate", ("Array", "convert")
+    )
+    types = Import("shadowmath._math._loops", "shadowmath._boundary._status", ("LIGHT", "Array"))
+    module = Import("shadowmath._math._planar", "shadowmath._boundary", ("_status",))
+    assert checks_in_cores([check, types, module]) == [check, module]
