@@ -250,7 +250,7 @@ def fit_cascades(
     _scalar_checks(checks, (lm, ov, dmax, S))
     C = _clip_from_gl(cam_api, camera_reversed_z)
     given = (U is not None, S is not None, dmax is not None)
-    o, record = _options(spec, layout, n, given, ctx.eps, tuple(v for row in C for v in row))
+    o, record = _options(spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row))
     call = _Call(ctx, spec, layout, shape, o)
     arrays = (L, V, P, box, U, S, dmax, lm, ov)
     if ctx.xp is np and warp is None:
@@ -392,7 +392,7 @@ def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | No
     with np.errstate(all="ignore"):  # invalid entries: their status bits say so
         e = F.cascade_entry(inputs, sc, S, o)
         splits = F.cascade_split(S, j, e[0][1:4], o)
-        sl = F.cascade_slice(e, inputs[3], S, j[:-1], o)
+        sl = F.cascade_slice(e, inputs[3], splits, j[:-1], o)
         row: list[Any] = [0.0] * ROW
         F.cascade_fit(e, sl, j[:-1], o, row)
         if warp is not None:
@@ -487,6 +487,7 @@ def _options(
     layout: str,
     n: int,
     given: tuple[bool, bool, bool],
+    *,
     eps: float,
     C: tuple[float, ...],
 ) -> tuple[CascadeOptions, Any]:

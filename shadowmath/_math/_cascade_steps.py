@@ -43,7 +43,7 @@ from ._cascade_formulas import (  # noqa: F401
 )
 from ._fit_formulas import fit_axes, fit_rows, placement_ok, safe_box, stable_sides, to_light
 from ._formulas import fabs, isfinite, sqrt, where
-from ._rows import row16, tile_rows
+from ._rows import _mul16, inverse4, row16, tile_rows
 
 #: Primitives of the mode, bound by specialize(): a float buffer of ``n`` entries, a check's
 #: bit (``flag(ok, bit)``), entry ``k`` of a per-entry row (``take_last(G, k)``) and, in the
@@ -128,65 +128,6 @@ def lesser(a: Any, b: Any) -> Any:
 def greater(a: Any, b: Any) -> Any:
     """``max(a, b)`` with the ``where`` primitive."""
     return where(a >= b, a, b)
-
-
-def inverse4(m: tuple[Any, ...]) -> tuple[tuple[Any, ...], Any]:
-    """The inverse of a 4x4 matrix (16 row-major entries) by 2x2 minors, and its determinant."""
-    s0 = m[0] * m[5] - m[4] * m[1]
-    s1 = m[0] * m[6] - m[4] * m[2]
-    s2 = m[0] * m[7] - m[4] * m[3]
-    s3 = m[1] * m[6] - m[5] * m[2]
-    s4 = m[1] * m[7] - m[5] * m[3]
-    s5 = m[2] * m[7] - m[6] * m[3]
-    c5 = m[10] * m[15] - m[14] * m[11]
-    c4 = m[9] * m[15] - m[13] * m[11]
-    c3 = m[9] * m[14] - m[13] * m[10]
-    c2 = m[8] * m[15] - m[12] * m[11]
-    c1 = m[8] * m[14] - m[12] * m[10]
-    c0 = m[8] * m[13] - m[12] * m[9]
-    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
-    k = 1.0 / where(det != 0, det, 1.0)
-    inv = (
-        (m[5] * c5 - m[6] * c4 + m[7] * c3) * k,
-        (-m[1] * c5 + m[2] * c4 - m[3] * c3) * k,
-        (m[13] * s5 - m[14] * s4 + m[15] * s3) * k,
-        (-m[9] * s5 + m[10] * s4 - m[11] * s3) * k,
-        (-m[4] * c5 + m[6] * c2 - m[7] * c1) * k,
-        (m[0] * c5 - m[2] * c2 + m[3] * c1) * k,
-        (-m[12] * s5 + m[14] * s2 - m[15] * s1) * k,
-        (m[8] * s5 - m[10] * s2 + m[11] * s1) * k,
-        (m[4] * c4 - m[5] * c2 + m[7] * c0) * k,
-        (-m[0] * c4 + m[1] * c2 - m[3] * c0) * k,
-        (m[12] * s4 - m[13] * s2 + m[15] * s0) * k,
-        (-m[8] * s4 + m[9] * s2 - m[11] * s0) * k,
-        (-m[4] * c3 + m[5] * c1 - m[6] * c0) * k,
-        (m[0] * c3 - m[1] * c1 + m[2] * c0) * k,
-        (-m[12] * s3 + m[13] * s1 - m[14] * s0) * k,
-        (m[8] * s3 - m[9] * s1 + m[10] * s0) * k,
-    )
-    return inv, det
-
-
-def _mul16(a: Any, b: Any) -> Any:
-    """``a @ b`` for 16 row-major entries each."""
-    return (
-        a[0] * b[0] + a[1] * b[4] + a[2] * b[8] + a[3] * b[12],
-        a[0] * b[1] + a[1] * b[5] + a[2] * b[9] + a[3] * b[13],
-        a[0] * b[2] + a[1] * b[6] + a[2] * b[10] + a[3] * b[14],
-        a[0] * b[3] + a[1] * b[7] + a[2] * b[11] + a[3] * b[15],
-        a[4] * b[0] + a[5] * b[4] + a[6] * b[8] + a[7] * b[12],
-        a[4] * b[1] + a[5] * b[5] + a[6] * b[9] + a[7] * b[13],
-        a[4] * b[2] + a[5] * b[6] + a[6] * b[10] + a[7] * b[14],
-        a[4] * b[3] + a[5] * b[7] + a[6] * b[11] + a[7] * b[15],
-        a[8] * b[0] + a[9] * b[4] + a[10] * b[8] + a[11] * b[12],
-        a[8] * b[1] + a[9] * b[5] + a[10] * b[9] + a[11] * b[13],
-        a[8] * b[2] + a[9] * b[6] + a[10] * b[10] + a[11] * b[14],
-        a[8] * b[3] + a[9] * b[7] + a[10] * b[11] + a[11] * b[15],
-        a[12] * b[0] + a[13] * b[4] + a[14] * b[8] + a[15] * b[12],
-        a[12] * b[1] + a[13] * b[5] + a[14] * b[9] + a[15] * b[13],
-        a[12] * b[2] + a[13] * b[6] + a[14] * b[10] + a[15] * b[14],
-        a[12] * b[3] + a[13] * b[7] + a[14] * b[11] + a[15] * b[15],
-    )
 
 
 def cascade_camera(V: Any, P: Any, o: Any, nc: Any, fc: Any) -> Any:
@@ -323,13 +264,13 @@ def cascade_entry(inputs: Any, sc: Any, G: Any, o: Any) -> Any:
     return (sign, near, end, sc[0], sc[2]), (nc, fc, bl, bg), a, inverse4(V)[0], st
 
 
-def cascade_slice(e: Any, box: Any, G: Any, j: Any, o: Any) -> Any:
-    """Cascade ``j``'s depths ``s0 <= s1`` (with its band) and its slice's corners: view
-    (``vc``), light (``lc``) and the box's half-space values at them (``gs``)."""
-    (sign, near, end, lam, ov), (nc, fc, _, _), a, iV, _ = e
-    rng = (near, end, lam)
-    s0, s1 = cascade_split(G, j, rng, o), cascade_split(G, j + 1, rng, o)
-    s1 = lesser(s1 + ov * (s1 - s0), cascade_split(G, o.cascades, rng, o))
+def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
+    """Cascade ``j``'s depths ``s0 <= s1`` (with its band; ``Z``: the ``n + 1`` splits)
+    and its slice's corners: view (``vc``), light (``lc``) and the box's half-space values
+    at them (``gs``)."""
+    (sign, _, _, _, ov), (nc, fc, _, _), a, iV, _ = e
+    s0, s1 = take_last(Z, j), take_last(Z, j + 1)
+    s1 = lesser(s1 + ov * (s1 - s0), take_last(Z, o.cascades))
     vc, lc, gs = alloc(24), alloc(24), alloc(48)
     lo, hi = (box[0], box[1], box[2]), (box[3], box[4], box[5])
     for k in range(8):
@@ -437,14 +378,12 @@ def cascade_loop(inputs: Any, opts: Any, out: Any, splits: Any, status: Any) -> 
         for k in range(o.cascades + 1):
             splits[i][k] = cascade_split(G, k, rng, o)
         for j in range(o.cascades):
-            cascade_fit(e, cascade_slice(e, box, G, j, o), j, o, out[i][j])
+            cascade_fit(e, cascade_slice(e, box, splits[i], j, o), j, o, out[i][j])
 
 
 FUNCTIONS = (
     "lesser",
     "greater",
-    "inverse4",
-    "_mul16",
     "cascade_camera",
     "cascade_checks",
     "cascade_range",
