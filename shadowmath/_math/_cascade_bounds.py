@@ -139,10 +139,7 @@ def cascade_body(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
     xp = array_api
     bl, bg = boxp
     s0, s1 = d[0][..., None], d[1][..., None]
-    sl = tuple(xp.stack(lc[c::3], axis=-1) for c in range(3))
-    bc = tuple(xp.stack(bl[c::3], axis=-1) for c in range(3))
-    g_slice = tuple(xp.stack(gs[c::6], axis=-1) for c in range(6))
-    sides = tuple(xp.stack(bg[c::5], axis=-1) for c in range(5))
+    sl, bc, g_slice, sides = (_corners(xp, v, m) for v, m in ((lc, 3), (bl, 3), (gs, 6), (bg, 5)))
     g_box = slice_values(sides, sides[4], s0, s1)
     g0, g1 = [], []
     for gsl, gb in zip(g_slice, g_box, strict=True):
@@ -157,6 +154,13 @@ def cascade_body(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
         p1 = xp.concat([p_s[..., _EDGE_1], p_b[..., _EDGE_1]], axis=-1)
         ends.append(xp.concat([p0 + t0 * (p1 - p0), p0 + t1 * (p1 - p0)], axis=-1))
     return ends, xp.concat([ok, ok], axis=-1), sl, bc
+
+
+def _corners(xp: Any, buffer: Any, m: int) -> Any:
+    """``m`` arrays ``(..., 8)``: value ``c`` of the eight corners of a buffer of 8 x m."""
+    stacked = xp.stack(xp.broadcast_arrays(*buffer), axis=-1)
+    stacked = xp.reshape(stacked, (*stacked.shape[:-1], 8, m))
+    return tuple(stacked[..., c] for c in range(m))
 
 
 def _bounds_array(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
@@ -174,4 +178,11 @@ def _bounds_array(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
     return low[0], high[0], low[1], high[1], z_lo, high[2], zb_lo, zb_hi
 
 
-FUNCTIONS = ("_bounds_loop", "_outcodes", "_clip_crossed", "cascade_body", "_bounds_array")
+FUNCTIONS = (
+    "_bounds_loop",
+    "_outcodes",
+    "_clip_crossed",
+    "cascade_body",
+    "_corners",
+    "_bounds_array",
+)
