@@ -458,3 +458,20 @@ def test_jax_gradients_in_the_camera_and_the_split_positions() -> None:
         fd = (area(shift, splits + e) - area(shift, splits - e)) / (2 * h)
         assert float(g_splits[k]) == pytest.approx(float(fd), rel=1e-5, abs=1e-8)
         assert float(g_splits[k]) != 0.0
+
+
+def test_the_options_record_reads_back_each_option_by_name() -> None:
+    """The compiled loop reads the options by name from a structured array: each field
+    holds its option (a bool as a bool, a count as an int, a matrix as 16 numbers)."""
+    from shadowmath._math._cascade_steps import CascadeOptions, options_record
+
+    rows = tuple(tuple(float(16 * m + k) for k in range(16)) for m in range(3))
+    o = CascadeOptions(True, False, True, False, 0.9, 0.8, 512.0, 256.0, 2.0**-52, 2.0**-26,
+                       3, 0.01, 2, 2, *rows)  # fmt: skip
+    record = options_record(o)[0]
+    for name, value in o._asdict().items():
+        got = record[name]
+        if isinstance(value, tuple):
+            assert tuple(got) == value, name
+        else:
+            assert type(got.item()) is type(value) and got == value, name

@@ -61,7 +61,7 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 def test_no_import_circles() -> None:
     graph = _graph()
-    assert "shadowmath._math._fit_formulas" in graph["shadowmath._math._fit_entry"]  # the graph is read
+    assert "shadowmath._math._fit_formulas" in graph["shadowmath._math._fit_entry"]  # (read)
     assert _cycles(graph) == []
 
 

@@ -95,7 +95,7 @@ def test_bad_values_raise_every_frame_as_fit_shadow_does() -> None:
     with pytest.raises(ValueError, match="blocker_vertices"):
         fitter.fit(light, bad)
     around = np.concatenate([box, -box])  # casters on both sides of the light
-    with pytest.raises(ValueError) as expected:
+    with pytest.raises(ValueError, match="light") as expected:
         sm.fit_shadow(light, around, 64)
     with pytest.raises(ValueError, match=re.escape(str(expected.value))):
         fitter.fit(light, around)

@@ -122,7 +122,8 @@ def loops() -> SimpleNamespace:
             "where": jit(_select),
             "rint": np.rint,
             "alloc": jit(_zeros),
-            "flag": jit(_fit_entry.flag),
+            "flag": jit(_flag),
+            "take_last": jit(_take),
             "to_single": jit(_fit_entry.to_single),
         }
         return specialize(primitives, wrap=jit)
@@ -133,6 +134,16 @@ def loops() -> SimpleNamespace:
 def _zeros(n: int) -> Any:
     """The loops' float buffer for Numba (module level, so that its disk cache finds it)."""
     return np.zeros(n)
+
+
+def _flag(ok: Any, bit: int) -> int:
+    """A check's status bit, for Numba: 0 where ``ok`` (module level, for the disk cache)."""
+    return 0 if ok else bit
+
+
+def _take(row: Any, k: int) -> Any:
+    """Entry ``k`` of a row, for Numba (module level, so that its disk cache finds it)."""
+    return row[k]
 
 
 def _select(c: Any, a: Any, b: Any) -> Any:

@@ -102,3 +102,9 @@ WIDE = (
     "(cube_face_projection), a spot light's cone or a light farther from the blocker "
     "spends the texels better"
 )
+
+#: A split range that starts at or behind the camera with a logarithmic part.
+LOG_NEAR = (
+    "near: logarithmic splits need near > 0 (use scheme='uniform' for a range that starts "
+    "at the camera)"
+)

@@ -99,3 +99,43 @@ PLANAR_NONFINITE_LIGHT = 2
 PLANAR_ZERO_NORMAL = 4
 PLANAR_ZERO_LIGHT = 8
 PLANAR_IN_PLANE = 16
+
+
+#: fit_cascades' checks in the order their failures are reported (bit ``1 << index``):
+#: the per-entry steps (:mod:`shadowmath._math._cascade_steps`) set them in a status word
+#: with ``flag``; the boundary raises the first failing one's message (NumPy) or hands
+#: each to ``Checks.require`` (JAX: NaN outputs).
+CASCADE_CHECKS: tuple[tuple[str, str], ...] = (
+    ("light_finite", non_finite("light")),
+    ("view_finite", non_finite("view")),
+    ("projection_finite", non_finite("projection")),
+    ("bounds_finite", non_finite("scene_bounds")),
+    ("up_finite", non_finite("up")),
+    ("view_affine", "view: expected an affine world-to-view matrix (last row 0, 0, 0, 1)"),
+    ("view_singular", "view: singular (its 3x3 part has no inverse)"),
+    ("projection_singular", "projection: singular (no inverse)"),
+    ("infinite_far", "projection: an infinite far plane needs a perspective camera (near > 0)"),
+    ("bounds_order", "scene_bounds: the max corner must be >= the min corner on every axis"),
+    ("light_zero", "light: zero direction (x = y = z = 0): a directional light points toward "
+     "the light"),
+    ("up_parallel", msg.UP_PARALLEL),
+    ("far_infinite", "max_distance: the projection's far plane is at infinity; give the "
+     "shadow distance as max_distance"),
+    ("max_distance", "max_distance: the shadow distance must lie beyond the camera's near "
+     "plane and no farther than its far plane"),
+    ("log_near", msg.LOG_NEAR),
+    ("splits_increase", "splits: the depths must increase"),
+    ("splits_range", "splits: the depths must lie within the camera's [near, far] view depths"),
+)  # fmt: skip
+
+_CASCADE_INDEX = {name: i for i, (name, _) in enumerate(CASCADE_CHECKS)}
+
+
+def cascade_bit(name: str) -> int:
+    """The status bit of fit_cascades' check ``name``."""
+    return 1 << _CASCADE_INDEX[name]
+
+
+def cascade_messages() -> tuple[tuple[int, str], ...]:
+    """``(bit, message)`` of fit_cascades' checks, in report order."""
+    return tuple((1 << i, message) for i, (_, message) in enumerate(CASCADE_CHECKS))

@@ -55,6 +55,7 @@ from shadowmath._math._cube import cube_face_views as _cube_face_views
 from shadowmath._math._cube import depth_row as _depth_row
 from shadowmath._math._frame import stack_matrix
 from shadowmath._math._pcf import border_texels as _border_texels
+from shadowmath._math._rows import tile_rows
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 
 from . import _compiled
@@ -547,11 +548,12 @@ def atlas_tile_transforms(
 
 
 def _tile_transforms(rect: Ints, size: int) -> NDArray[np.float64]:
-    T = np.zeros((rect.shape[0], 4, 4))
-    T[:, 0, 0] = T[:, 1, 1] = rect[:, 2] / size
-    T[:, 0, 3], T[:, 1, 3] = rect[:, 0] / size, rect[:, 1] / size
-    T[:, 2, 2] = T[:, 3, 3] = 1.0
-    return T
+    """Each tile's matrix: the identity moved into the tile (the cascades' own formula)."""
+    x, y, n = (rect[:, k].astype(np.float64) for k in range(3))
+    one, zero = np.ones_like(x), np.zeros_like(x)
+    identity = tuple(one if i % 5 == 0 else zero for i in range(16))
+    rows = tile_rows(identity, (x, y, n, n), (float(size), float(size)))
+    return np.stack(np.broadcast_arrays(*rows), axis=-1).reshape(-1, 4, 4)
 
 
 # ------------------------------------------------------------------ fitting

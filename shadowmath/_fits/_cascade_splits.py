@@ -20,6 +20,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from shadowmath._boundary._messages import LOG_NEAR
 from shadowmath._boundary._validate import Array, Checks, all_finite, convert, non_finite
 from shadowmath._math._specialize import formulas
 
@@ -103,12 +104,6 @@ def check_range(checks: Checks, n: Array, f: Array, lm: Array, fixed: float | No
             (n > 0) | (lm == 0),
             LOG_NEAR,
         )
-
-
-LOG_NEAR = (
-    "near: logarithmic splits need near > 0 (use scheme='uniform' for a range that starts "
-    "at the camera)"
-)
 
 
 def split_depths(xp: Any, n: Array, f: Array, lm: Array, count: int) -> Array:

@@ -1,16 +1,17 @@
 r"""Cascaded shadow maps fitted to a camera: :func:`fit_cascades`.
 
-A boundary and two drivers of the same formulas (:mod:`shadowmath._math._cascade_formulas`):
+The boundary converts and checks the arguments once, then runs the steps of
+:mod:`shadowmath._math._cascade_steps` (written once) in one of two modes:
 
-* NumPy input: the loop of :mod:`shadowmath._math._cascade_loop` over cameras and
-  cascades, compiled by Numba (the ``fast`` extra), or run by Python on lists for one
-  to :data:`PYTHON_LOOP_CAMERAS` cameras without Numba;
-* JAX input (and NumPy batches without Numba): the array driver below, vectorized over
-  the batch, the cascades and the 24 clipped edges; values and gradients follow the
-  same expressions. ``warp="lispsm"`` runs here only.
+* the loop mode, NumPy input: :func:`~shadowmath._math._cascade_steps.cascade_loop` over
+  cameras and cascades, compiled by Numba (the ``fast`` extra), or run by Python on lists
+  for one to :data:`PYTHON_LOOP_CAMERAS` cameras without Numba;
+* the array mode, JAX input (and NumPy batches without Numba): the same steps once on
+  whole arrays (the cascades on the last axis); values and gradients follow the same
+  expressions. ``warp="lispsm"`` runs here only.
 
-The boundary converts and checks the arguments once; each driver reports its failed
-checks with the same messages.
+Both return a status word of :data:`shadowmath._boundary._status.CASCADE_CHECKS`; the
+boundary raises the first failing check's message (NumPy) or makes the entry NaN (JAX).
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ import numpy as np
 
 from shadowmath._api._api_convention import check_api as _check_api
 from shadowmath._backends import _kernels
-from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._projection import check_projection
+from shadowmath._boundary._status import cascade_messages
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -39,8 +40,7 @@ from shadowmath._boundary._validate import (
     require_matrix,
 )
 from shadowmath._math._bias import PcfFilter
-from shadowmath._math._cascade_formulas import EDGES
-from shadowmath._math._cascade_loop import CHECKS, ROW
+from shadowmath._math._cascade_steps import ROW, CascadeOptions, options_record
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._conventions import clip_from_gl as _clip_from_gl
 from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
@@ -48,12 +48,9 @@ from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath.lights import DirectionalLight
 
 from ._cascade_splits import (
-    LOG_NEAR,
     SplitScheme,
     check_count,
-    check_range,
     check_scheme,
-    split_depths,
 )
 from ._lispsm import check_warp, warp_cascades
 from ._spec import ShadowMapSpec, api_rows, map_spec
@@ -249,6 +246,29 @@ def fit_cascades(
         dmax = None if max_distance is None else float(max_distance)
     checks = Checks(ctx)
     L = _light_vector(checks, L)
+    shape = _batch(checks, (L, V, P, box, U, S, dmax))
+    n = S.shape[-1] - 1 if S is not None else n_given
+    assert n is not None
+    _scalar_checks(checks, (lm, ov, dmax, S))
+    C = _clip_from_gl(cam_api, camera_reversed_z)
+    given = (U is not None, S is not None, dmax is not None)
+    o, record = _options(spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row))
+    call = _Call(ctx, spec, layout, shape, o)
+    arrays = (L, V, P, box, U, S, dmax, lm, ov)
+    if ctx.xp is np and warp is None:
+        python = not _kernels.available()
+        if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
+            try:
+                return _compiled(call, arrays, None if python else record)
+            except (ZeroDivisionError, OverflowError):
+                pass  # Python floats raise where Numba's give inf: invalid input, which the
+                # array mode below reports with its message
+    return _arrays(call, checks, arrays, warp)
+
+
+def _batch(checks: Checks, arrays: tuple[Any, ...]) -> tuple[int, ...]:
+    """The shape checks of the arrays and their batch shape."""
+    L, V, P, box, U, S, dmax = arrays
     require_matrix("view", V)
     check_projection(checks, P)
     require_last("scene_bounds", box, 3, min_ndim=2, hint="[min_corner, max_corner]")
@@ -271,24 +291,7 @@ def fit_cascades(
         if v is not None and not isinstance(v, float):
             shapes.append(v.shape[: v.ndim - drop])
             names.append(name)
-    shape = batch_shape(*shapes, names=names)
-    C = _clip_from_gl(cam_api, camera_reversed_z)
-    if ctx.xp is np and warp is None:
-        python = not _kernels.available()
-        if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
-            arrays = (L, V, P, box, U, S, dmax, lm, ov)
-            try:
-                return _compiled(ctx, spec, layout, shape, arrays, C, n_given, python)
-            except (ZeroDivisionError, OverflowError):
-                pass  # Python floats raise where Numba's give inf: invalid input, which the
-                # array driver below reports with its message
-    if plain:
-        lm, ov = ctx.constant(lm), ctx.constant(ov)
-        dmax = None if dmax is None else ctx.constant(dmax)
-    cam = _camera(ctx, checks, V, P, C)
-    depths = _splits(ctx, checks, cam, S, dmax, lm, ov, fixed, n_given)
-    _value_checks(checks, L, box, U)
-    return _fit(ctx, checks, spec, layout, shape, (L, V, box, U), cam, depths, warp)
+    return batch_shape(*shapes, names=names)
 
 
 def _light_vector(checks: Checks, L: Array) -> Array:
@@ -305,326 +308,18 @@ def _light_vector(checks: Checks, L: Array) -> Array:
     return L
 
 
-def _value_checks(checks: Checks, L: Array, box: Array, U: Array | None) -> None:
-    xp = checks.ctx.xp
-    checks.require(all_finite(xp, L, 1), non_finite("light"))
-    checks.require(all_finite(xp, box, 2), non_finite("scene_bounds"))
-    checks.require(xp.all(box[..., 1, :] >= box[..., 0, :], axis=-1), MESSAGES["bounds_order"])
-    if U is not None:
-        checks.require(all_finite(xp, U, 1), non_finite("up"))
-
-
-class Camera(NamedTuple):
-    """A camera's frustum edges in view space and its depth conventions (per batch entry)."""
-
-    near_corners: Array  # (*b, 4, 3): the near plane's corners, i + 2 j
-    far_corners: Array  # (*b, 4, 4): the far plane's, homogeneous (w >= 0)
-    sign: Array  # (*b,): view depth = sign * z_view
-    near: Array  # (*b,) view depth of the near plane
-    far: Array  # (*b,) view depth of the far plane (inf for an infinite far plane)
-    view_to_world: Array  # (*b, 4, 4)
-    clip_rows: Array  # (*b, 4, 4): projection @ view (its rows x, y and w are used)
-
-
-def _camera(ctx: Context, checks: Checks, V: Array, P: Array, C: Any) -> Camera:
-    """The camera's frustum from ``view`` and ``projection`` (``C``: OpenGL clip to theirs)."""
-    xp = ctx.xp
-    checks.require(all_finite(xp, V, 2), non_finite("view"))
-    checks.require(all_finite(xp, P, 2), non_finite("projection"))
-    last = xp.asarray([0.0, 0.0, 0.0, 1.0], dtype=ctx.dtype)
-    checks.require(xp.all(V[..., 3, :] == last, axis=-1), MESSAGES["view_affine"])
-    eps = ctx.eps
-    # The linear part's Hadamard test, as a blocker's placement's (free of scale).
-    ok_v = formulas(xp).placement_ok(tuple(V[..., i // 4, i % 4] for i in range(16)), eps)
-    checks.require(ok_v, MESSAGES["view_singular"])
-    pscale = xp.prod(xp.sqrt(xp.sum(P**2, axis=-1)), axis=-1)
-    ok_p = xp.abs(xp.linalg.det(P)) > 64 * eps * pscale
-    checks.require(ok_p, MESSAGES["projection_singular"])
-    safe = ~(ok_p & ok_v)
-    eye = xp.eye(4, dtype=ctx.dtype)
-    Vs = xp.where(safe[..., None, None], eye, V)
-    Ps = xp.where(safe[..., None, None], eye, P)
-    inv_v, inv_p = xp.linalg.inv(Vs), xp.linalg.inv(Ps)
-    # The eight NDC corners of OpenGL's cube, in the camera API's clip space.
-    corners = (
-        np.array([[x, y, z, 1.0] for z in (-1.0, 1.0) for y in (-1.0, 1.0) for x in (-1.0, 1.0)])
-        @ np.asarray(C, dtype=float).T
-    )
-    hom = xp.matmul(xp.asarray(corners, dtype=ctx.dtype), xp.swapaxes(inv_p, -1, -2))
-    near_h, far_h = hom[..., :4, :], hom[..., 4:, :]
-    near = near_h[..., :3] / near_h[..., 3:]
-    far = xp.where(far_h[..., 3:] < 0, -far_h, far_h)
-    far = far / xp.max(xp.abs(far), axis=-1, keepdims=True)
-    nz = xp.mean(near[..., 2], axis=-1)
-    fw = xp.mean(far[..., 3], axis=-1)
-    fz = xp.mean(far[..., 2], axis=-1)
-    finite_far = fw > 32 * eps
-    safe_fw = xp.where(finite_far, fw, xp.ones_like(fw))
-    sign = xp.where(finite_far, xp.sign(fz / safe_fw - nz), xp.sign(nz))
-    sign = xp.where(sign == 0, xp.ones_like(sign), sign)
-    far_depth = xp.where(finite_far, sign * fz / safe_fw, xp.asarray(np.inf, dtype=ctx.dtype))
-    checks.require(finite_far | (sign * nz > 0), MESSAGES["infinite_far"])
-    return Camera(near, far, sign, sign * nz, far_depth, inv_v, xp.matmul(P, V))
-
-
-class Depths(NamedTuple):
-    splits: Array  # (*b, n + 1)
-    start: Array  # (*b, n) each cascade's first view depth
-    end: Array  # (*b, n) its last (band_end)
-
-
-def _splits(
-    ctx: Context,
-    checks: Checks,
-    cam: Camera,
-    S: Array | None,
-    dmax: Array | None,
-    lm: Array,
-    ov: Array,
-    fixed: float | None,
-    count: int | None,
-) -> Depths:
-    xp = ctx.xp
-    checks.require(all_finite(xp, ov, 0), non_finite("overlap"))
-    checks.require((ov >= 0) & (ov < 1), _OVERLAP_RANGE)
-    tol = float(np.sqrt(ctx.eps))
-    if S is not None:
-        checks.require(all_finite(xp, S, 1), non_finite("splits"))
-        checks.require(xp.all(S[..., 1:] > S[..., :-1], axis=-1), MESSAGES["splits_increase"])
-        checks.require(
-            # Within sqrt(eps) relative: the camera's own near/far, rounded by its inverse.
-            (S[..., 0] >= cam.near - tol * xp.abs(cam.near)) & (S[..., -1] <= cam.far * (1 + tol)),
-            MESSAGES["splits_range"],
-        )
-        s = S
-    else:
-        far = cam.far
-        if dmax is not None:
-            checks.require(all_finite(xp, dmax, 0), non_finite("max_distance"))
-            checks.require((dmax > cam.near) & (dmax <= cam.far), MESSAGES["max_distance"])
-            far = xp.where(dmax > cam.near, xp.minimum(dmax, cam.far), cam.near + 1)
-        else:
-            checks.require(xp.isfinite(cam.far), MESSAGES["far_infinite"])
-        check_range(checks, cam.near, far, lm, fixed)
-        assert count is not None
-        safe_far = xp.where(far > cam.near, far, cam.near + 1)
-        safe_far = xp.where(xp.isfinite(safe_far), safe_far, cam.near + 1)
-        s = split_depths(xp, cam.near, safe_far, lm, count)
-    a, b = s[..., :-1], s[..., 1:]
-    ov = xp.asarray(ov)[..., None]
-    end = xp.minimum(b + ov * (b - a), s[..., -1:])
-    return Depths(s, a, end)
-
-
-_E0 = np.array([e[0] for e in EDGES])
-_E1 = np.array([e[1] for e in EDGES])
-
-
-def _fit(
-    ctx: Context,
-    checks: Checks,
-    spec: ShadowMapSpec,
-    layout: str,
-    shape: tuple[int, ...],
-    arrays: tuple[Array, Array, Array, Array | None],
-    cam: Camera,
-    depths: Depths,
-    warp: str | None = None,
-) -> Cascades:
-    """Every cascade of every batch entry on whole arrays (trusted inputs)."""
-    xp, F = ctx.xp, formulas(ctx.xp)
-    L, V, box, U = arrays
-    coords = xp.max(xp.abs(box), axis=(-2, -1))
-    up = (0.0, 0.0, 0.0) if U is None else (U[..., 0], U[..., 1], U[..., 2])
-    a, ok_light, _, ok_up = F.fit_axes((-L[..., 0], -L[..., 1], -L[..., 2]), up, U is not None,
-                                       coords, ctx.eps)  # fmt: skip
-    checks.require(ok_light, MESSAGES["light_zero"])
-    checks.require(ok_up, MESSAGES["up_parallel"])
-    a_n = tuple(v[..., None] for v in a)  # per cascade
-    view, world = _slice_corners(xp, F, cam, depths)
-    bounds, zb = _clipped_bounds(
-        xp, F, cam, V, box, depths, world, tuple(v[..., None] for v in a_n)
-    )
-    mx, my = spec.margins
-    if spec.stable:
-        hx, hy, cx, cy, z_lo, z_hi = _stable_box(xp, F, cam, view, a_n, (mx, my), spec, zb, ctx)
-        pad = (z_hi - z_lo) + xp.maximum(hx, hy)
-        near, far = pad, pad + (z_hi - z_lo)
-    else:
-        hx, hy, cx, cy, near, far = F.cascade_box(bounds)
-        z_lo = bounds[4]
-    shift = z_lo - near  # the origin, on Z through the world origin: x, y stay anchored
-    origin = (shift * a_n[6], shift * a_n[7], shift * a_n[8])
-    near, far = near * (1 - NEAR_FAR_SLACK), far * (1 + NEAR_FAR_SLACK)
-    w, clip, tex = F.fit_rows(origin, a_n, F.safe_box(hx, hy, cx, cy, near, far), (mx, my),
-                              True, api_rows(spec.api, spec.reversed_z))  # fmt: skip
-    n = depths.start.shape[-1]
-    ports, tile = _tiles(n, spec.size, layout)
-    tex = _in_tile(xp, tex, tile)
-    full = (*shape, n)
-
-    def out(entries: tuple[Array, ...]) -> Array:
-        if len(entries) == 12:
-            zero = xp.zeros_like(entries[0])
-            entries = (*entries, zero, zero, zero, zero + 1)
-        same = [e if getattr(e, "shape", None) == full else xp.broadcast_to(e, full)
-                for e in entries]  # fmt: skip
-        flat = xp.stack(same, axis=-1)
-        m = xp.reshape(xp.broadcast_to(flat, (*full, 16)), (*full, 4, 4))
-        return checks.poison(m, 3)
-
-    size = xp.stack([2 * hx / (mx * spec.size[0]), 2 * hy / (my * spec.size[1])], axis=-1)
-    # >>> LiSPSM hook (shadowmath/_fits/_lispsm.py): the warp replaces clip, tex and size.
-    if warp is not None:
-        a_l = tuple(v[..., None] for v in a_n)
-        body = _body(xp, F, cam, V, box, depths, world, a_l)
-        tiled = lambda rows: _in_tile(xp, rows, tile)  # noqa: E731
-        clip, tex, size = warp_cascades(xp, F, body, cam, V, a_n, spec, (clip, tex, size), tiled)
-    # <<< end of the LiSPSM hook
-    mxs, mys = (xp.full(full, m, dtype=ctx.dtype) for m in (mx, my))
-    fields = [checks.poison(xp.broadcast_to(v, full), 1)
-              for v in (hx, hy, near, far, mxs, mys, cx, cy)]  # fmt: skip
-    rx, ry, nr, fa, m_x, m_y, ox, oy = fields
-    fr = Frustum(rx, ry, nr, fa, m_x, m_y, ox, oy, orthographic=True)
-    texture = _texture(n, spec.size, layout)
-    return Cascades(
-        world_to_light=out(w),
-        frustum=fr,
-        world_to_clip=out(clip),
-        world_to_texture=out(tex),
-        splits=checks.poison(xp.broadcast_to(depths.splits, (*shape, n + 1)), 1),
-        band_end=checks.poison(xp.broadcast_to(depths.end, full), 1),
-        texel_size=checks.poison(xp.broadcast_to(size, (*full, 2)), 2),
-        viewports=ports,
-        texture_size=texture[0],
-        texture_layers=texture[1],
-    )
-
-
-def _slice_corners(xp: Any, F: Any, cam: Camera, depths: Depths) -> tuple[Array, Array]:
-    """The slices' corners ``i + 2 j + 4 l``: view and world, each ``(3, *b, n, 8)``."""
-    nc = cam.near_corners[..., None, :, :]  # (*b, 1, 4, 3)
-    fc = cam.far_corners[..., None, :, :]  # (*b, 1, 4, 4)
-    s = cam.sign[..., None, None]
-    n = tuple(nc[..., c] for c in range(3))
-    f = tuple(fc[..., c] for c in range(4))
-    near = F.edge_point(n, f, s, depths.start[..., None])
-    far = F.edge_point(n, f, s, depths.end[..., None])
-    view = xp.stack([xp.concat([p, q], axis=-1) for p, q in zip(near, far, strict=True)])
-    m = tuple(cam.view_to_world[..., i // 4, i % 4][..., None, None] for i in range(12))
-    world = xp.stack(F.affine(m, view[0], view[1], view[2]))
-    return view, world
-
-
-def _box_corners(xp: Any, box: Array) -> tuple[Array, Array, Array]:
-    """The scene box's corners ``i + 2 j + 4 l``, three ``(*b, 1, 8)`` arrays."""
-    lo, hi = box[..., 0, :], box[..., 1, :]
-    bits = np.array([[(k >> c) & 1 for k in range(8)] for c in range(3)], dtype=bool)
-    return tuple(
-        xp.where(xp.asarray(bits[c]), hi[..., c, None], lo[..., c, None])[..., None, :]
-        for c in range(3)
-    )
-
-
-def _body(
-    xp: Any, F: Any, cam: Camera, V: Array, box: Array, depths: Depths, world: Array, a: Any
-) -> tuple[list[Array], Array, tuple[Array, ...], tuple[Array, ...]]:
-    """The vertices of each slice intersected with the scene box, in the frame ``a``.
-
-    Returns ``(ends, ok, slice_corners, box_corners)``: ``ends`` three ``(*b, n, 48)``
-    arrays (both clipped ends of the 24 edges; a vertex of the intersection is one of
-    them), ``ok`` ``(*b, n, 48)`` True where the edge kept a part; the slices' corners
-    ``(*b, n, 8)`` and the box's ``(*b, 1, 8)`` in the same frame. With identity axes
-    ``a`` the coordinates are world coordinates.
-    """
-    bx, by, bz = _box_corners(xp, box)
-    lo = tuple(box[..., 0, c][..., None, None] for c in range(3))
-    hi = tuple(box[..., 1, c][..., None, None] for c in range(3))
-    # The slice's corners in the box's half-spaces, the box's corners in the slice's.
-    g_slice = F.box_values(world[0], world[1], world[2], lo, hi)
-    pv = tuple(cam.clip_rows[..., i // 4, i % 4][..., None, None] for i in range(16))
-    sides = F.camera_values(pv, bx, by, bz)
-    vz = tuple(V[..., 2, i][..., None, None] for i in range(4))
-    depth = cam.sign[..., None, None] * (vz[0] * bx + vz[1] * by + vz[2] * bz + vz[3])
-    g_box = F.slice_values(sides, depth, depths.start[..., None], depths.end[..., None])
-    g0 = [xp.concat([gs[..., _E0], xp.broadcast_to(gb, gs.shape)[..., _E0]], axis=-1)
-          for gs, gb in zip(g_slice, g_box, strict=True)]  # fmt: skip
-    g1 = [xp.concat([gs[..., _E1], xp.broadcast_to(gb, gs.shape)[..., _E1]], axis=-1)
-          for gs, gb in zip(g_slice, g_box, strict=True)]  # fmt: skip
-    t0, t1, ok = F.clip_segment(tuple(g0), tuple(g1))
-    sl = F.to_light(world[0], world[1], world[2], a)  # (*b, n, 8) each
-    bl = F.to_light(bx, by, bz, a)
-    ends = []
-    for p_s, p_b in zip(sl, bl, strict=True):
-        p_b = xp.broadcast_to(p_b, p_s.shape)
-        p0 = xp.concat([p_s[..., _E0], p_b[..., _E0]], axis=-1)
-        p1 = xp.concat([p_s[..., _E1], p_b[..., _E1]], axis=-1)
-        ends.append(xp.concat([p0 + t0 * (p1 - p0), p0 + t1 * (p1 - p0)], axis=-1))
-    return ends, xp.concat([ok, ok], axis=-1), sl, bl
-
-
-def _clipped_bounds(
-    xp: Any, F: Any, cam: Camera, V: Array, box: Array, depths: Depths, world: Array, a: Any
-) -> tuple[tuple[Array, ...], tuple[Array, Array]]:
-    """Light-space bounds of slice intersected with box; the box's own ``z`` range."""
-    ends, ok2, sl, bl = _body(xp, F, cam, V, box, depths, world, a)
-    seen = xp.any(ok2, axis=-1)
-    inf = xp.asarray(np.inf, dtype=world.dtype)
-
-    def low(v: Array, fallback: Array) -> Array:
-        return xp.where(seen, xp.min(xp.where(ok2, v, inf), axis=-1), xp.min(fallback, axis=-1))
-
-    def high(v: Array, fallback: Array) -> Array:
-        return xp.where(seen, xp.max(xp.where(ok2, v, -inf), axis=-1), xp.max(fallback, axis=-1))
-
-    zb_lo, zb_hi = xp.min(bl[2], axis=-1), xp.max(bl[2], axis=-1)  # (*b, 1)
-    z_hi = high(ends[2], sl[2])
-    z_lo = xp.minimum(xp.minimum(zb_lo, low(ends[2], sl[2])), z_hi)
-    bounds = (low(ends[0], sl[0]), high(ends[0], sl[0]), low(ends[1], sl[1]),
-              high(ends[1], sl[1]), z_lo, z_hi)  # fmt: skip
-    return bounds, (zb_lo, zb_hi)
-
-
-def _stable_box(
-    xp: Any,
-    F: Any,
-    cam: Camera,
-    view: Array,
-    a: Any,
-    margins: tuple[float, float],
-    spec: ShadowMapSpec,
-    zb: tuple[Array, Array],
-    ctx: Context,
-) -> tuple[Array, ...]:
-    """The stable box: the slice's sphere plus half a texel, centre snapped; its depth range."""
-    corners = tuple(view[c][..., k] for k in range(8) for c in range(3))
-    vx, vy, vz, r2 = F.slice_sphere(corners)
-    m = tuple(cam.view_to_world[..., i // 4, i % 4][..., None] for i in range(12))
-    c = F.affine(m, vx, vy, vz)
-    texels = (margins[0], margins[1], float(spec.size[0]), float(spec.size[1]))
-    r = xp.sqrt(r2)
-    hx, hy, ox, oy, _ = F.stable_sides(r2, c, a, texels, r, ctx.eps)
-    cx = c[0] * a[0] + c[1] * a[1] + c[2] * a[2] + ox
-    cy = c[0] * a[3] + c[1] * a[4] + c[2] * a[5] + oy
-    cz = c[0] * a[6] + c[1] * a[7] + c[2] * a[8]
-    z_hi = xp.minimum(cz + r, zb[1])
-    z_lo = xp.minimum(zb[0], z_hi - r)
-    return hx, hy, cx, cy, z_lo, z_hi
-
-
 @functools.lru_cache(maxsize=64)
-def _tiles(n: int, size: tuple[int, int], layout: str) -> tuple[Array, tuple[int, int, Array]]:
-    """Each cascade's viewport ``(x, y, w, h)`` and its tile: columns, rows, ``(n, 2)`` cells."""
+def _tiles(n: int, size: tuple[int, int], layout: str) -> Array:
+    """Each cascade's viewport ``(x, y, w, h)`` (read-only: shared by every call)."""
     w, h = size
     if layout == "layers":
         ports = np.tile(np.array([0, 0, w, h]), (n, 1))
-        ports.setflags(write=False)  # cached: shared by every call
-        return ports, (1, 1, np.zeros((n, 2), dtype=int))
-    cols, rows = _grid(n, layout)
-    cells = np.array([(i % cols, i // cols) for i in range(n)])
-    ports = np.column_stack([cells[:, 0] * w, cells[:, 1] * h, np.full(n, w), np.full(n, h)])
-    ports.setflags(write=False)  # cached: shared by every call
-    return ports, (cols, rows, cells)
+    else:
+        cols = _grid(n, layout)[0]
+        cells = np.array([(i % cols, i // cols) for i in range(n)])
+        ports = np.column_stack([cells[:, 0] * w, cells[:, 1] * h, np.full(n, w), np.full(n, h)])
+    ports.setflags(write=False)
+    return ports
 
 
 def _texture(n: int, size: tuple[int, int], layout: str) -> tuple[tuple[int, int], int]:
@@ -636,108 +331,122 @@ def _texture(n: int, size: tuple[int, int], layout: str) -> tuple[tuple[int, int
     return (cols * w, rows * h), 1
 
 
-def _in_tile(xp: Any, tex: tuple[Array, ...], tile: tuple[int, int, Array]) -> tuple[Array, ...]:
-    """Texture rows moved into the tile: ``s' = (s + col) / cols``, ``t' = (t + row) / rows``.
+class _Call(NamedTuple):
+    """One call's context: backend, map, layout, batch shape and options record."""
 
-    Rows count from the texture's first row in memory, where ``t = 0`` lies and where
-    every API's viewport ``y = 0`` lies (OpenGL's bottom row is both).
-    """
-    cols, rows, cells = tile
-    if cols == 1 and rows == 1:
-        return tex
-    dtype = tex[0].dtype
-    col = xp.asarray(cells[:, 0], dtype=dtype)
-    row = xp.asarray(cells[:, 1], dtype=dtype)
-    q = tex[12:16]
-    s = tuple((tex[i] + col * q[i]) / cols for i in range(4))
-    t = tuple((tex[4 + i] + row * q[i]) / rows for i in range(4))
-    return (*s, *t, *tex[8:16])
+    ctx: Context
+    spec: ShadowMapSpec
+    layout: str
+    shape: tuple[int, ...]
+    o: CascadeOptions
 
 
-#: The messages of the value checks, by the names of :data:`._cascade_loop.CHECKS`: the
-#: compiled loop reports its status bits with them, the array driver its ``require``\ s.
-MESSAGES = {
-    "light_finite": non_finite("light"),
-    "view_finite": non_finite("view"),
-    "projection_finite": non_finite("projection"),
-    "bounds_finite": non_finite("scene_bounds"),
-    "up_finite": non_finite("up"),
-    "view_affine": "view: expected an affine world-to-view matrix (last row 0, 0, 0, 1)",
-    "view_singular": "view: singular (its 3x3 part has no inverse)",
-    "projection_singular": "projection: singular (no inverse)",
-    "infinite_far": "projection: an infinite far plane needs a perspective camera (near > 0)",
-    "bounds_order": "scene_bounds: the max corner must be >= the min corner on every axis",
-    "light_zero": "light: zero direction (x = y = z = 0): a directional light points toward "
-    "the light",
-    "up_parallel": msg.UP_PARALLEL,
-    "far_infinite": "max_distance: the projection's far plane is at infinity; give the "
-    "shadow distance as max_distance",
-    "max_distance": "max_distance: the shadow distance must lie beyond the camera's near "
-    "plane and no farther than its far plane",
-    "log_near": LOG_NEAR,
-    "splits_increase": "splits: the depths must increase",
-    "splits_range": "splits: the depths must lie within the camera's [near, far] view depths",
-}
-LOOP_MESSAGES = tuple(MESSAGES[name] for name in CHECKS)
-
-
-def _compiled(
-    ctx: Context,
-    spec: ShadowMapSpec,
-    layout: str,
-    shape: tuple[int, ...],
-    arrays: tuple[Any, ...],
-    C: Any,
-    count: int | None,
-    python: bool = False,
-) -> Cascades:
-    """:func:`fit_cascades` for NumPy input through the compiled loop (``fast`` extra), or,
-    ``python``, the same loop run by Python (a few cameras without Numba)."""
+def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
+    """The loop mode: :func:`._cascade_steps.cascade_loop` compiled by Numba (``fast``
+    extra, ``record`` its options), or, ``record`` None, run by Python on lists (a few
+    cameras without Numba)."""
+    ctx, shape, o = call.ctx, call.shape, call.o
     L, V, P, box, U, S, dmax, lm, ov = arrays
-    _scalar_checks(lm, ov)
-    n = S.shape[-1] - 1 if S is not None else count
-    assert n is not None
-    total = math.prod(shape)
+    n, total = o.cascades, math.prod(shape)
     if type(lm) is float and type(ov) is float and (dmax is None or type(dmax) is float):
         scal = np.array([[lm, np.nan if dmax is None else dmax, ov]])
     else:
         scal = np.stack(np.broadcast_arrays(lm, np.nan if dmax is None else dmax, ov), axis=-1)
-    given = (U is not None, S is not None, dmax is not None)
-    opts = _options(spec, layout, n, given, ctx.eps, tuple(v for row in C for v in row))
-    operands = (
+    inputs = (
         flat_batch(L, shape, (3,)), flat_batch(V, shape, (4, 4)).reshape(-1, 16),
         flat_batch(P, shape, (4, 4)).reshape(-1, 16), flat_batch(box, shape, (2, 3)).reshape(-1, 6),
         _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (3,)),
         _NO_SPLITS if S is None else flat_batch(S, shape, (n + 1,)),
     )  # fmt: skip
-    if python:  # one camera without Numba: the same loop on Python lists and floats
+    if record is None:  # the same loop on Python lists and floats
         rows = [[[0.0] * ROW for _ in range(n)] for _ in range(total)]
         cuts, flags = [[0.0] * (n + 1) for _ in range(total)], [0] * total
-        scalar_formulas().cascade_loop(*(v.tolist() for v in operands), opts.tolist(), rows,
-                                       cuts, flags)  # fmt: skip
+        loop_inputs = tuple(v.tolist() for v in inputs)
+        scalar_formulas().cascade_loop(loop_inputs, (o,), rows, cuts, flags)
         out = np.asarray(rows, dtype=ctx.dtype)
         splits = np.asarray(cuts, dtype=ctx.dtype)
         status = np.asarray(flags, dtype=np.int64)
     else:
         out = np.empty((total, n, ROW), dtype=ctx.dtype)
         splits = np.empty((total, n + 1), dtype=ctx.dtype)
-        status = np.zeros(total, dtype=np.int32)
-        _kernels.loops().cascade_loop(*operands, opts, out, splits, status)
+        status = np.zeros(total, dtype=np.int64)
+        _kernels.loops().cascade_loop(inputs, record, out, splits, status)
     if status[0] if total == 1 else status.any():
-        raise_status(status.reshape(shape), [(1 << i, m) for i, m in enumerate(LOOP_MESSAGES)])
-    o = out.reshape(*shape, n, ROW)
-    m = o[..., :48].reshape(*shape, n, 3, 4, 4)
-    rx, ry, near, far, m_x, m_y, cx, cy = (o[..., 48 + k] for k in range(8))
-    texture = _texture(n, spec.size, layout)
+        raise_status(status.reshape(shape), cascade_messages())
+    return _result(call, out.reshape(*shape, n, ROW), splits.reshape(*shape, n + 1))
+
+
+def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | None) -> Cascades:
+    """The array mode: the same steps once on whole arrays (NumPy or JAX), per-entry
+    values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``)."""
+    ctx, o = call.ctx, call.o
+    xp, F = ctx.xp, formulas(ctx.xp)
+    L, V, P, box, U, S, dmax, lm, ov = arrays
+    inputs = (
+        tuple(L[..., c, None] for c in range(3)),
+        tuple(V[..., i // 4, i % 4, None] for i in range(16)),
+        tuple(P[..., i // 4, i % 4, None] for i in range(16)),
+        tuple(box[..., i // 3, i % 3, None] for i in range(6)),
+        (0.0, 0.0, 0.0) if U is None else tuple(U[..., c, None] for c in range(3)),
+    )
+    sc = tuple(v if v is None or isinstance(v, float) else v[..., None] for v in (lm, dmax, ov))
+    j = np.arange(o.cascades + 1, dtype=ctx.dtype)  # the cascades' indices, in the work dtype
+    with np.errstate(all="ignore"):  # invalid entries: their status bits say so
+        e = F.cascade_entry(inputs, sc, S, o)
+        splits = F.cascade_split(S, j, e[0][1:4], o)
+        sl = F.cascade_slice(e, inputs[3], splits, j[:-1], o)
+        row: list[Any] = [0.0] * ROW
+        F.cascade_fit(e, sl, j[:-1], o, row)
+        if warp is not None:
+            _warp(call, (e, sl, j[:-1]), (V, P), row)
+    for bit, message in cascade_messages():
+        checks.require((e[4][..., 0] & bit) == 0, message)
+    full = (*call.shape, o.cascades)
+    rows = xp.stack([xp.broadcast_to(xp.asarray(v, dtype=ctx.dtype), full) for v in row], -1)
+    splits = xp.broadcast_to(splits, (*call.shape, o.cascades + 1))
+    return _result(call, checks.poison(rows, 2), checks.poison(splits, 1))
+
+
+class _WarpCamera(NamedTuple):
+    """What the LiSPSM hook reads of the camera (per entry, ``(*b, ...)``)."""
+
+    sign: Array  # (*b,): view depth = sign * z_view
+    view_to_world: Array  # (*b, 4, 4)
+    clip_rows: Array  # (*b, 4, 4): projection @ view
+
+
+def _warp(call: _Call, steps: tuple[Any, ...], VP: tuple[Array, Array], row: list[Any]) -> None:
+    """The LiSPSM hook (:mod:`._lispsm`): the warp replaces clip, texture rows and size."""
+    xp, F, o = call.ctx.xp, formulas(call.ctx.xp), call.o
+    e, sl, j = steps
+    V, P = VP
+    body = F.cascade_body(sl[3], sl[4], (e[1][2], e[1][3]), (sl[0], sl[1]))
+    iV = xp.stack(xp.broadcast_arrays(*e[3]), axis=-1)[..., 0, :]
+    cam = _WarpCamera(e[0][0][..., 0], xp.reshape(iV, (*iV.shape[:-1], 4, 4)), xp.matmul(P, V))
+    size = xp.stack(xp.broadcast_arrays(row[57], row[58]), axis=-1)
+    ortho = (tuple(row[16:32]), tuple(row[32:48]), size)
+    clip, tex, size = warp_cascades(
+        xp, F, body, cam, V, e[2], call.spec, ortho, lambda rows: F.cascade_tile(rows, j, o)
+    )
+    row[16:32], row[32:48] = clip, tex
+    row[57], row[58] = size[..., 0], size[..., 1]
+
+
+def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
+    """The result from each cascade's row ``(*batch, n, ROW)`` and the splits."""
+    xp, n, spec = call.ctx.xp, call.o.cascades, call.spec
+    m = xp.reshape(rows[..., :48], (*call.shape, n, 3, 4, 4))
+    rx, ry, near, far, m_x, m_y, cx, cy = (rows[..., 48 + k] for k in range(8))
+    texture = _texture(n, spec.size, call.layout)
     return Cascades(
         world_to_light=m[..., 0, :, :],
         frustum=Frustum(rx, ry, near, far, m_x, m_y, cx, cy, orthographic=True),
         world_to_clip=m[..., 1, :, :],
         world_to_texture=m[..., 2, :, :],
-        splits=splits.reshape(*shape, n + 1),
-        band_end=o[..., 56],
-        texel_size=o[..., 57:59],
-        viewports=_tiles(n, spec.size, layout)[0],
+        splits=splits,
+        band_end=rows[..., 56],
+        texel_size=rows[..., 57:59],
+        viewports=_tiles(n, spec.size, call.layout),
         texture_size=texture[0],
         texture_layers=texture[1],
     )
@@ -751,22 +460,27 @@ _NO_UP = np.zeros((1, 3))
 _NO_SPLITS = np.zeros((1, 2))
 
 
-def _scalar_checks(lm: Any, ov: Any) -> None:
-    """lam and overlap, checked on NumPy values or Python floats (the loop trusts them)."""
+def _scalar_checks(checks: Checks, values: tuple[Any, ...]) -> None:
+    """lam, overlap, max_distance and splits: finite, and lam and overlap in range (the
+    steps trust them). Python floats are checked as they are."""
+    lm, ov, dmax, S = values
+    xp = checks.ctx.xp
     if type(lm) is float and type(ov) is float:
         if not 0 <= lm <= 1:  # NaN fails both
             raise ValueError(non_finite("lam") if lm != lm else _LAM_RANGE)
         if not 0 <= ov < 1:
             raise ValueError(non_finite("overlap") if ov != ov else _OVERLAP_RANGE)
-        return
-    if not np.all(np.isfinite(lm)):
-        raise ValueError(non_finite("lam"))
-    if not np.all((lm >= 0) & (lm <= 1)):
-        raise ValueError(_LAM_RANGE)
-    if not np.all(np.isfinite(ov)):
-        raise ValueError(non_finite("overlap"))
-    if not np.all((ov >= 0) & (ov < 1)):
-        raise ValueError(_OVERLAP_RANGE)
+    else:
+        checks.require(all_finite(xp, lm, 0), non_finite("lam"))
+        checks.require((lm >= 0) & (lm <= 1), _LAM_RANGE)
+        checks.require(all_finite(xp, ov, 0), non_finite("overlap"))
+        checks.require((ov >= 0) & (ov < 1), _OVERLAP_RANGE)
+    if dmax is not None and not isinstance(dmax, float):
+        checks.require(all_finite(xp, dmax, 0), non_finite("max_distance"))
+    elif dmax is not None and not math.isfinite(dmax):
+        raise ValueError(non_finite("max_distance"))
+    if S is not None:
+        checks.require(all_finite(xp, S, 1), non_finite("splits"))
 
 
 @functools.lru_cache(maxsize=256)
@@ -775,20 +489,23 @@ def _options(
     layout: str,
     n: int,
     given: tuple[bool, bool, bool],
+    *,
     eps: float,
     C: tuple[float, ...],
-) -> Array:
-    """The loop's options as one float64 array (cached: the same few recur every frame)."""
+) -> tuple[CascadeOptions, Any]:
+    """The call's options by name, and as the compiled loop's record (cached: the same
+    few recur every frame)."""
     cols, rows = _grid(n, layout)
-    mx, my = spec.margins
     C_api, TC_api = api_rows(spec.api, spec.reversed_z)
     has_up, has_splits, has_dmax = given
-    opts = np.array([
-        has_up, spec.stable, has_splits, has_dmax, mx, my, *spec.size, eps, NEAR_FAR_SLACK,
-        cols, rows, *C, *C_api, *TC_api,
-    ], dtype=np.float64)  # fmt: skip
-    opts.setflags(write=False)
-    return opts
+    o = CascadeOptions(
+        has_up=has_up, stable=spec.stable, has_splits=has_splits, has_dmax=has_dmax,
+        mx=float(spec.margins[0]), my=float(spec.margins[1]), width=float(spec.size[0]),
+        height=float(spec.size[1]), eps=eps, tol=math.sqrt(eps), cascades=n,
+        slack=NEAR_FAR_SLACK, cols=cols, rows=rows, camera_clip=C, map_clip=tuple(C_api),
+        map_texture=tuple(TC_api),
+    )  # fmt: skip
+    return o, options_record(o)
 
 
 _LAM_RANGE = "lam: the practical scheme's blend must lie in [0, 1]"

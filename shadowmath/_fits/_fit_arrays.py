@@ -94,7 +94,7 @@ def _namespace(xp: ModuleType, scalar: bool) -> SimpleNamespace:
     primitives = scalar_primitives() if scalar else {**array_primitives(xp), "flag": Flags.of}
     passes = ArrayPasses(xp, scalar, primitives["flag"])
     names = ("spread", "light_pass", "receiver_far", "enclosing_ball")
-    return specialize({**primitives, **{n: getattr(passes, n) for n in names}})
+    return specialize({**primitives, **{n: getattr(passes, n) for n in names}}, loop=scalar)
 
 
 class Flags:

@@ -206,10 +206,10 @@ def warp_cascades(
     r"""Each cascade's ``world_to_clip``, ``world_to_texture`` (16 entries) and texel sizes, warped.
 
     Arguments:
-        body: ``_body(...)`` of the cascades in the light frame ``a``: three
-            ``(*b, n, 48)`` vertex coordinates, their ``(*b, n, 48)`` mask, the
-            slices' and the box's corners.
-        cam: the camera (``_cascades.Camera``); ``V``: ``(*b, 4, 4)`` its view matrix;
+        body: ``cascade_body(...)`` (:mod:`shadowmath._math._cascade_bounds`) of the
+            cascades in the light frame ``a``: three ``(*b, n, 48)`` vertex coordinates,
+            their ``(*b, n, 48)`` mask, the slices' and the box's corners.
+        cam: the camera (``_cascades._WarpCamera``); ``V``: ``(*b, 4, 4)`` its view matrix;
             ``a``: the light frame's axes, 9 arrays ``(*b, 1)``.
         ortho: the orthographic cascade's clip and texture rows (texture already
             in its tile) and ``(*b, n, 2)`` texel sizes: kept where the warp falls back.

@@ -1,9 +1,9 @@
 r"""Cascaded shadow maps: the per-point and per-cascade formulas, one source for every backend.
 
 A cascade is a directional light's orthographic map fitted to one slice of a
-camera's view frustum, between two view depths ``a < b``. The drivers
-(:mod:`shadowmath._fits._cascades` on whole arrays, :func:`._cascade_loop.cascade_loop` per
-camera and cascade, compiled by Numba) run the same steps:
+camera's view frustum, between two view depths ``a < b``. The steps of
+:mod:`._cascade_steps` (run once per camera and cascade on floats, or once on whole arrays)
+are:
 
 1. the slice's eight corners, on the camera frustum's four edge lines at the
    depths ``a`` and ``b`` (:func:`edge_point`), then in world space;

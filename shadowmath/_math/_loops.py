@@ -23,6 +23,7 @@ from typing import Any
 
 from ._fit_entry import fit_entry
 from ._formulas import compose_rows, planar_entries
+from ._rows import row16
 from ._vertex_passes import enclosing_support
 
 
@@ -82,13 +83,6 @@ def _spot(Lr: Any, spot: bool) -> Any:
     return (0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-def _tuple16(v: Any, k: int) -> Any:
-    return (
-        v[k], v[k + 1], v[k + 2], v[k + 3], v[k + 4], v[k + 5], v[k + 6], v[k + 7],
-        v[k + 8], v[k + 9], v[k + 10], v[k + 11], v[k + 12], v[k + 13], v[k + 14], v[k + 15],
-    )  # fmt: skip
-
-
 def fit_loop(operands: Any, opts: Any, out: Any) -> None:
     """Every batch entry's :func:`fit_entry`.
 
@@ -102,7 +96,7 @@ def fit_loop(operands: Any, opts: Any, out: Any) -> None:
     light, verts, placement, recv, ups, near, far = operands
     rows, mats, status = out
     o = opts[0]
-    api = (_tuple16(o.api_clip, 0), _tuple16(o.api_texture, 0))
+    api = (row16(o.api_clip, 0), row16(o.api_texture, 0))
     for i in range(len(rows)):
         Lr, Ur = _row(light, i), _row(ups, i)
         L = (float(Lr[0]), float(Lr[1]), float(Lr[2]))
@@ -141,7 +135,6 @@ FUNCTIONS = (
     "_row",
     "_entries",
     "_spot",
-    "_tuple16",
     "fit_loop",
     "_store",
 )

@@ -1,8 +1,9 @@
 """Bind the per-entry formulas to a backend: NumPy or JAX arrays, Python or Numba scalars.
 
 The formulas of :mod:`._formulas` and :mod:`._fit_formulas` (and the loops of
-:mod:`._loops` that drive them per entry) are written with five
-primitives (``where``, ``sqrt``, ``fabs``, ``rint``, ``isfinite``). :func:`specialize`
+:mod:`._loops` that drive them per entry, and fit_cascades' steps, :mod:`._cascade_steps`)
+are written with five primitives (``where``, ``sqrt``, ``fabs``, ``rint``, ``isfinite``;
+the cascades' steps also ``alloc``, ``flag`` and ``take_last``). :func:`specialize`
 copies every one of them into one namespace where those names mean one backend's
 functions, so a specialized formula calls specialized formulas: the frame, the
 frustum, the fits and the matrices are written once and the backends cannot drift.
@@ -20,12 +21,14 @@ from typing import Any
 import numpy as np
 
 from . import (
+    _cascade_bounds,
     _cascade_formulas,
-    _cascade_loop,
+    _cascade_steps,
     _fit_entry,
     _fit_formulas,
     _formulas,
     _loops,
+    _rows,
     _vertex_passes,
 )
 
@@ -36,19 +39,28 @@ _MODULES = (
     (_fit_entry, _fit_entry.FUNCTIONS),
     (_loops, _loops.FUNCTIONS),
     (_cascade_formulas, _cascade_formulas.FUNCTIONS),
-    (_cascade_loop, _cascade_loop.FUNCTIONS),
+    (_rows, _rows.FUNCTIONS),
+    (_cascade_steps, _cascade_steps.FUNCTIONS),
+    (_cascade_bounds, _cascade_bounds.FUNCTIONS),
 )
 
 
+def _forms() -> dict[str, tuple[str, str]]:
+    """Names with a loop form and an array form (a module's ``FORMS``)."""
+    return {k: v for module, _ in _MODULES for k, v in getattr(module, "FORMS", {}).items()}
+
+
 def specialize(
-    primitives: dict[str, Any], wrap: Callable[[Any], Any] | None = None
+    primitives: dict[str, Any], wrap: Callable[[Any], Any] | None = None, *, loop: bool = True
 ) -> types.SimpleNamespace:
     """Copies of the formulas with the primitives bound to one backend.
 
     ``wrap`` (e.g. ``numba.njit``) is applied to each copy; the copies call one
     another through the same namespace, so a compiled formula calls compiled ones.
     A primitive named like a function replaces it (the array backends' vertex passes
-    replace the loops of :mod:`._vertex_passes`).
+    replace the loops of :mod:`._vertex_passes`). ``loop``: per-entry scalars (Python
+    or Numba floats), else whole arrays: a name of a module's ``FORMS`` is bound to its
+    loop form or its array form.
     """
     namespace: dict[str, Any] = {}
     for module, _ in _MODULES:
@@ -65,7 +77,10 @@ def specialize(
         func = namespace[name]
         copy = types.FunctionType(func.__code__, namespace, name, func.__defaults__)
         namespace[name] = wrap(copy) if wrap is not None else copy
-    exported = [*names, *_PRIMITIVES]
+    forms = _forms()
+    for name, (loop_form, array_form) in forms.items():
+        namespace[name] = namespace[loop_form if loop else array_form]
+    exported = [*names, *forms, *_PRIMITIVES]
     return types.SimpleNamespace(**{name: namespace[name] for name in exported})
 
 
@@ -75,22 +90,18 @@ _PRIMITIVES = ("where", "sqrt", "fabs", "rint", "isfinite", "maximum", "flag")
 @functools.cache
 def formulas(xp: ModuleType) -> types.SimpleNamespace:
     """The formulas specialized to the array namespace ``xp`` (NumPy or ``jax.numpy``)."""
-    return specialize(array_primitives(xp))
+    return specialize(array_primitives(xp), loop=False)
 
 
 def array_primitives(xp: ModuleType) -> dict[str, Any]:
     """The primitives on arrays of the namespace ``xp``."""
     where = xp.where if xp is not np else _numpy_where
-
     return {
-        "where": where,
-        "sqrt": xp.sqrt,
-        "fabs": xp.abs,
-        "rint": xp.round,
-        "isfinite": xp.isfinite,
-        "maximum": xp.maximum,
-        "to_single": _same,
-    }
+        "where": where, "sqrt": xp.sqrt, "fabs": xp.abs, "rint": xp.round,
+        "isfinite": xp.isfinite, "alloc": _zeros_list, "array_api": xp,
+        "flag": functools.partial(_array_flag, xp), "take_last": _take_last,
+        "maximum": xp.maximum, "to_single": _same,
+    }  # fmt: skip
 
 
 @functools.cache
@@ -108,9 +119,10 @@ def scalar_primitives() -> dict[str, Any]:
         "rint": _rint,
         "isfinite": math.isfinite,
         "maximum": max,
-        "flag": _fit_entry.flag,
         "to_single": _fit_entry.to_single,
         "alloc": _zeros_list,
+        "flag": _scalar_flag,
+        "take_last": _scalar_take,
     }
 
 
@@ -121,6 +133,29 @@ def _same(x: Any) -> Any:
 def _zeros_list(n: int) -> list[float]:
     """The compiled loops' float buffer on Python: a list (its floats stay Python floats)."""
     return [0.0] * n
+
+
+def _scalar_flag(ok: Any, bit: int) -> int:
+    """A check's status bit on scalars: 0 where ``ok``."""
+    return 0 if ok else bit
+
+
+def _array_flag(xp: ModuleType, ok: Any, bit: int) -> Any:
+    """A check's status bit on arrays: 0 where ``ok``."""
+    return xp.where(ok, 0, bit)
+
+
+def _scalar_take(row: Any, k: int) -> Any:
+    """Entry ``k`` of one entry's row."""
+    return row[k]
+
+
+def _take_last(row: Any, k: Any) -> Any:
+    """Entry ``k`` of each entry's row ``(*batch, m)``: ``(*batch, 1)`` for an int ``k``,
+    ``(*batch, n)`` for ``n`` indices (whole numbers of any dtype)."""
+    if isinstance(k, int):
+        return row[..., k, None]
+    return row[..., k.astype(int)]
 
 
 def _scalar_where(c: Any, a: Any, b: Any) -> Any:

@@ -1,0 +1,188 @@
+"""A cascade's light-space bounds: its slice of the camera frustum intersected with the scene box.
+
+The one step of :mod:`._cascade_steps` with two forms, both over the 24 edges (12 of the
+slice, 12 of the box) clipped to the other solid with :func:`._cascade_formulas.clip_plane`
+(a vertex of the intersection is a clipped end of one of them):
+
+* :func:`_bounds_loop` (the loop mode: Python or Numba floats), where each corner's outcode
+  settles most edges without clipping;
+* :func:`_bounds_array` (the array mode), every edge of every cascade at once, reductions
+  over the last axis; :func:`cascade_body` is its first half (LiSPSM reuses it).
+
+``specialize`` binds the name ``cascade_bounds`` to the mode's form (:data:`FORMS`). Both
+take the slice's corners in light coordinates (``lc``, 8 x 3) and the box's half-space
+values at them (``gs``, 8 x 6), the box's corners in light coordinates and their camera
+side values and view depth (``boxp = (bl, bg)``, 8 x 3 and 8 x 5) and the slice's depths
+``d = (s0, s1)``; both return ``(lo_x, hi_x, lo_y, hi_y, z_lo, z_hi, zb_lo, zb_hi)``: the
+bounds (the slice's own where the intersection is empty; ``z_lo`` lowered to the box's
+nearest corner) and the box's ``z`` range.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+# Shared formulas and primitives (the mode's buffer and array namespace), rebound by specialize().
+from ._cascade_formulas import EDGES, clip_plane, clip_segment, slice_values  # noqa: F401
+from ._cascade_steps import alloc, array_api
+from ._formulas import where
+
+_E0 = (0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3)
+_E1 = (1, 3, 5, 7, 2, 3, 6, 7, 4, 5, 6, 7)
+_EDGE_0 = np.array(_E0)
+_EDGE_1 = np.array(_E1)
+
+#: Names bound per mode by specialize(): ``name: (loop form, array form)``.
+FORMS = {"cascade_bounds": ("_bounds_loop", "_bounds_array")}
+
+
+def _bounds_loop(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
+    """The loop form. Each corner's outcode (bit ``j``: outside half-space ``j``, Cohen and
+    Sutherland) settles most edges: a common bit puts the edge outside, no bit at either
+    end inside; :func:`clip_segment` gives the same answers, only slower."""
+    bl, bg = boxp
+    inf = math.inf
+    lx, hx_, ly, hy_, lz, hz = inf, -inf, inf, -inf, inf, -inf
+    cs, cb = _outcodes(gs, bg, d)
+    whole = True  # every slice corner in the (convex) box: the intersection is the slice
+    for k in range(8):
+        if cs[k] != 0:
+            whole = False
+    seen = False
+    for e in range(0 if whole else 24):
+        k0, k1 = _E0[e % 12], _E1[e % 12]
+        codes = cs if e < 12 else cb
+        c0, c1 = int(codes[k0]), int(codes[k1])
+        if c0 & c1:
+            continue
+        pts = lc if e < 12 else bl
+        t0, t1, ok = _clip_crossed(gs, bg, d, (e, k0, k1), c0 | c1)
+        if ok:
+            seen = True
+            p0 = (pts[3 * k0], pts[3 * k0 + 1], pts[3 * k0 + 2])
+            dx, dy, dz = pts[3 * k1] - p0[0], pts[3 * k1 + 1] - p0[1], pts[3 * k1 + 2] - p0[2]
+            for t in (t0, t1):
+                x, y, z = p0[0] + t * dx, p0[1] + t * dy, p0[2] + t * dz
+                # Comparisons, not min()/max(): the Python run of this loop calls nothing.
+                if x < lx:
+                    lx = x
+                if x > hx_:
+                    hx_ = x
+                if y < ly:
+                    ly = y
+                if y > hy_:
+                    hy_ = y
+                if z < lz:
+                    lz = z
+                if z > hz:
+                    hz = z
+    if whole or not seen:
+        for k in range(8):
+            x, y, z = lc[3 * k], lc[3 * k + 1], lc[3 * k + 2]
+            lx, hx_, ly, hy_ = min(lx, x), max(hx_, x), min(ly, y), max(hy_, y)
+            lz, hz = min(lz, z), max(hz, z)
+    zb = zt = bl[2]
+    for k in range(8):
+        zb, zt = min(zb, bl[3 * k + 2]), max(zt, bl[3 * k + 2])
+    return lx, hx_, ly, hy_, min(min(zb, lz), hz), hz, zb, zt
+
+
+def _outcodes(gs: Any, bg: Any, d: Any) -> Any:
+    """The slice's corners' outcodes against the box, the box's against the slice."""
+    s0, s1 = d
+    cs, cb = alloc(8), alloc(8)
+    for k in range(8):
+        c = 0
+        for j in range(6):
+            if gs[6 * k + j] < 0:
+                c |= 1 << j
+        cs[k] = c
+        depth = bg[5 * k + 4]
+        c = (16 if depth - s0 < 0 else 0) | (32 if s1 - depth < 0 else 0)
+        for j in range(4):
+            if bg[5 * k + j] < 0:
+                c |= 1 << j
+        cb[k] = c
+    return cs, cb
+
+
+def _clip_crossed(gs: Any, bg: Any, d: Any, edge: Any, crossed: int) -> Any:
+    """Edge ``edge = (e, k0, k1)`` clipped by the planes an end is outside of (``crossed``;
+    the others change nothing): ``(t0, t1, ok)``."""
+    e, k0, k1 = edge
+    s0, s1 = d
+    t0, t1, ok = 0.0, 1.0, True
+    if crossed == 0:
+        return t0, t1, ok
+    for j in range(6):
+        if crossed & (1 << j):
+            if e < 12:
+                a, b = gs[6 * k0 + j], gs[6 * k1 + j]
+            elif j < 4:
+                a, b = bg[5 * k0 + j], bg[5 * k1 + j]
+            elif j == 4:
+                a, b = bg[5 * k0 + 4] - s0, bg[5 * k1 + 4] - s0
+            else:
+                a, b = s1 - bg[5 * k0 + 4], s1 - bg[5 * k1 + 4]
+            t0, t1, ok = clip_plane(t0, t1, ok, a, b)
+    return t0, t1, ok and t0 <= t1
+
+
+def cascade_body(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
+    """The array form's vertices: ``(ends, ok, slice_corners, box_corners)``: ``ends`` three
+    ``(*b, n, 48)`` arrays (both clipped ends of the 24 edges), ``ok`` ``(*b, n, 48)`` True
+    where the edge kept a part; the slices' corners ``(*b, n, 8)`` and the box's
+    ``(*b, 1, 8)``, each three arrays in light coordinates."""
+    xp = array_api
+    bl, bg = boxp
+    s0, s1 = d[0][..., None], d[1][..., None]
+    sl, bc, g_slice, sides = (_corners(xp, v, m) for v, m in ((lc, 3), (bl, 3), (gs, 6), (bg, 5)))
+    g_box = slice_values(sides, sides[4], s0, s1)
+    g0, g1 = [], []
+    for gsl, gb in zip(g_slice, g_box, strict=True):
+        gb = xp.broadcast_to(gb, gsl.shape)
+        g0.append(xp.concat([gsl[..., _EDGE_0], gb[..., _EDGE_0]], axis=-1))
+        g1.append(xp.concat([gsl[..., _EDGE_1], gb[..., _EDGE_1]], axis=-1))
+    t0, t1, ok = clip_segment(tuple(g0), tuple(g1))
+    ends = []
+    for p_s, p_b in zip(sl, bc, strict=True):
+        p_b = xp.broadcast_to(p_b, p_s.shape)
+        p0 = xp.concat([p_s[..., _EDGE_0], p_b[..., _EDGE_0]], axis=-1)
+        p1 = xp.concat([p_s[..., _EDGE_1], p_b[..., _EDGE_1]], axis=-1)
+        ends.append(xp.concat([p0 + t0 * (p1 - p0), p0 + t1 * (p1 - p0)], axis=-1))
+    return ends, xp.concat([ok, ok], axis=-1), sl, bc
+
+
+def _corners(xp: Any, buffer: Any, m: int) -> Any:
+    """``m`` arrays ``(..., 8)``: value ``c`` of the eight corners of a buffer of 8 x m."""
+    stacked = xp.stack(xp.broadcast_arrays(*buffer), axis=-1)
+    stacked = xp.reshape(stacked, (*stacked.shape[:-1], 8, m))
+    return tuple(stacked[..., c] for c in range(m))
+
+
+def _bounds_array(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
+    """The array form: :func:`cascade_body`'s vertices reduced over the last axis."""
+    xp = array_api
+    ends, ok2, sl, bc = cascade_body(lc, gs, boxp, d)
+    seen = xp.any(ok2, axis=-1)
+    inf = xp.asarray(np.inf, dtype=ends[0].dtype)
+    low = [where(seen, xp.min(where(ok2, v, inf), axis=-1), xp.min(f, axis=-1))
+           for v, f in zip(ends, sl, strict=True)]  # fmt: skip
+    high = [where(seen, xp.max(where(ok2, v, -inf), axis=-1), xp.max(f, axis=-1))
+            for v, f in zip(ends, sl, strict=True)]  # fmt: skip
+    zb_lo, zb_hi = xp.min(bc[2], axis=-1), xp.max(bc[2], axis=-1)
+    z_lo = xp.minimum(xp.minimum(zb_lo, low[2]), high[2])
+    return low[0], high[0], low[1], high[1], z_lo, high[2], zb_lo, zb_hi
+
+
+FUNCTIONS = (
+    "_bounds_loop",
+    "_outcodes",
+    "_clip_crossed",
+    "cascade_body",
+    "_corners",
+    "_bounds_array",
+)

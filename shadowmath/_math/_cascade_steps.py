@@ -1,0 +1,399 @@
+"""fit_cascades' steps, written once for every backend: one camera's cascades.
+
+Each step takes *per-entry values*: Python or Numba floats (the loop mode: :func:`cascade_loop`
+runs them once per camera and cascade) or arrays of the batch shape (the array mode: NumPy or
+JAX runs them once on whole arrays, the cascades on a last axis). Data-dependent choices
+are the ``where`` primitive; a check sets its bit of :data:`._status.CASCADE_CHECKS` with
+``st = st | flag(ok, bit)`` (``0 if ok else bit``, or ``where(ok, 0, bit)``), so both modes
+return the same status word. Static options (``o.stable``) are Python branches on the
+options record ``o`` (:class:`CascadeOptions`; in the loop a 1-element array of
+:func:`options_dtype`, read by name). Buffers come from the ``alloc`` primitive (a NumPy
+array under Numba, a list elsewhere; a list holds arrays in the array mode).
+
+Only the pass over the 24 clipped edges has two forms: :func:`_bounds_loop` (outcodes
+settle most edges without clipping) and :func:`_bounds_array` (every edge at once,
+reductions over the last axis); ``specialize`` binds ``cascade_bounds`` to the mode's one
+(:data:`FORMS`). Both use the formulas of :mod:`._cascade_formulas`.
+
+Trusted shapes only: nothing here raises.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from shadowmath._boundary._status import cascade_bit
+
+# Shared formulas and primitives, rebound by specialize().
+from ._cascade_formulas import (  # noqa: F401
+    EDGES,
+    affine,
+    box_values,
+    camera_values,
+    cascade_box,
+    clip_plane,
+    clip_segment,
+    edge_point,
+    slice_sphere,
+    slice_values,
+    split_depth,
+)
+from ._fit_formulas import fit_axes, fit_rows, placement_ok, safe_box, stable_sides, to_light
+from ._formulas import fabs, isfinite, sqrt, where
+from ._rows import _mul16, inverse4, row16, tile_rows
+
+#: Primitives of the mode, bound by specialize(): a float buffer of ``n`` entries, a check's
+#: bit (``flag(ok, bit)``), entry ``k`` of a per-entry row (``take_last(G, k)``) and, in the
+#: array mode, the array namespace.
+alloc: Any = None
+flag: Any = None
+take_last: Any = None
+array_api: Any = None
+#: The bounds pass of the mode (:data:`FORMS`).
+cascade_bounds: Any = None
+
+# Status bits (module constants: Numba freezes them at compile time).
+C_LIGHT_FINITE = cascade_bit("light_finite")
+C_VIEW_FINITE = cascade_bit("view_finite")
+C_PROJECTION_FINITE = cascade_bit("projection_finite")
+C_BOUNDS_FINITE = cascade_bit("bounds_finite")
+C_UP_FINITE = cascade_bit("up_finite")
+C_VIEW_AFFINE = cascade_bit("view_affine")
+C_VIEW_SINGULAR = cascade_bit("view_singular")
+C_PROJECTION_SINGULAR = cascade_bit("projection_singular")
+C_INFINITE_FAR = cascade_bit("infinite_far")
+C_BOUNDS_ORDER = cascade_bit("bounds_order")
+C_LIGHT_ZERO = cascade_bit("light_zero")
+C_UP_PARALLEL = cascade_bit("up_parallel")
+C_FAR_INFINITE = cascade_bit("far_infinite")
+C_MAX_DISTANCE = cascade_bit("max_distance")
+C_LOG_NEAR = cascade_bit("log_near")
+C_SPLITS_INCREASE = cascade_bit("splits_increase")
+C_SPLITS_RANGE = cascade_bit("splits_range")
+
+#: One output row per cascade: world_to_light, world_to_clip, world_to_texture (16 each),
+#: the frustum's eight numbers, the band's end, the texel's size along X and Y.
+ROW = 48 + 8 + 3
+
+
+class CascadeOptions(NamedTuple):
+    """The options of one call, by name (static for the call)."""
+
+    has_up: bool
+    stable: bool
+    has_splits: bool
+    has_dmax: bool
+    mx: float  # the margins: the usable fraction of the map along X and Y
+    my: float
+    width: float  # each map's texels
+    height: float
+    eps: float
+    tol: float  # sqrt(eps): how far given splits may round past the camera's range
+    cascades: int  # how many
+    slack: float  # NEAR_FAR_SLACK
+    cols: int  # the atlas's grid (0: texture layers, no tiles)
+    rows: int
+    camera_clip: tuple[float, ...]  # OpenGL clip to the camera's (16)
+    map_clip: tuple[float, ...]  # OpenGL clip to the maps' API's (16)
+    map_texture: tuple[float, ...]  # its texture rows (16)
+
+
+_KINDS = {"bool": np.bool_, "float": np.float64, "int": np.int64}
+
+
+def options_dtype() -> np.dtype[Any]:
+    """The structured dtype of :class:`CascadeOptions` (the compiled loop's record)."""
+    fields: list[Any] = []
+    for name, hint in CascadeOptions.__annotations__.items():
+        kind = getattr(hint, "__forward_arg__", hint)  # NamedTuple keeps a string as a ForwardRef
+        fields.append((name, _KINDS[kind]) if kind in _KINDS else (name, np.float64, (16,)))
+    return np.dtype(fields)
+
+
+def options_record(o: CascadeOptions) -> Any:
+    """``o`` as a read-only 1-element structured array (read as ``opts[0].stable``)."""
+    record = np.array([tuple(o)], dtype=options_dtype())
+    record.setflags(write=False)
+    return record
+
+
+def lesser(a: Any, b: Any) -> Any:
+    """``min(a, b)`` with the ``where`` primitive."""
+    return where(a <= b, a, b)
+
+
+def greater(a: Any, b: Any) -> Any:
+    """``max(a, b)`` with the ``where`` primitive."""
+    return where(a >= b, a, b)
+
+
+def cascade_camera(V: Any, P: Any, o: Any, nc: Any, fc: Any) -> Any:
+    """The camera's frustum edges: near corners ``nc`` (4 x 3), far corners ``fc`` (4 x 4,
+    homogeneous, ``w >= 0``), both ``i + 2 j``. Returns the view depth's sign, the near and
+    far depths (``inf``: an infinite far plane) and the status bits."""
+    iP, dp = inverse4(P)
+    pn = sqrt(P[0] * P[0] + P[1] * P[1] + P[2] * P[2] + P[3] * P[3])
+    for r in range(1, 4):
+        q = 4 * r
+        pn = pn * sqrt(
+            P[q] * P[q] + P[q + 1] * P[q + 1] + P[q + 2] * P[q + 2] + P[q + 3] * P[q + 3]
+        )
+    st = flag(fabs(dp) > 64.0 * o.eps * pn, C_PROJECTION_SINGULAR)
+    zero = 0.0 * dp
+    nz, fz, fw = zero, zero, zero
+    C = o.camera_clip
+    for k in range(8):  # OpenGL's NDC corner (x, y, z) in the camera's clip space, unprojected
+        x, y, z = 2.0 * (k & 1) - 1.0, 2.0 * ((k >> 1) & 1) - 1.0, 2.0 * (k >> 2) - 1.0
+        c = (
+            C[0] * x + C[1] * y + C[2] * z + C[3],
+            C[4] * x + C[5] * y + C[6] * z + C[7],
+            C[8] * x + C[9] * y + C[10] * z + C[11],
+            C[12] * x + C[13] * y + C[14] * z + C[15],
+        )
+        h = (iP[0] * c[0] + iP[1] * c[1] + iP[2] * c[2] + iP[3] * c[3],
+             iP[4] * c[0] + iP[5] * c[1] + iP[6] * c[2] + iP[7] * c[3],
+             iP[8] * c[0] + iP[9] * c[1] + iP[10] * c[2] + iP[11] * c[3],
+             iP[12] * c[0] + iP[13] * c[1] + iP[14] * c[2] + iP[15] * c[3])  # fmt: skip
+        e = k & 3
+        if k < 4:
+            q = where(h[3] != 0, h[3], 1.0)
+            nc[3 * e], nc[3 * e + 1], nc[3 * e + 2] = h[0] / q, h[1] / q, h[2] / q
+            nz = nz + 0.25 * nc[3 * e + 2]
+        else:
+            big = greater(greater(fabs(h[0]), fabs(h[1])), greater(fabs(h[2]), fabs(h[3])))
+            big = where(h[3] < 0, -big, where(big > 0, big, 1.0))
+            for r in range(4):
+                fc[4 * e + r] = h[r] / big
+            fz = fz + 0.25 * fc[4 * e + 2]
+            fw = fw + 0.25 * fc[4 * e + 3]
+    finite_far = fw > 32.0 * o.eps
+    safe_fw = where(finite_far, fw, zero + 1.0)
+    t = where(finite_far, fz / safe_fw - nz, nz)
+    sign = where(t < 0, zero - 1.0, zero + 1.0)
+    st = st | flag(finite_far | (sign * nz > 0), C_INFINITE_FAR)
+    far = where(finite_far, sign * fz / safe_fw, zero + math.inf)
+    return sign, sign * nz, far, st
+
+
+def cascade_checks(inputs: Any, o: Any) -> Any:
+    """The finiteness, affinity and order checks of one entry's inputs (status bits)."""
+    L, V, P, box, U = inputs
+    tv, tp = V[0], P[0]
+    for k in range(1, 16):
+        tv, tp = tv + V[k], tp + P[k]
+    st = flag(isfinite(L[0] + L[1] + L[2]), C_LIGHT_FINITE)
+    st = st | flag(isfinite(tv), C_VIEW_FINITE) | flag(isfinite(tp), C_PROJECTION_FINITE)
+    total = box[0] + box[1] + box[2] + box[3] + box[4] + box[5]
+    st = st | flag(isfinite(total), C_BOUNDS_FINITE)
+    if o.has_up:
+        st = st | flag(isfinite(U[0] + U[1] + U[2]), C_UP_FINITE)
+    affine_ok = (V[12] == 0) & (V[13] == 0) & (V[14] == 0) & (V[15] == 1)
+    st = st | flag(affine_ok, C_VIEW_AFFINE)
+    st = st | flag(placement_ok(V, o.eps), C_VIEW_SINGULAR)  # free of scale (Hadamard)
+    order = (box[3] >= box[0]) & (box[4] >= box[1]) & (box[5] >= box[2])
+    return st | flag(order, C_BOUNDS_ORDER)
+
+
+def cascade_range(near: Any, far: Any, sc: Any, G: Any, o: Any) -> Any:
+    """The last split of the scheme (``near + 1`` where invalid) and the checks of the
+    splits: given (``G``, ``n + 1`` increasing within the camera's range, to ``o.tol``
+    relative) or of the scheme (``sc = (lam, max_distance, overlap)``)."""
+    n = o.cascades
+    if o.has_splits:
+        ok = take_last(G, 1) > take_last(G, 0)
+        for k in range(2, n + 1):
+            ok = ok & (take_last(G, k) > take_last(G, k - 1))
+        st = flag(ok, C_SPLITS_INCREASE)
+        inside = (take_last(G, 0) >= near - o.tol * fabs(near)) & (
+            take_last(G, n) <= far * (1.0 + o.tol)
+        )
+        return far, st | flag(inside, C_SPLITS_RANGE)
+    if o.has_dmax:
+        d = sc[1]
+        st = flag((d > near) & (d <= far), C_MAX_DISTANCE)
+        end = where(d > near, lesser(d, far), near + 1.0)
+    else:
+        st = flag(isfinite(far), C_FAR_INFINITE)
+        end = far
+    st = st | flag((sc[0] == 0) | (near > 0), C_LOG_NEAR)
+    return where(isfinite(end) & (end > near), end, near + 1.0), st
+
+
+def cascade_split(G: Any, k: Any, rng: Any, o: Any) -> Any:
+    """Split ``k`` (an int, or the cascades' indices in the array mode): given, or the
+    scheme's over ``rng = (near, end, lam)`` with exact ends."""
+    if o.has_splits:
+        return take_last(G, k)
+    near, end, lam = rng
+    n = o.cascades
+    return where(k == 0, near, where(k == n, end, split_depth(near, end, lam, k / n)))
+
+
+def box_pass(VP: Any, box: Any, a_sign: Any, bl: Any, bg: Any) -> None:
+    """The scene box's corners (``box``: min then max, 6 numbers): light coordinates
+    (``bl``, 8 x 3), camera side values and view depth (``bg``, 8 x 5)."""
+    V, P = VP
+    a, sign = a_sign
+    PV = _mul16(P, V)
+    for k in range(8):
+        x, y, z = box[3 * (k & 1)], box[3 * ((k >> 1) & 1) + 1], box[3 * (k >> 2) + 2]
+        p = to_light(x, y, z, a)
+        bl[3 * k], bl[3 * k + 1], bl[3 * k + 2] = p[0], p[1], p[2]
+        sides = camera_values(PV, x, y, z)
+        for c in range(4):
+            bg[5 * k + c] = sides[c]
+        bg[5 * k + 4] = sign * (V[8] * x + V[9] * y + V[10] * z + V[11])
+
+
+def cascade_entry(inputs: Any, sc: Any, G: Any, o: Any) -> Any:
+    """One camera's steps before its cascades: frustum, checks, split range, light frame
+    and scene box. ``inputs = (L, V, P, box, U)``: 3, 16, 16, 6 and 3 per-entry values."""
+    L, V, P, box, U = inputs
+    nc, fc, bl, bg = alloc(12), alloc(16), alloc(24), alloc(40)
+    sign, near, far, st = cascade_camera(V, P, o, nc, fc)
+    end, st_range = cascade_range(near, far, sc, G, o)
+    coords = greater(greater(greater(fabs(box[0]), fabs(box[1])), fabs(box[2])),
+                     greater(greater(fabs(box[3]), fabs(box[4])), fabs(box[5])))  # fmt: skip
+    a, ok_light, _, ok_up = fit_axes((-L[0], -L[1], -L[2]), U, o.has_up, coords, o.eps)
+    st = st | cascade_checks(inputs, o) | st_range
+    st = st | flag(ok_light, C_LIGHT_ZERO) | flag(ok_up, C_UP_PARALLEL)
+    box_pass((V, P), box, (a, sign), bl, bg)
+    return (sign, near, end, sc[0], sc[2]), (nc, fc, bl, bg), a, inverse4(V)[0], st
+
+
+def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
+    """Cascade ``j``'s depths ``s0 <= s1`` (with its band; ``Z``: the ``n + 1`` splits)
+    and its slice's corners: view (``vc``), light (``lc``) and the box's half-space values
+    at them (``gs``)."""
+    (sign, _, _, _, ov), (nc, fc, _, _), a, iV, _ = e
+    s0, s1 = take_last(Z, j), take_last(Z, j + 1)
+    s1 = lesser(s1 + ov * (s1 - s0), take_last(Z, o.cascades))
+    vc, lc, gs = alloc(24), alloc(24), alloc(48)
+    lo, hi = (box[0], box[1], box[2]), (box[3], box[4], box[5])
+    for k in range(8):
+        e4 = k & 3
+        p = edge_point((nc[3 * e4], nc[3 * e4 + 1], nc[3 * e4 + 2]),
+                       (fc[4 * e4], fc[4 * e4 + 1], fc[4 * e4 + 2], fc[4 * e4 + 3]),
+                       sign, s0 if k < 4 else s1)  # fmt: skip
+        vc[3 * k], vc[3 * k + 1], vc[3 * k + 2] = p[0], p[1], p[2]
+        w = affine(iV, p[0], p[1], p[2])
+        q = to_light(w[0], w[1], w[2], a)
+        lc[3 * k], lc[3 * k + 1], lc[3 * k + 2] = q[0], q[1], q[2]
+        g = box_values(w[0], w[1], w[2], lo, hi)
+        for c in range(6):
+            gs[6 * k + c] = g[c]
+    return s0, s1, vc, lc, gs
+
+
+def cascade_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
+    """Cascade ``j``'s map into ``row`` (:data:`ROW` entries) from its slice ``sl``."""
+    s0, s1, vc, lc, gs = sl
+    _, (_, _, bl, bg), a, iV, _ = e
+    b = cascade_bounds(lc, gs, (bl, bg), (s0, s1))
+    if o.stable:
+        hx, hy, cx, cy, z_lo, z_hi = stable_box(vc, iV, a, b, o)
+        pad = (z_hi - z_lo) + greater(hx, hy)
+        near, far = pad, pad + (z_hi - z_lo)
+    else:
+        hx, hy, cx, cy, near, far = cascade_box((b[0], b[1], b[2], b[3], b[4], b[5]))
+        z_lo = b[4]
+    store_cascade(a, (hx, hy, cx, cy, near, far), z_lo, (j, o), row)
+    row[56] = s1
+
+
+def stable_box(vc: Any, iV: Any, a: Any, b: Any, o: Any) -> Any:
+    """The stable box of one cascade: the slice's sphere plus half a texel, its centre
+    snapped to whole texels; its depth range (``b``: the bounds with the box's own ``z``)."""
+    corners = (
+        vc[0], vc[1], vc[2], vc[3], vc[4], vc[5], vc[6], vc[7], vc[8], vc[9], vc[10], vc[11],
+        vc[12], vc[13], vc[14], vc[15], vc[16], vc[17], vc[18], vc[19], vc[20], vc[21],
+        vc[22], vc[23],
+    )  # fmt: skip
+    vx, vy, vz, r2 = slice_sphere(corners)
+    c = affine(iV, vx, vy, vz)
+    r = sqrt(r2)
+    hx, hy, ox, oy, _ = stable_sides(r2, c, a, (o.mx, o.my, o.width, o.height), r, o.eps)
+    cx = c[0] * a[0] + c[1] * a[1] + c[2] * a[2] + ox
+    cy = c[0] * a[3] + c[1] * a[4] + c[2] * a[5] + oy
+    cz = c[0] * a[6] + c[1] * a[7] + c[2] * a[8]
+    z_hi = lesser(cz + r, b[7])
+    return hx, hy, cx, cy, lesser(b[6], z_hi - r), z_hi
+
+
+def cascade_tile(tex: Any, j: Any, o: Any) -> Any:
+    """Texture rows of cascade ``j`` moved into its atlas tile (:func:`._rows.tile_rows`;
+    with texture layers, ``o.cols == 0``, unchanged)."""
+    if o.cols > 0:
+        return tile_rows(tex, (j % o.cols, j // o.cols, 1.0, 1.0), (o.cols, o.rows))
+    return tex
+
+
+def store_cascade(a: Any, box6: Any, z_lo: Any, jo: Any, row: Any) -> None:
+    """The cascade's matrices, frustum and texel size into ``row``."""
+    j, o = jo
+    hx, hy, cx, cy, near, far = box6
+    shift = z_lo - near  # the origin, on Z through the world origin: x, y stay anchored
+    origin = (shift * a[6], shift * a[7], shift * a[8])
+    near, far = near * (1.0 - o.slack), far * (1.0 + o.slack)
+    api = (row16(o.map_clip, 0), row16(o.map_texture, 0))
+    box = safe_box(hx, hy, cx, cy, near, far)
+    w, clip, tex = fit_rows(origin, a, box, (o.mx, o.my), True, api)
+    tex = cascade_tile(tex, j, o)
+    for k in range(12):
+        row[k] = w[k]
+    row[12], row[13], row[14], row[15] = 0.0, 0.0, 0.0, 1.0
+    for k in range(16):
+        row[16 + k] = clip[k]
+        row[32 + k] = tex[k]
+    row[48], row[49], row[50], row[51] = hx, hy, near, far
+    row[52], row[53], row[54], row[55] = o.mx, o.my, cx, cy
+    row[57] = 2.0 * hx / (o.mx * o.width)
+    row[58] = 2.0 * hy / (o.my * o.height)
+
+
+def cascade_loop(inputs: Any, opts: Any, out: Any, splits: Any, status: Any) -> None:
+    """The loop mode's driver: every camera's cascades, one camera at a time.
+
+    ``inputs``: light ``(m, 3)``, views and projections ``(m, 16)``, boxes ``(m, 6)``
+    (min then max), ups ``(m, 3)``, scalars ``(m, 3)`` (lam, max_distance, overlap) and
+    given splits ``(m, n + 1)``, each ``m = count or 1`` read at ``i % m``; ``opts``: the
+    options record (``opts[0]``). ``out``: ``(count, n, ROW)``; ``splits``:
+    ``(count, n + 1)``; ``status``: ``(count,)``.
+    """
+    light, views, projs, boxes, ups, scalars, given = inputs
+    o = opts[0]
+    for i in range(len(out)):
+        L, U, bx = light[i % len(light)], ups[i % len(ups)], boxes[i % len(boxes)]
+        box = (bx[0], bx[1], bx[2], bx[3], bx[4], bx[5])
+        G = given[i % len(given)]
+        e = cascade_entry(
+            ((L[0], L[1], L[2]), row16(views[i % len(views)], 0), row16(projs[i % len(projs)], 0),
+             box, (U[0], U[1], U[2])), scalars[i % len(scalars)], G, o,
+        )  # fmt: skip
+        status[i] = e[4]
+        rng = (e[0][1], e[0][2], e[0][3])
+        for k in range(o.cascades + 1):
+            splits[i][k] = cascade_split(G, k, rng, o)
+        for j in range(o.cascades):
+            cascade_fit(e, cascade_slice(e, box, splits[i], j, o), j, o, out[i][j])
+
+
+FUNCTIONS = (
+    "lesser",
+    "greater",
+    "cascade_camera",
+    "cascade_checks",
+    "cascade_range",
+    "cascade_split",
+    "box_pass",
+    "cascade_entry",
+    "cascade_slice",
+    "cascade_fit",
+    "stable_box",
+    "cascade_tile",
+    "store_cascade",
+    "cascade_loop",
+)
