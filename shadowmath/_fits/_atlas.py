@@ -22,7 +22,6 @@ The rule, the borders and the API conventions are written out in ``docs/atlas.md
 from __future__ import annotations
 
 import functools
-import math
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -61,6 +60,7 @@ from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 from . import _compiled
 from ._cube_depth import AT_LIGHT, cube_depth_core
 from ._fit_arrays import Inputs, driver, fit_arrays
+from ._light_kinds import KIND_OF, POINT, SPOT, SUN, homogeneous, spot_row
 from ._setup import _receiver_kind, _receiver_rows, caster_triangles
 from ._spec import FitKey, ShadowMapSpec, api_rows, map_spec
 from ._spot_select import spot_selection
@@ -558,7 +558,7 @@ def _tile_transforms(rect: Ints, size: int) -> NDArray[np.float64]:
 
 # ------------------------------------------------------------------ fitting
 
-_POINT, _SPOT, _SUN = 0, 1, 2
+_POINT, _SPOT, _SUN = POINT, SPOT, SUN
 
 
 def fit_atlas(
@@ -803,8 +803,7 @@ def _read_lights(lights: Any, count: int) -> tuple[Ints, Any]:
                 d, a = light[1], light[2]
                 if type(d) is np.ndarray and d.shape == (3,) and _scalar(a):
                     kinds.append(_SPOT)
-                    angle = float(a)
-                    rows.append([*first.tolist(), *d.tolist(), math.tan(angle), angle])
+                    rows.append(spot_row(first.tolist(), d.tolist(), float(a)))
                     continue
             _typed_rows(light, kinds, rows)
         kind_arr = np.array(kinds, dtype=np.int64)
@@ -816,10 +815,12 @@ def _read_lights(lights: Any, count: int) -> tuple[Ints, Any]:
                 "lights", "a sequence of typed lights, (L, 4) or (L, 3)", tuple(arr.shape),
                 "a homogeneous light is (x, y, z, w), w = 0 directional",
             )  # fmt: skip
-        w = np.asarray(arr[:, 3]) if arr.shape[-1] == 4 else np.ones(arr.shape[0])
-        kind_arr = np.where(w == 0, _SUN, _POINT).astype(np.int64)
-        safe_w = np.where(w == 0, 1.0, w)[:, None]
-        xyz = np.asarray(arr[:, :3]) / safe_w
+        arr = np.asarray(arr, dtype=np.float64)
+        if arr.shape[-1] == 3:  # positions of point lights
+            arr = np.concatenate([arr, np.ones((arr.shape[0], 1))], axis=1)
+        with np.errstate(all="ignore"):
+            sun, xyz = homogeneous(np, arr)
+        kind_arr = np.where(sun, _SUN, _POINT).astype(np.int64)
         data = np.concatenate([xyz, np.zeros((arr.shape[0], 5))], axis=1)
     if kind_arr.shape[0] != count:
         raise ValueError(f"lights: the atlas has {count} lights, got {kind_arr.shape[0]}")
@@ -827,7 +828,7 @@ def _read_lights(lights: Any, count: int) -> tuple[Ints, Any]:
 
 
 _TYPED = (PointLight, SpotLight, DirectionalLight)
-_KINDS = {PointLight: _POINT, SpotLight: _SPOT, DirectionalLight: _SUN}
+_KINDS = KIND_OF
 _PAD = [0.0] * 5
 
 
@@ -854,7 +855,7 @@ def _typed_rows(light: Any, kinds: list[int], rows: list[list[float]]) -> None:
     a = np.broadcast_to(np.asarray(light.angle, dtype=np.float64).reshape(-1), (count,))
     for pi, di, ai in zip(p.tolist(), d.tolist(), a.tolist(), strict=True):
         kinds.append(_SPOT)
-        rows.append([*pi, *di, math.tan(ai), ai])
+        rows.append(spot_row(pi, di, ai))
 
 
 def _check_arrays(

@@ -52,6 +52,7 @@ from shadowmath.receivers import Mesh, Triangles
 
 from . import _compiled
 from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
+from ._light_kinds import homogeneous, spot_rows
 from ._shadow_setup import ShadowSetup
 from ._spec import FitKey, ShadowMapSpec, api_rows, map_spec
 from ._spot_select import spot_selection
@@ -364,9 +365,8 @@ def _spot_array(ctx: Context, position: Array, direction: Array, angle: Array) -
     names = ("light.position", "light.direction", "light.angle")
     shapes = (position.shape[:-1], direction.shape[:-1], angle.shape)
     shape = batch_shape(*shapes, names=names)
-    a = xp.broadcast_to(angle, shape)[..., None]
     parts = (xp.broadcast_to(position, (*shape, 3)), xp.broadcast_to(direction, (*shape, 3)))
-    return xp.concatenate([*parts, xp.tan(a), a], axis=-1)
+    return spot_rows(xp, *parts, xp.broadcast_to(angle, shape))
 
 
 def _light_kind(ctx: Context, directional: bool | None, L: Array) -> tuple[bool, Array]:
@@ -391,12 +391,11 @@ def _light_kind(ctx: Context, directional: bool | None, L: Array) -> tuple[bool,
             "w, which a traced JAX array does not have; pass sm.PointLight(position) or "
             "sm.DirectionalLight(direction) under jit, vmap or grad"
         )
-    w = np.asarray(L[..., 3])
-    if not w.any():
-        return True, L[..., :3]
-    if w.all():
-        with np.errstate(all="ignore"):
-            return False, L[..., :3] / L[..., 3:]
+    with np.errstate(all="ignore"):
+        sun, xyz = homogeneous(ctx.xp, L)
+    kinds = np.asarray(sun)
+    if kinds.all() or not kinds.any():
+        return bool(kinds.all()), xyz
     raise ValueError(
         "light: a batch mixes point lights (w != 0) and directional lights (w = 0); their "
         "fits differ in kind: call fit_shadow once per kind (split the batch by w == 0), "
