@@ -136,6 +136,26 @@ def cascade_bit(name: str) -> int:
     return 1 << _CASCADE_INDEX[name]
 
 
+# Bits of fit_cascades' checks (module constants: Numba freezes them at compile time).
+C_LIGHT_FINITE = cascade_bit("light_finite")
+C_VIEW_FINITE = cascade_bit("view_finite")
+C_PROJECTION_FINITE = cascade_bit("projection_finite")
+C_BOUNDS_FINITE = cascade_bit("bounds_finite")
+C_UP_FINITE = cascade_bit("up_finite")
+C_VIEW_AFFINE = cascade_bit("view_affine")
+C_VIEW_SINGULAR = cascade_bit("view_singular")
+C_PROJECTION_SINGULAR = cascade_bit("projection_singular")
+C_INFINITE_FAR = cascade_bit("infinite_far")
+C_BOUNDS_ORDER = cascade_bit("bounds_order")
+C_LIGHT_ZERO = cascade_bit("light_zero")
+C_UP_PARALLEL = cascade_bit("up_parallel")
+C_FAR_INFINITE = cascade_bit("far_infinite")
+C_MAX_DISTANCE = cascade_bit("max_distance")
+C_LOG_NEAR = cascade_bit("log_near")
+C_SPLITS_INCREASE = cascade_bit("splits_increase")
+C_SPLITS_RANGE = cascade_bit("splits_range")
+
+
 def cascade_messages() -> tuple[tuple[int, str], ...]:
     """``(bit, message)`` of fit_cascades' checks, in report order."""
     return tuple((1 << i, message) for i, (_, message) in enumerate(CASCADE_CHECKS))

@@ -25,7 +25,25 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from shadowmath._boundary._status import cascade_bit
+from shadowmath._boundary._status import (
+    C_BOUNDS_FINITE,
+    C_BOUNDS_ORDER,
+    C_FAR_INFINITE,
+    C_INFINITE_FAR,
+    C_LIGHT_FINITE,
+    C_LIGHT_ZERO,
+    C_LOG_NEAR,
+    C_MAX_DISTANCE,
+    C_PROJECTION_FINITE,
+    C_PROJECTION_SINGULAR,
+    C_SPLITS_INCREASE,
+    C_SPLITS_RANGE,
+    C_UP_FINITE,
+    C_UP_PARALLEL,
+    C_VIEW_AFFINE,
+    C_VIEW_FINITE,
+    C_VIEW_SINGULAR,
+)
 
 # Shared formulas and primitives, rebound by specialize().
 from ._cascade_formulas import (  # noqa: F401
@@ -56,23 +74,6 @@ array_api: Any = None
 cascade_bounds: Any = None
 
 # Status bits (module constants: Numba freezes them at compile time).
-C_LIGHT_FINITE = cascade_bit("light_finite")
-C_VIEW_FINITE = cascade_bit("view_finite")
-C_PROJECTION_FINITE = cascade_bit("projection_finite")
-C_BOUNDS_FINITE = cascade_bit("bounds_finite")
-C_UP_FINITE = cascade_bit("up_finite")
-C_VIEW_AFFINE = cascade_bit("view_affine")
-C_VIEW_SINGULAR = cascade_bit("view_singular")
-C_PROJECTION_SINGULAR = cascade_bit("projection_singular")
-C_INFINITE_FAR = cascade_bit("infinite_far")
-C_BOUNDS_ORDER = cascade_bit("bounds_order")
-C_LIGHT_ZERO = cascade_bit("light_zero")
-C_UP_PARALLEL = cascade_bit("up_parallel")
-C_FAR_INFINITE = cascade_bit("far_infinite")
-C_MAX_DISTANCE = cascade_bit("max_distance")
-C_LOG_NEAR = cascade_bit("log_near")
-C_SPLITS_INCREASE = cascade_bit("splits_increase")
-C_SPLITS_RANGE = cascade_bit("splits_range")
 
 #: One output row per cascade: world_to_light, world_to_clip, world_to_texture (16 each),
 #: the frustum's eight numbers, the band's end, the texel's size along X and Y.
