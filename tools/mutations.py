@@ -4,11 +4,11 @@ Each entry of :data:`ALL` (the fits' :data:`MUTATIONS`, then :data:`MODULES`: ca
 atlas, shadow cameras, cube depth, bias, PCF, spot caster selection, soft shadows,
 gather and the pygfx integration) changes one piece of exact source text into a
 plausible mistake (a sign, a factor, a rounding mode, a bound, a swapped axis). For
-each, the runner copies the repository's ``shadowmath/`` and ``tests/`` (and ``conftest.py``,
-``pyproject.toml``) into a temporary folder, applies the one mutation there, and
-runs the entry's test files with ``pytest -x``: a mutation is *killed* when a test
-fails, and *SURVIVED* when they all pass, which means the tests do not pin that
-piece of the formula down.
+each, the runner copies the repository's ``shadowmath/``, ``tests/``, ``docs/`` (whose
+examples tests run), ``conftest.py`` and ``pyproject.toml`` into a temporary folder,
+applies the one mutation there, and runs the entry's test files with ``pytest -x``: a
+mutation is *killed* when a test fails, and *SURVIVED* when they all pass, which means
+the tests do not pin that piece of the formula down.
 
 The tests run with ``SHADOWMATH_NUMBA=0`` (the array path: no compiled code cached
 from the unmutated source can hide a mutation), ``SHADOWMATH_REQUIRE_GL=1`` (a render
@@ -44,7 +44,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-COPIED = ("shadowmath", "tests", "conftest.py", "pyproject.toml")
+COPIED = ("shadowmath", "tests", "docs", "conftest.py", "pyproject.toml")
 IGNORED = shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc", ".hypothesis")
 TIMEOUT_S = 1800.0
 
@@ -743,12 +743,12 @@ MODULES: tuple[Mutation, ...] = (
         PYGFX,
     ),
     Mutation(
-        "pygfx-half-turn-axis",
+        "pygfx-up-face-as-pygfx-aims-it",
         PYGFX_F,
-        "np.diag([1.0, -1.0, -1.0, 1.0])",
-        "np.diag([-1.0, -1.0, 1.0, 1.0])",
-        "point light's +Y face: the half turn about z instead of x",
-        PYGFX,
+        "        _turn_up_face(shadow, light)",
+        "        pass",
+        "point light's +Y face left as pygfx 0.17 aims it (looking away from +Y)",
+        ("tests/render/test_pygfx.py::test_pygfx_point_light_faces_as_the_shader_reads_them",),
     ),
     Mutation(
         "pygfx-fov",
