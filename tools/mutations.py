@@ -1,15 +1,18 @@
-"""A small mutation runner for shadowmath's core formulas.
+"""A small mutation runner for shadowmath's formulas, module by module.
 
-Each entry of :data:`MUTATIONS` changes one piece of exact source text into a
-plausible mistake (a sign, a factor, a rounding mode). For each, the runner copies
-the repository's ``shadowmath/`` and ``tests/`` (and ``conftest.py``,
-``pyproject.toml``) into a temporary folder, applies the one mutation there, and
-runs the entry's test files with ``pytest -x``: a mutation is *killed* when a test
-fails, and *SURVIVED* when they all pass, which means the tests do not pin that
-piece of the formula down.
+Each entry of :data:`ALL` (the fits' :data:`MUTATIONS`, then :data:`MODULES`: cascades,
+atlas, shadow cameras, cube depth, bias, PCF, spot caster selection, soft shadows,
+gather and the pygfx integration) changes one piece of exact source text into a
+plausible mistake (a sign, a factor, a rounding mode, a bound, a swapped axis). For
+each, the runner copies the repository's ``shadowmath/``, ``tests/``, ``docs/`` (whose
+examples tests run), ``conftest.py`` and ``pyproject.toml`` into a temporary folder,
+applies the one mutation there, and runs the entry's test files with ``pytest -x``: a
+mutation is *killed* when a test fails, and *SURVIVED* when they all pass, which means
+the tests do not pin that piece of the formula down.
 
 The tests run with ``SHADOWMATH_NUMBA=0`` (the array path: no compiled code cached
-from the unmutated source can hide a mutation) and ``PYTHONPATH`` set to the
+from the unmutated source can hide a mutation), ``SHADOWMATH_REQUIRE_GL=1`` (a render
+test fails instead of skipping) and ``PYTHONPATH`` set to the
 temporary folder (checked: ``shadowmath`` must be imported from there), with a
 fixed hypothesis seed (``--seed``, default 0) so that a run can be repeated. First the
 listed test files run once unmutated (the baseline): a test that fails without any
@@ -41,7 +44,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-COPIED = ("shadowmath", "tests", "conftest.py", "pyproject.toml")
+COPIED = ("shadowmath", "tests", "docs", "conftest.py", "pyproject.toml")
 IGNORED = shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc", ".hypothesis")
 TIMEOUT_S = 1800.0
 
@@ -202,6 +205,565 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
 )
 
+# --- every module beyond the fits (issue 26): cascades, atlas, cameras, cube depth, bias,
+# PCF, spot caster selection, soft shadows, gather and the pygfx integration.
+
+CASCADES = ("tests/test_cascades.py",)
+SURVIVORS = ("tests/test_mutation_survivors.py",)
+CASCADE_F = "shadowmath/_math/_cascade_formulas.py"
+SPLITS_F = "shadowmath/_fits/_cascade_splits.py"
+LISPSM_F = "shadowmath/_fits/_lispsm.py"
+TILES_F = "shadowmath/_math/_atlas_tiles.py"
+ATLAS_F = "shadowmath/_fits/_atlas.py"
+ATLAS = ("tests/test_atlas.py",)
+CAMERA_F = "shadowmath/_fits/_camera.py"
+CAMERA = ("tests/test_shadow_camera.py",)
+CUBE_DEPTH_F = "shadowmath/_fits/_cube_depth.py"
+CUBE_DEPTH = ("tests/test_cube_depth.py",)
+CUBE_F = "shadowmath/_math/_cube.py"
+CUBE = ("tests/test_cube.py",)
+BIAS_F = "shadowmath/_math/_bias.py"
+BIAS = ("tests/test_bias.py",)
+PCF_F = "shadowmath/_math/_pcf.py"
+PCF = ("tests/test_pcf.py",)
+SPOT_F = "shadowmath/_math/_spot_casters.py"
+SPOT = ("tests/test_caster_selection.py",)
+SOFT_F = "shadowmath/_math/_soft.py"
+SOFT = ("tests/test_soft.py",)
+GATHER_F = "shadowmath/gather.py"
+GATHER = ("tests/test_gather.py",)
+PYGFX_F = "shadowmath/integrations/pygfx.py"
+PYGFX = ("tests/render/test_pygfx.py",)
+
+MODULES: tuple[Mutation, ...] = (
+    # cascades: formulas, splits, LiSPSM
+    Mutation(
+        "cascade-pad-min",
+        CASCADE_F,
+        "pad = (z_hi - z_lo) + where(hx >= hy, hx, hy)",
+        "pad = (z_hi - z_lo) + where(hx >= hy, hy, hx)",
+        "cascade_box: the origin padded by the map's smaller half-size (max replaced by min)",
+        SURVIVORS,
+    ),
+    Mutation(
+        "cascade-flat-box",
+        CASCADE_F,
+        "return t0, t1, ok & (t0 <= t1)",
+        "return t0, t1, ok & (t0 < t1)",
+        "clip_segment: a single point (t0 = t1) counted empty (a flat scene box loses its points)",
+        SURVIVORS,
+    ),
+    Mutation(
+        "cascade-split-uniform",
+        CASCADE_F,
+        "(1.0 - lam) * (near + (far - near) * frac)",
+        "(1.0 - lam) * (near + far * frac)",
+        "split_depth: the uniform part n + f i/N instead of n + (f - n) i/N",
+        CASCADES,
+    ),
+    Mutation(
+        "cascade-edge-infinite-far",
+        CASCADE_F,
+        "u = (d - s * n[2]) / (s * (f[2] - n[2]) + d * (1.0 - f[3]))",
+        "u = (d - s * n[2]) / (s * (f[2] - n[2]))",
+        "edge_point: the far corner's w ignored (an infinite far plane's edges)",
+        CASCADES,
+    ),
+    Mutation(
+        "cascade-clip-entering",
+        CASCADE_F,
+        "t0 = where(entering & (t > t0), t, t0)",
+        "t0 = where(entering & (t < t0), t, t0)",
+        "clip_plane: a plane entered does not raise t0 (Liang-Barsky's comparison reversed)",
+        CASCADES,
+    ),
+    Mutation(
+        "cascade-sphere-centre",
+        CASCADE_F,
+        "t = 0.5 + (rf2 - rn2) / (2.0 * where(length2 > 0, length2, 1.0))",
+        "t = 0.5 + (rf2 - rn2) / (4.0 * where(length2 > 0, length2, 1.0))",
+        "slice_sphere: the centre half-way to the equidistant point (not the minimal sphere)",
+        CASCADES,
+    ),
+    Mutation(
+        "cascade-box-values",
+        CASCADE_F,
+        "return x - lo[0], hi[0] - x, y - lo[1], hi[1] - y, z - lo[2], hi[2] - z",
+        "return x - lo[0], hi[0] - x, y - lo[1], hi[1] - y, z - lo[2], hi[2] - y",
+        "box_values: the box's top plane reads y for z",
+        CASCADES,
+    ),
+    Mutation(
+        "cascade-camera-sides",
+        CASCADE_F,
+        "return cw - cx, cw + cx, cw - cy, cw + cy, cw",
+        "return cw - cx, cw + cx, cw - cy, cw + cx, cw",
+        "camera_values: the bottom side plane w + x instead of w + y",
+        SURVIVORS,
+    ),
+    Mutation(
+        "splits-far-equals-near",
+        SPLITS_F,
+        'checks.require(f > n, "far: the split range must end beyond near (far > near)")',
+        'checks.require(f >= n, "far: the split range must end beyond near (far > near)")',
+        "cascade_splits: far == near accepted (an empty range of cascades)",
+        SURVIVORS,
+    ),
+    Mutation(
+        "splits-log-near-zero",
+        SPLITS_F,
+        "(n > 0) | (lm == 0),",
+        "(n >= 0) | (lm == 0),",
+        "cascade_splits: near = 0 accepted with a logarithmic part",
+        CASCADES,
+    ),
+    Mutation(
+        "splits-fraction",
+        SPLITS_F,
+        "i = xp.asarray(np.arange(count + 1) / count, dtype=n.dtype)",
+        "i = xp.asarray(np.arange(count + 1) / (count + 1), dtype=n.dtype)",
+        "cascade_splits: the fractions i / (N + 1) instead of i / N",
+        CASCADES,
+    ),
+    Mutation(
+        "lispsm-y-row",
+        LISPSM_F,
+        "sy * ((wp.f + wp.n) * t_row[3] - 2.0 * wp.f * wp.n),",
+        "sy * ((wp.f + wp.n) * t_row[3] - 1.0 * wp.f * wp.n),",
+        "LiSPSM: the warp's y row -(f + n) t + f n instead of 2 f n (y' leaves [-1, 1])",
+        ("tests/test_lispsm.py",),
+    ),
+    Mutation(
+        "lispsm-x-centre",
+        LISPSM_F,
+        "h, c = 0.5 * (hi - lo), 0.5 * (hi + lo)",
+        "h, c = 0.5 * (hi - lo), 0.5 * (hi - lo)",
+        "LiSPSM: the window's centre (hi - lo) / 2 instead of (hi + lo) / 2",
+        ("tests/test_lispsm.py",),
+    ),
+    Mutation(
+        "lispsm-texel-size",
+        LISPSM_F,
+        "size_u = wp.f * (wp.f - wp.n) / (spec.margins[1] * spec.size[1] * wp.n)",
+        "size_u = (wp.f - wp.n) / (spec.margins[1] * spec.size[1])",
+        "LiSPSM: the texel size along u without the perspective's f / n",
+        ("tests/test_lispsm.py",),
+    ),
+    # the atlas: allocation rule (integer arrays) and tile geometry
+    Mutation(
+        "atlas-hysteresis-upper",
+        TILES_F,
+        "(raw <= previous * (1 + hysteresis))",
+        "(raw < previous * (1 + hysteresis))",
+        "size_classes: a coverage exactly at p (1 + h) changes class (the bound is inclusive)",
+        SURVIVORS,
+    ),
+    Mutation(
+        "atlas-hysteresis-lower",
+        TILES_F,
+        "keep &= (raw > previous * ((1 - hysteresis) / 2))",
+        "keep &= (raw >= previous * ((1 - hysteresis) / 2))",
+        "size_classes: a coverage exactly at p (1 - h) / 2 keeps its class (the bound is strict)",
+        SURVIVORS,
+    ),
+    Mutation(
+        "atlas-power-of-two-class",
+        TILES_F,
+        "exponent -= mantissa == 0.5",
+        "exponent -= mantissa == 0.25",
+        "size_classes: an exact power of two wishes the next class up",
+        ATLAS,
+    ),
+    Mutation(
+        "atlas-budget-order",
+        TILES_F,
+        "last_first = order[::-1]",
+        "last_first = order",
+        "shrink_to_budget: the most covering light halved first",
+        ATLAS,
+    ),
+    Mutation(
+        "atlas-worst-fit",
+        TILES_F,
+        "k = int(candidates[np.argmin(rank)])",
+        "k = int(candidates[np.argmax(rank)])",
+        "place: a new tile in the free node with the largest free ancestor (worst fit)",
+        ATLAS,
+    ),
+    Mutation(
+        "atlas-pack-smallest-first",
+        TILES_F,
+        "order = np.lexsort((rank, -side))",
+        "order = np.lexsort((rank, side))",
+        "pack: tiles laid smallest first (misaligned along the Morton curve)",
+        ATLAS,
+    ),
+    Mutation(
+        "atlas-morton-mask",
+        TILES_F,
+        "v = (v | (v << 2)) & 0x33333333\n    return",
+        "v = (v | (v << 2)) & 0x55555555\n    return",
+        "morton_encode: a wrong mask spreading the bits",
+        ATLAS,
+    ),
+    Mutation(
+        "atlas-tile-transform-xy",
+        ATLAS_F,
+        "T[:, 0, 3], T[:, 1, 3] = rect[:, 0] / size, rect[:, 1] / size",
+        "T[:, 0, 3], T[:, 1, 3] = rect[:, 1] / size, rect[:, 0] / size",
+        "atlas_tile_transforms: a tile's column and row swapped",
+        ATLAS,
+    ),
+    Mutation(
+        "atlas-border-fills-tile",
+        ATLAS_F,
+        "if lo <= 2 * border:",
+        "if lo < 2 * border:",
+        "allocate_atlas: a border of min_tile / 2 accepted (no inner texel left)",
+        ATLAS,
+    ),
+    # shadow cameras
+    Mutation(
+        "camera-ortho-window-symmetric",
+        CAMERA_F,
+        "shift_x, shift_y = (cx, cy) if ortho else (0.0 * cx, 0.0 * cy)",
+        "shift_x, shift_y = (0.0 * cx, 0.0 * cy) if ortho else (0.0 * cx, 0.0 * cy)",
+        "shadow_camera: an orthographic eye left at the origin with an off-centre window",
+        SURVIVORS,
+    ),
+    Mutation(
+        "camera-margin-y",
+        CAMERA_F,
+        "hx, hy = fr.rx_max / fr.margin_x, fr.ry_max / fr.margin_y",
+        "hx, hy = fr.rx_max / fr.margin_x, fr.ry_max / fr.margin_x",
+        "shadow_camera: the window's height divided by the x margin",
+        CAMERA,
+    ),
+    Mutation(
+        "camera-look-plus-z",
+        CAMERA_F,
+        '"+z": (-r, u, f)}[look]',
+        '"+z": (r, u, f)}[look]',
+        "camera_to_world: look '+z' with right instead of -right (a reflection)",
+        CAMERA,
+    ),
+    Mutation(
+        "camera-cascade-origin",
+        CAMERA_F,
+        "origin = -xp.sum(R * t[..., :, None], axis=-2)",
+        "origin = -xp.sum(R * t[..., :, None], axis=-1)",
+        "shadow_camera of cascades: the eye -R t instead of -R^T t",
+        CAMERA,
+    ),
+    # cube depth ranges
+    Mutation(
+        "cube-depth-border-scale",
+        CUBE_DEPTH_F,
+        "return k * d_min * (1 - NEAR_FAR_SLACK), d_max * (1 + NEAR_FAR_SLACK), ok",
+        "return d_min * (1 - NEAR_FAR_SLACK), d_max * (1 + NEAR_FAR_SLACK), ok",
+        "cube_depth_core: near not scaled by the border ring's window k",
+        CUBE_DEPTH,
+    ),
+    Mutation(
+        "cube-depth-receivers-signed",
+        CUBE_DEPTH_F,
+        "xp.max(xp.abs(corners - light[..., None, :]), axis=(-2, -1))",
+        "xp.max(corners - light[..., None, :], axis=(-2, -1))",
+        "cube_depth_core: receivers' distance without |.| (those below the light missed)",
+        CUBE_DEPTH,
+    ),
+    Mutation(
+        "cube-depth-edge-beyond-end",
+        CUBE_DEPTH_F,
+        "inside = ok & (s >= 0) & (s <= 1)",
+        "inside = ok & (s >= 0)",
+        "triangle_min_chebyshev: edge candidates past the edge's end counted",
+        CUBE_DEPTH,
+    ),
+    Mutation(
+        "cube-depth-diagonal-outside",
+        CUBE_DEPTH_F,
+        "inside = ok & (t > 0) & xp.all(side >= 0, axis=0)",
+        "inside = ok & (t > 0)",
+        "triangle_min_chebyshev: a diagonal crossing the triangle's plane outside it counted",
+        CUBE_DEPTH,
+    ),
+    Mutation(
+        "cube-depth-candidates",
+        CUBE_DEPTH_F,
+        "(gap != bound) & (gap <= bound + _KEEP_ULPS * eps * size)",
+        "(gap != bound) & (gap <= 0.5 * bound)",
+        "nearest_triangle: triangles whose box comes within twice the bound skipped",
+        CUBE_DEPTH,
+    ),
+    Mutation(
+        "cube-tie-y-over-x",
+        CUBE_F,
+        "use_y = xp.logical_not(use_z) & (ay >= ax)",
+        "use_y = xp.logical_not(use_z) & (ay > ax)",
+        "_major_face: a tie |y| = |x| goes to x (Vulkan: y wins over x)",
+        CUBE,
+    ),
+    Mutation(
+        "cube-depth-reversed",
+        CUBE_F,
+        "return near * (far - D) / (span * D)",
+        "return far * (far - D) / (span * D)",
+        "cube_face_depth: reversed depth f (f - D) / ((f - n) D) instead of n (f - D) / ...",
+        ("tests/test_cube.py::test_cube_face_depth_is_the_depth_the_face_projection_stores",),
+    ),
+    Mutation(
+        "cube-projection-zero-to-one-reversed",
+        CUBE_F,
+        "return n / span, f * n / span",
+        "return f / span, f * n / span",
+        "cube_face_projection: [0, 1] reversed depth's a = f / (f - n) instead of n / (f - n)",
+        ("tests/test_cube.py::test_depth_range_of_each_api",),
+    ),
+    Mutation(
+        "cube-face-scale",
+        CUBE_F,
+        "return (size - 2 * border) / size",
+        "return (size - border) / size",
+        "face_scale: (N - b) / N instead of (N - 2 b) / N (one side's ring only)",
+        ("tests/test_cube.py::test_the_texel_drawn_for_p_is_the_texel_sampled_with_p_minus_light",),
+    ),
+    Mutation(
+        "cube-face-st-swapped",
+        CUBE_F,
+        "return face, (sc / ma + 1) / 2, (tc / ma + 1) / 2",
+        "return face, (tc / ma + 1) / 2, (sc / ma + 1) / 2",
+        "cube_face: s and t swapped",
+        CUBE,
+    ),
+    # bias
+    Mutation(
+        "bias-reach-bilinear",
+        BIAS_F,
+        'return radius + (1.0 if filter == "bilinear" else 0.5)',
+        "return radius + 0.5",
+        "_reach: a bilinear kernel's reach k + 1/2 instead of k + 1",
+        BIAS,
+    ),
+    Mutation(
+        "bias-gradient-perspective",
+        BIAS_F,
+        "grads = (M[..., :3, :3] - uvw[..., :, None] * M[..., 3:, :3]) / q[..., None]",
+        "grads = M[..., :3, :3] / q[..., None]",
+        "_texture_gradients: the quotient rule's q-gradient term dropped",
+        BIAS,
+    ),
+    Mutation(
+        "bias-slope-height",
+        BIAS_F,
+        "y = xp.where(edge_on, inf, xp.abs(dr_dt / (safe * H)))",
+        "y = xp.where(edge_on, inf, xp.abs(dr_dt / (safe * W)))",
+        "_depth_slope: the slope along t per texel of the width W instead of the height H",
+        BIAS,
+    ),
+    Mutation(
+        "bias-texel-across-ray",
+        BIAS_F,
+        "det = xp.abs(dot(xp, cross(xp, gs, gt), n))",
+        "det = norm(xp, cross(xp, gs, gt))",
+        "texel_world_size on a surface: the texel across the ray (surface tilt ignored)",
+        BIAS,
+    ),
+    Mutation(
+        "bias-normal-offset-unnormalised",
+        BIAS_F,
+        "along_ray = xp.abs(dot(xp, gr, D)) / length",
+        "along_ray = xp.abs(dot(xp, gr, D))",
+        "_normal_offset: grad r . D not divided by |D|",
+        BIAS,
+    ),
+    Mutation(
+        "bias-depth-bits",
+        BIAS_F,
+        "r_min = 1.0 / (2.0**depth_bits - 1)",
+        "r_min = 1.0 / 2.0**depth_bits",
+        "slope_scaled_bias: a fixed-point depth step 1 / 2^b instead of 1 / (2^b - 1)",
+        BIAS,
+    ),
+    # PCF
+    Mutation(
+        "pcf-border",
+        PCF_F,
+        "return max(1, math.ceil(_reach(radius, filter) - 0.5))",
+        "return max(1, math.ceil(_reach(radius, filter) - 1.0))",
+        "pcf_border_texels: a bilinear kernel's border a texel short",
+        PCF,
+    ),
+    Mutation(
+        "pcf-bilinear-centre",
+        PCF_F,
+        "u = coords[..., 0] * W - 0.5",
+        "u = coords[..., 0] * W",
+        "pcf bilinear: the weights measured from texel corners, not centres",
+        PCF,
+    ),
+    Mutation(
+        "pcf-compare-reversed",
+        PCF_F,
+        "margin = depths - stored if reversed_z else stored - depths",
+        "margin = stored - depths",
+        "pcf: reversed-z compares as if not reversed",
+        PCF,
+    ),
+    Mutation(
+        "pcf-smoothstep",
+        PCF_F,
+        "return x * x * (3 - 2 * x)",
+        "return x * x",
+        "pcf softness: x^2 instead of the smoothstep 3x^2 - 2x^3",
+        ("tests/test_pcf.py::test_softness_is_exact_away_from_the_stored_depth",),
+    ),
+    Mutation(
+        "pcf-box-normalise",
+        PCF_F,
+        "fraction = xp.clip(total / (2 * radius + 1) ** 2, 0.0, 1.0)",
+        "fraction = xp.clip(total / (2 * radius + 2) ** 2, 0.0, 1.0)",
+        "pcf: the sum divided by (2k + 2)^2 taps instead of (2k + 1)^2",
+        PCF,
+    ),
+    Mutation(
+        "pcf-rows-bound",
+        PCF_F,
+        "(rows >= 0) & (rows <= H - 1)",
+        "(rows >= 0) & (rows <= W - 1)",
+        "pcf: rows past the map's height read when the map is wider than high",
+        PCF,
+    ),
+    # spot light caster selection
+    Mutation(
+        "spot-side-plane",
+        SPOT_F,
+        "n = xp.stack([tz - X, tz + X, tz - Y, tz + Y, Z], axis=-2)",
+        "n = xp.stack([tz - X, tz + X, tz - Y, tz - Y, Z], axis=-2)",
+        "pyramid_planes: the -y side plane is the +y side's",
+        SPOT,
+    ),
+    Mutation(
+        "spot-drop-any-side",
+        SPOT_F,
+        "reaches = xp.all(xp.any(front & (g[..., :4] > -tau[..., :4]), axis=-2), axis=-1)",
+        "reaches = xp.any(xp.any(front & (g[..., :4] > -tau[..., :4]), axis=-2), axis=-1)",
+        "points_kept: a set outside one side plane kept if it reaches another",
+        SPOT,
+    ),
+    Mutation(
+        "spot-empty-square-wide",
+        SPOT_F,
+        "s = xp.minimum(t, 1.0)[..., None, None]",
+        "s = xp.maximum(t, 1.0)[..., None, None]",
+        "empty_square: the empty fit's square wider than a narrow cone",
+        SPOT,
+    ),
+    Mutation(
+        "spot-clip-outside-kept",
+        SPOT_F,
+        "inside = exists & xp.all(values >= -tau, axis=-1)",
+        "inside = exists",
+        "clip_triangles: candidate points outside the pyramid kept",
+        SPOT,
+    ),
+    Mutation(
+        "spot-caster-depth-min",
+        SPOT_F,
+        "depth = xp.max(xp.abs(z), axis=-1)",
+        "depth = xp.min(xp.abs(z), axis=-1)",
+        "caster_depth: the nearest caster's depth instead of the farthest",
+        SURVIVORS,
+    ),
+    # soft shadows
+    Mutation(
+        "soft-grid-columns-rows",
+        SOFT_F,
+        "u = (col + jitter[..., 0]) / cols",
+        "u = (col + jitter[..., 0]) / rows",
+        "area light samples: u divided by the rows instead of the columns",
+        SOFT,
+    ),
+    Mutation(
+        "soft-grid-not-square",
+        SOFT_F,
+        "rows = max(d for d in range(1, math.isqrt(count) + 1) if count % d == 0)",
+        "rows = min(d for d in range(1, math.isqrt(count) + 1) if count % d == 0)",
+        "area light samples: a 1 x count strip instead of the most nearly square grid",
+        ("tests/test_soft.py::test_one_sample_in_each_cell_of_the_most_nearly_square_grid",),
+    ),
+    Mutation(
+        "soft-z-row-sign",
+        SOFT_F,
+        "row_z = e4 - row_w",
+        "row_z = row_w - e4",
+        "pyramid_to_unit_cube: z = 1 - 1/w instead of 1/w - 1",
+        ("tests/test_soft.py::test_points_on_a_ray_from_the_apex_share_x_y",),
+    ),
+    Mutation(
+        "soft-w-through-base",
+        SOFT_F,
+        "row_w = _row(xp, n_w, a, dot(xp, n_w, ew))",
+        "row_w = _row(xp, n_w, b, dot(xp, n_w, ew))",
+        "pyramid_to_unit_cube: W = 0 on the base instead of at the apex",
+        SOFT,
+    ),
+    # gather
+    Mutation(
+        "gather-face-offset",
+        GATHER_F,
+        "offset += int(V.shape[0])",
+        "offset += int(V.shape[0]) - 1",
+        "gather_meshes: faces of later meshes offset one vertex short",
+        GATHER,
+    ),
+    Mutation(
+        "gather-transform-transpose",
+        GATHER_F,
+        "V @ xp.matrix_transpose(M[:3, :3]) + M[:3, 3]",
+        "V @ M[:3, :3] + M[:3, 3]",
+        "gather_meshes: vertices multiplied by A^T instead of A",
+        GATHER,
+    ),
+    Mutation(
+        "gather-triangle-faces",
+        GATHER_F,
+        "faces = np.arange(3 * corners[0], dtype=np.int64).reshape(-1, 3)",
+        "faces = np.arange(3 * corners[0], dtype=np.int64).reshape(3, -1).T",
+        "gather_meshes: Triangles' faces read column-wise (corners of different triangles)",
+        GATHER,
+    ),
+    # the pygfx integration
+    Mutation(
+        "pygfx-view-offset-top",
+        PYGFX_F,
+        "camera.set_view_offset(2.0 * X, 2.0 * Y, lo + X, Y - t, r - lo, t - b)",
+        "camera.set_view_offset(2.0 * X, 2.0 * Y, lo + X, b + Y, r - lo, t - b)",
+        "set_shadow_camera: the view offset's y from the bottom, not the top-left corner",
+        PYGFX,
+    ),
+    Mutation(
+        "pygfx-up-face-as-pygfx-aims-it",
+        PYGFX_F,
+        "        _turn_up_face(shadow, light)",
+        "        pass",
+        "point light's +Y face left as pygfx 0.17 aims it (looking away from +Y)",
+        ("tests/render/test_pygfx.py::test_pygfx_point_light_faces_as_the_shader_reads_them",),
+    ),
+    Mutation(
+        "pygfx-fov",
+        PYGFX_F,
+        "half_tan = 0.5 * (X + Y)",
+        "half_tan = max(X, Y)",
+        "set_shadow_camera: pygfx's fov from max(X, Y) instead of (X + Y) / 2",
+        PYGFX,
+    ),
+)
+
+
+#: The whole table: the fits' mutations, then every other module's.
+ALL: tuple[Mutation, ...] = MUTATIONS + MODULES
+
 
 class RunnerError(Exception):
     """The run itself failed (exit status 2): not a verdict on any mutation."""
@@ -252,6 +814,9 @@ def apply(mutation: Mutation, root: Path) -> None:
 def environment(root: Path) -> dict[str, str]:
     env = dict(os.environ)
     env["SHADOWMATH_NUMBA"] = "0"
+    # The render tests (the pygfx integration's) fail instead of skipping without a GPU
+    # API: a skipped test would let every mutation it should kill "survive".
+    env.setdefault("SHADOWMATH_REQUIRE_GL", "1")
     env["PYTHONPATH"] = str(root)
     env["PYTHONDONTWRITEBYTECODE"] = "1"
     return env
@@ -334,12 +899,12 @@ def table(rows: Iterable[Sequence[str]], header: Sequence[str]) -> str:
 
 def select(only: Sequence[str] | None) -> tuple[Mutation, ...]:
     if not only:
-        return MUTATIONS
-    known = {m.id for m in MUTATIONS}
+        return ALL
+    known = {m.id for m in ALL}
     unknown = [i for i in only if i not in known]
     if unknown:
         raise RunnerError(f"mutations: unknown id(s) {unknown}; --list shows them")
-    return tuple(m for m in MUTATIONS if m.id in only)
+    return tuple(m for m in ALL if m.id in only)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
