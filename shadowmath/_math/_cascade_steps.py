@@ -60,14 +60,13 @@ from ._cascade_formulas import (  # noqa: F401
     split_depth,
 )
 from ._fit_formulas import fit_axes, fit_rows, placement_ok, safe_box, stable_sides, to_light
-from ._formulas import fabs, isfinite, sqrt, where
+from ._formulas import fabs, flag, isfinite, sqrt, where
 from ._rows import _mul16, inverse4, row16, tile_rows
 
 #: Primitives of the mode, bound by specialize(): a float buffer of ``n`` entries, a check's
 #: bit (``flag(ok, bit)``), entry ``k`` of a per-entry row (``take_last(G, k)``) and, in the
 #: array mode, the array namespace.
 alloc: Any = None
-flag: Any = None
 take_last: Any = None
 array_api: Any = None
 #: The bounds pass of the mode (:data:`FORMS`).

@@ -56,7 +56,7 @@ from ._fit_formulas import (
     spot_sides,
     stable_sides,
 )
-from ._formulas import axes_from_z, fabs, isfinite, maximum, normalize3, where
+from ._formulas import axes_from_z, fabs, flag, isfinite, maximum, normalize3, where
 from ._vertex_passes import enclosing_ball, light_pass, receiver_far, spread
 
 
@@ -94,12 +94,7 @@ class Entry(NamedTuple):
     tex: tuple[Any, ...]  # 16
 
 
-# Primitives of the backends (specialize binds each backend's own; these are Python's).
-def flag(ok: Any, bit: int) -> Any:
-    """``bit`` where the check ``ok`` failed, else 0."""
-    return 0 if ok else bit
-
-
+# A primitive of the backends (specialize binds each backend's own; this is Python's).
 def to_single(x: float) -> float:
     """``x`` rounded to float32 (a per-entry loop computing a float32 fit in float64)."""
     return float(np.float32(x))

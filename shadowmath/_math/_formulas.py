@@ -26,6 +26,11 @@ isfinite: Callable[..., Any] = np.isfinite
 maximum: Callable[..., Any] = np.maximum
 
 
+def flag(ok: Any, bit: int) -> Any:
+    """``bit`` where the check ``ok`` failed, else 0 (a primitive: each backend binds its own)."""
+    return 0 if ok else bit
+
+
 def normalize3(x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any]:
     """``(x, y, z) / |(x, y, z)|`` and the length, without overflow; zero gives zero.
 
