@@ -92,7 +92,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "welzl-three-levels",
-        "shadowmath/_math/_loops.py",
+        "shadowmath/_math/_vertex_passes.py",
         "                    if _outside(pr, ball):",
         "                    if False:",
         "Welzl's algorithm without its fourth level (spheres of four support points)",
@@ -180,10 +180,9 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "receivers-pull-near",
-        "shadowmath/_fits/_fit_arrays.py",
-        "    return _finish(d, key, a, flags, L, axes, sides, (zb_min, z_hi, zb_min, zb_max))",
-        "    return _finish(d, key, a, flags, L, axes, sides,"
-        " (0.5 * zb_min, z_hi, zb_min, zb_max))",
+        "shadowmath/_math/_fit_entry.py",
+        "        (zb_min, z_hi, zb_min, zb_max),",
+        "        (0.5 * zb_min, z_hi, zb_min, zb_max),",
         "a point light's near pulled toward the light (as receivers in front used to)",
         ("tests/test_receivers.py",),
     ),
@@ -216,7 +215,7 @@ LISPSM_F = "shadowmath/_fits/_lispsm.py"
 TILES_F = "shadowmath/_math/_atlas_tiles.py"
 ATLAS_F = "shadowmath/_fits/_atlas.py"
 ATLAS = ("tests/test_atlas.py",)
-CAMERA_F = "shadowmath/_fits/_camera.py"
+CAMERA_F = "shadowmath/_fits/_shadow_camera.py"
 CAMERA = ("tests/test_shadow_camera.py",)
 CUBE_DEPTH_F = "shadowmath/_fits/_cube_depth.py"
 CUBE_DEPTH = ("tests/test_cube_depth.py",)
@@ -408,9 +407,9 @@ MODULES: tuple[Mutation, ...] = (
     ),
     Mutation(
         "atlas-tile-transform-xy",
-        ATLAS_F,
-        "T[:, 0, 3], T[:, 1, 3] = rect[:, 0] / size, rect[:, 1] / size",
-        "T[:, 0, 3], T[:, 1, 3] = rect[:, 1] / size, rect[:, 0] / size",
+        "shadowmath/_math/_rows.py",
+        "    x, y, w, h = rect\n",
+        "    y, x, w, h = rect\n",
         "atlas_tile_transforms: a tile's column and row swapped",
         ATLAS,
     ),
@@ -522,7 +521,7 @@ MODULES: tuple[Mutation, ...] = (
     ),
     Mutation(
         "cube-face-scale",
-        CUBE_F,
+        "shadowmath/_api/_cube_faces.py",
         "return (size - 2 * border) / size",
         "return (size - border) / size",
         "face_scale: (N - b) / N instead of (N - 2 b) / N (one side's ring only)",
@@ -579,7 +578,7 @@ MODULES: tuple[Mutation, ...] = (
     ),
     Mutation(
         "bias-depth-bits",
-        BIAS_F,
+        "shadowmath/_api/_depth_bias.py",
         "r_min = 1.0 / (2.0**depth_bits - 1)",
         "r_min = 1.0 / 2.0**depth_bits",
         "slope_scaled_bias: a fixed-point depth step 1 / 2^b instead of 1 / (2^b - 1)",
@@ -589,8 +588,8 @@ MODULES: tuple[Mutation, ...] = (
     Mutation(
         "pcf-border",
         PCF_F,
-        "return max(1, math.ceil(_reach(radius, filter) - 0.5))",
-        "return max(1, math.ceil(_reach(radius, filter) - 1.0))",
+        "return max(1, math.ceil(kernel_reach(radius, filter) - 0.5))",
+        "return max(1, math.ceil(kernel_reach(radius, filter) - 1.0))",
         "pcf_border_texels: a bilinear kernel's border a texel short",
         PCF,
     ),
