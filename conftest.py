@@ -11,7 +11,11 @@ from typing import Any
 import numpy as np
 import pytest
 
-import shadowmath
+# Before shadowmath is imported: its public functions check their jaxtyping annotations
+# after every call in the test suite (shadowmath/_boundary/_shapes.py).
+os.environ["SHADOWMATH_CHECK_SHAPES"] = "1"
+
+import shadowmath  # noqa: E402
 
 
 @pytest.fixture(autouse=True)

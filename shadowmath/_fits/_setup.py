@@ -23,6 +23,7 @@ import numpy as np
 
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._shapes import ArrayLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -46,7 +47,7 @@ from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._frame import LightFrame, check_aim, stack_matrix
 from shadowmath._math._frustum import Frustum
 from shadowmath._math._specialize import formulas, scalar_formulas
-from shadowmath.lights import DirectionalLight, PointLight, SpotLight
+from shadowmath.lights import DirectionalLight, Light, PointLight, SpotLight
 from shadowmath.receivers import Mesh, Triangles
 
 from . import _compiled
@@ -59,15 +60,15 @@ __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
 
 def fit_shadow(
-    light: Any,
-    blocker_vertices: Any,
+    light: Real[ArrayLike, "*#batch 3"] | Real[ArrayLike, "*#batch 4"] | Light,
+    blocker_vertices: Real[ArrayLike, "*#batch N 3"] | Triangles | Mesh,
     map_size: int | tuple[int, int] | ShadowMapSpec,
     *,
-    blocker_to_world: Any = None,
-    receivers: Any = None,
-    up: Any = None,
-    near: Any = None,
-    far: Any = None,
+    blocker_to_world: Real[ArrayLike, "*#batch 4 4"] | None = None,
+    receivers: Real[ArrayLike, "*#batch M 3"] | Triangles | Mesh | None = None,
+    up: Real[ArrayLike, "*#batch 3"] | None = None,
+    near: Real[ArrayLike, "*#batch"] | None = None,
+    far: Real[ArrayLike, "*#batch"] | None = None,
     aim: Literal["mean", "bbox"] = "mean",
     method: Literal["mdv", "optimized"] = "mdv",
     border_texels: int | None = None,
@@ -233,7 +234,7 @@ def fit_shadow(
                     pcf_filter=pcf_filter, margin=margin, api=api, reversed_z=reversed_z,
                     stable=stable)  # fmt: skip
     spot = isinstance(light, SpotLight)
-    if spot:
+    if isinstance(light, SpotLight):  # (not `spot`: mypy narrows the type)
         named = {"light.position": light[0], "light.direction": light[1], "light.angle": light[2]}
     else:
         named = {"light": light[0] if isinstance(light, PointLight | DirectionalLight) else light}
@@ -579,7 +580,9 @@ def _batch_of(setup: ShadowSetup) -> tuple[int, ...]:
     return tuple(setup.frustum.near.shape)
 
 
-def receiver_texture_matrix(setup: ShadowSetup, receiver_to_world: Any) -> Array:
+def receiver_texture_matrix(
+    setup: ShadowSetup, receiver_to_world: Real[ArrayLike, "*#batch 4 4"]
+) -> Float[Array, "*batch 4 4"]:
     """Receiver local coordinates straight to homogeneous shadow-map texture coordinates.
 
     ``setup.world_to_texture @ receiver_to_world``: the matrix a receiver's
