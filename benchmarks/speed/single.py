@@ -232,7 +232,9 @@ def run(cfg: Config) -> Section:
     cols = np.minimum((coords[:, 0] * MAP_SIZE).astype(int), MAP_SIZE - 1)
     rows_ = np.minimum((coords[:, 1] * MAP_SIZE).astype(int), MAP_SIZE - 1)
     base = measure(lambda: depths <= depth_map[rows_, cols], repeats=reps, min_time=fast)
-    t = measure(lambda: sm.pcf(depth_map, coords, depths, radius=1), repeats=reps, min_time=fast)
+    t = measure(
+        lambda: sm.pcf(depth_map, coords, depths, pcf_radius=1), repeats=reps, min_time=fast
+    )
     rows.append(
         Row(
             f"pcf, {count:,} lookups, 3x3 box, {MAP_SIZE}² map, NumPy float64",
