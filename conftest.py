@@ -15,7 +15,7 @@ import pytest
 # after every call in the test suite (shadowmath/_boundary/_shapes.py).
 os.environ["SHADOWMATH_CHECK_SHAPES"] = "1"
 
-import shadowmath  # noqa: E402
+import shadowmath
 
 
 @pytest.fixture(autouse=True)

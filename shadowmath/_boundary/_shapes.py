@@ -157,7 +157,7 @@ def _check(name: str, hints: dict[str, Any], arguments: dict[str, Any], out: Any
     named = [type(v) for _, v, _ in values if isinstance(v, tuple) and hasattr(v, "_fields")]
     for what, value, _ in list(values):
         if type(value) in named and (what == "result" or named.count(type(value)) == 1):
-            fields = _field_hints(type(value))
+            fields = _field_hints(value.__class__)
             values += [(f"{what}.{f}", getattr(value, f), fields[f]) for f in value._fields]
     # One memo, as jaxtyping's own decorator pushes it: a name such as N is one size in every
     # value, and a size may name an argument ("{count}+1").
