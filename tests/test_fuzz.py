@@ -1639,7 +1639,7 @@ PCF_INVALID = {
     "map_shape": ({"depth_map": "1d"}, "depth_map: expected shape"),
     "coords_shape": ({"coords": "3d"}, "coords: expected shape"),
     "batch": ({"depths": "batch"}, "batch dimensions do not broadcast"),
-    "too_small": ({"radius": 40}, "radius: a box kernel of radius 40"),
+    "too_small": ({"pcf_radius": 40}, "radius: a box kernel of radius 40"),
     "nan_map": ({"depth_map": "nan"}, "depth_map: " + NON_FINITE),
     "nan_coords": ({"coords": "nan"}, "coords: " + NON_FINITE),
     "inf_depth": ({"depths": "inf"}, "depths: " + NON_FINITE),
@@ -1651,7 +1651,7 @@ def test_fuzz_pcf_invalid(case: PcfCase, name: str) -> None:
     CASES["pcf invalid"] += 1
     change, message = PCF_INVALID[name]
     Z, c, d = case.depth_map, case.coords, case.depths
-    options: dict[str, Any] = {"radius": case.radius, "filter": "box", "softness": 0.0}
+    options: dict[str, Any] = {"pcf_radius": case.radius, "pcf_filter": "box", "softness": 0.0}
     value = next(iter(change.values()))
     if name == "integer_map":
         Z = (Z * 64).astype(np.int32)
@@ -2245,7 +2245,7 @@ def test_fuzz_bias_invalid(data: st.DataObject, name: str) -> None:
         value = {"radius": -1, "filter": "tent", "slope_factor": data.draw(st.sampled_from(
             [-1.0, np.nan, np.inf])), "constant": -2.0, "depth_bits": data.draw(st.sampled_from(
             [0, 33, True, 16.0])), "scale": np.nan}[name]  # fmt: skip
-        options[name] = value
+        options[{"radius": "pcf_radius", "filter": "pcf_filter"}.get(name, name)] = value
     with pytest.raises(ValueError, match=re.escape(message)):
         _bias_call(fn, M, p, n, size, **options)
 
@@ -2258,7 +2258,7 @@ def test_fuzz_bias_jax_eager_jit_vmap(data: st.DataObject) -> None:
     bad = case.points.copy()
     row = data.draw(st.integers(0, 3))
     bad[row, 0] = np.nan
-    options = {"radius": case.radius, "filter": case.filter}
+    options = {"pcf_radius": case.radius, "pcf_filter": case.filter}
     for name in BIAS_FUNCTIONS:
         extra = options if name in ("slope_scaled_bias", "normal_offset") else {}
         fn = functools.partial(_bias_call, name, size=case.size, **extra)
