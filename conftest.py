@@ -11,6 +11,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+# Before shadowmath is imported: its public functions check their jaxtyping annotations
+# after every call in the test suite (shadowmath/_boundary/_shapes.py).
+os.environ["SHADOWMATH_CHECK_SHAPES"] = "1"
+
 import shadowmath
 
 

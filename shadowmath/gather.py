@@ -12,6 +12,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ._boundary._shapes import ArrayLike, Real
 from ._boundary._validate import (
     Array,
     Checks,
@@ -32,7 +33,9 @@ class _Part(NamedTuple):
     transform: Any
 
 
-def gather_meshes(meshes: Iterable[tuple[Any, Any]]) -> Mesh:
+def gather_meshes(
+    meshes: Iterable[tuple[Mesh | Triangles, Real[ArrayLike, "4 4"] | None]],
+) -> Mesh:
     r"""Concatenate meshes placed by world transforms into one world-space mesh.
 
     Entry ``i`` is a pair ``(mesh, M_i)``; its vertices :math:`v` (local coordinates)

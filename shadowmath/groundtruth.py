@@ -16,6 +16,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ._boundary._shapes import ArrayLike, Bool, Integer, Real, shapes_checked
+
 #: Pairs of (point, triangle) tested per chunk: bounds the temporary arrays (~100 MB).
 _CHUNK_PAIRS = 1 << 20
 
@@ -29,14 +31,15 @@ def _points(name: str, value: Any) -> NDArray[np.float64]:
     return arr
 
 
+@shapes_checked
 def segment_hits_triangles(
-    points: Any,
-    light_position: Any,
-    vertices: Any,
-    triangles: Any,
+    points: Real[ArrayLike, "*points 3"],
+    light_position: Real[ArrayLike, " 3"] | Real[ArrayLike, " 4"],
+    vertices: Real[ArrayLike, "N 3"],
+    triangles: Integer[ArrayLike, "M 3"],
     *,
     eps: float = 1e-9,
-) -> NDArray[np.bool_]:
+) -> Bool[NDArray[np.bool_], "*points"]:
     r"""Whether the segment from each point to the light crosses any triangle.
 
     ``light_position`` is a point ``(x, y, z)``, or homogeneous ``(x, y, z, w)``:

@@ -9,9 +9,9 @@ these types once per call (see :func:`fit_shadow`).
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import NamedTuple, TypeAlias
 
-from ._boundary._validate import Array
+from ._boundary._shapes import ArrayLike, Real
 
 
 class PointLight(NamedTuple):
@@ -26,7 +26,7 @@ class PointLight(NamedTuple):
         (3,)
     """
 
-    position: Array
+    position: Real[ArrayLike, "*#batch 3"]
 
 
 class DirectionalLight(NamedTuple):
@@ -42,7 +42,7 @@ class DirectionalLight(NamedTuple):
         (3,)
     """
 
-    direction: Array
+    direction: Real[ArrayLike, "*#batch 3"]
 
 
 class SpotLight(NamedTuple):
@@ -66,6 +66,10 @@ class SpotLight(NamedTuple):
         ()
     """
 
-    position: Array
-    direction: Array
-    angle: Array
+    position: Real[ArrayLike, "*#batch 3"]
+    direction: Real[ArrayLike, "*#batch 3"]
+    angle: Real[ArrayLike, "*#batch"]
+
+
+#: Any typed light: what :func:`fit_shadow` and the other fits take beside the arrays.
+Light: TypeAlias = PointLight | DirectionalLight | SpotLight

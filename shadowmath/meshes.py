@@ -15,6 +15,7 @@ import os
 import numpy as np
 from numpy.typing import NDArray
 
+from ._boundary._shapes import shapes_checked
 from ._boundary._validate import integer, real
 from .receivers import Mesh as Mesh
 
@@ -55,6 +56,7 @@ def _count(name: str, value: int, minimum: int) -> int:
     return integer(name, value, minimum)
 
 
+@shapes_checked
 def torus(
     major_radius: float = 1.0,
     minor_radius: float = 0.35,
@@ -102,6 +104,7 @@ def torus(
     return Mesh(vertices, _grid_triangles(n, m, wrap_cols=True, wrap_rows=True))
 
 
+@shapes_checked
 def sphere(radius: float = 1.0, *, segments: int = 32, rings: int = 16) -> Mesh:
     """A UV sphere centred at the origin, poles on the ``z`` axis.
 
@@ -145,6 +148,7 @@ def sphere(radius: float = 1.0, *, segments: int = 32, rings: int = 16) -> Mesh:
     return Mesh(vertices, np.concatenate([north, body, south]).astype(np.int64))
 
 
+@shapes_checked
 def box(size: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> Mesh:
     """An axis-aligned box centred at the origin, four vertices per face (flat normals).
 
@@ -180,6 +184,7 @@ def box(size: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> Mesh:
     return Mesh(vertices, triangles.astype(np.int64))
 
 
+@shapes_checked
 def bar(length: float = 3.0, thickness: float = 0.08) -> Mesh:
     """A long thin bar along ``x``: a hard case for the frustum (a very wide silhouette).
 
@@ -197,6 +202,7 @@ def bar(length: float = 3.0, thickness: float = 0.08) -> Mesh:
     return box((length, thickness, thickness))
 
 
+@shapes_checked
 def grid(size: tuple[float, float] = (1.0, 1.0), *, segments: tuple[int, int] = (1, 1)) -> Mesh:
     """A flat rectangle in the ``z = 0`` plane, centred at the origin, facing ``+z``.
 
@@ -227,6 +233,7 @@ def grid(size: tuple[float, float] = (1.0, 1.0), *, segments: tuple[int, int] = 
     return Mesh(vertices, _grid_triangles(nx + 1, ny + 1, wrap_cols=False, wrap_rows=False))
 
 
+@shapes_checked
 def signed_volume(mesh: Mesh) -> float:
     r"""The signed volume enclosed by a closed mesh (divergence theorem).
 
@@ -255,6 +262,7 @@ def _parse_index(token: str, count: int, path: str, line_number: int) -> int:
     return resolved
 
 
+@shapes_checked
 def load_obj(path: str | os.PathLike[str]) -> Mesh:
     """Read the vertices and faces of a Wavefront OBJ file (no dependency).
 
@@ -311,6 +319,7 @@ def load_obj(path: str | os.PathLike[str]) -> Mesh:
     return Mesh(v, np.asarray(triangles, dtype=np.int64))
 
 
+@shapes_checked
 def load_mesh(path: str | os.PathLike[str]) -> Mesh:
     """Read a mesh file: OBJ with the built-in reader, other formats through trimesh.
 

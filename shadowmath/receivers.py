@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from ._boundary._validate import Array
+from ._boundary._shapes import ArrayLike, Integer, Real
 
 
 class Triangles(NamedTuple):
@@ -30,7 +30,7 @@ class Triangles(NamedTuple):
         (2, 3, 3)
     """
 
-    corners: Array
+    corners: Real[ArrayLike, "*#batch _ 3 3"]
 
 
 class Mesh(NamedTuple):
@@ -54,5 +54,5 @@ class Mesh(NamedTuple):
         (2, 3)
     """
 
-    vertices: Array
-    faces: Array
+    vertices: Real[ArrayLike, "*#batch _ 3"]
+    faces: Integer[ArrayLike, "_ 3"]

@@ -259,8 +259,8 @@ def test_slope_scaled_bias_makes_a_plane_acne_free(
         points,
         n,
         map_size=(W, H),
-        radius=radius,
-        filter=filt,
+        pcf_radius=radius,
+        pcf_filter=filt,
         constant=0,  # type: ignore[arg-type]
     )
     reach = radius + (1.0 if filt == "bilinear" else 0.5)
@@ -320,7 +320,7 @@ def test_normal_offset_makes_a_plane_acne_free_directional(
     W, H = size
     M, light, _ = light_matrix(rng, directional=True)
     n, c, p0 = plane_facing_light(rng, M, light, True, max_deg=85)
-    o = normal_offset(M, p0, n, map_size=(W, H), radius=radius, filter=filt)  # type: ignore[arg-type]
+    o = normal_offset(M, p0, n, map_size=(W, H), pcf_radius=radius, pcf_filter=filt)  # type: ignore[arg-type]
     # Constant over the plane: choose the lookup points p' (texel corners too, and for
     # the bilinear kernel, whose reach ends at texel centres, points next to centres),
     # then p = p' - o.
@@ -388,13 +388,13 @@ def test_backends_dtypes_and_batches(to, dtype, batch) -> None:
     M, p, n, _ = scene(batch)
     expected = [
         texel_world_size(M, p, map_size=(64, 32)),
-        slope_scaled_bias(M, p, n, map_size=(64, 32), radius=1),
-        normal_offset(M, p, n, map_size=(64, 32), filter="bilinear"),
+        slope_scaled_bias(M, p, n, map_size=(64, 32), pcf_radius=1),
+        normal_offset(M, p, n, map_size=(64, 32), pcf_filter="bilinear"),
     ]
     got = [
         texel_world_size(to(M), to(p), map_size=(64, 32)),
-        slope_scaled_bias(to(M), to(p), to(n), map_size=(64, 32), radius=1),
-        normal_offset(to(M), to(p), to(n), map_size=(64, 32), filter="bilinear"),
+        slope_scaled_bias(to(M), to(p), to(n), map_size=(64, 32), pcf_radius=1),
+        normal_offset(to(M), to(p), to(n), map_size=(64, 32), pcf_filter="bilinear"),
     ]
     for g, e in zip(got, expected, strict=True):
         assert g.shape == e.shape
@@ -442,8 +442,8 @@ def test_invalid_values_raise_eagerly_and_poison_under_jit() -> None:
         ({"map_size": 0}, "map_size"),
         ({"map_size": (3, 4, 5)}, "map_size"),
         ({"map_size": 2.5}, "map_size"),
-        ({"map_size": 8, "radius": -1}, "radius"),
-        ({"map_size": 8, "filter": "gauss"}, "filter"),
+        ({"map_size": 8, "pcf_radius": -1}, "radius"),
+        ({"map_size": 8, "pcf_filter": "gauss"}, "filter"),
         ({"map_size": 8, "slope_factor": -1.0}, "slope_factor"),
         ({"map_size": 8, "constant": float("nan")}, "constant"),
         ({"map_size": 8, "depth_bits": 0}, "depth_bits"),
@@ -470,8 +470,8 @@ def test_bad_shapes() -> None:
 def test_numpy_integers_are_sizes() -> None:
     M, p, n, _ = scene()
     np.testing.assert_array_equal(
-        slope_scaled_bias(M, p, n, map_size=(np.int64(64), np.int32(32)), radius=np.int64(1)),
-        slope_scaled_bias(M, p, n, map_size=(64, 32), radius=1),
+        slope_scaled_bias(M, p, n, map_size=(np.int64(64), np.int32(32)), pcf_radius=np.int64(1)),
+        slope_scaled_bias(M, p, n, map_size=(64, 32), pcf_radius=1),
     )
 
 

@@ -1461,7 +1461,7 @@ def test_fuzz_bias_and_texel_size(dtype: Any, data: st.DataObject) -> None:
     # The slope-scaled bias covers every texel centre of the lookup on the receiver's plane:
     # the plane's depth under the corners (+-c, +-c) texels away differs from the point's
     # by c (|dr/dx| + |dr/dy|), between half and all of 2 c max(|dr/dx|, |dr/dy|).
-    options = {"map_size": (W, H), "radius": case.radius, "filter": case.filter}
+    options = {"map_size": (W, H), "pcf_radius": case.radius, "pcf_filter": case.filter}
     slope = _f64(sm.slope_scaled_bias(Md, pd, nd, constant=0.0, **options))
     cond_b = _condition(lambda m, p, n: sm.slope_scaled_bias(m, p, n, constant=0.0, **options),
                         (M, pts, normals))  # fmt: skip
@@ -1576,7 +1576,7 @@ def _pcf_reference(case: PcfCase, dtype: Any) -> np.ndarray:
 def _pcf(case: PcfCase, dtype: Any, xp: Any = np, **changes: Any) -> np.ndarray:
     c = case._replace(**changes)
     arrays = (_convert(np.asarray(a, np.float64), dtype, xp) for a in c[:3])
-    out = sm.pcf(*arrays, radius=c.radius, filter=c.filter,  # type: ignore[arg-type]
+    out = sm.pcf(*arrays, pcf_radius=c.radius, pcf_filter=c.filter,  # type: ignore[arg-type]
                  reversed_z=c.reversed_z, softness=c.softness)  # fmt: skip
     return _f64(out)
 
@@ -1641,7 +1641,7 @@ def test_fuzz_pcf_border_texels(case: PcfCase, data: st.DataObject) -> None:
     s, t = (cols + frac[:n]) / W, (rows + frac[n:]) / H
     # (Receivers nearer than the empty texels' depth 1 by half the comparison's width: lit.)
     depths = np.minimum(case.depths, 1 - case.softness / 2 - 1 / 64)
-    options = {"radius": k, "filter": filt, "reversed_z": False, "softness": case.softness}
+    options = {"pcf_radius": k, "pcf_filter": filt, "reversed_z": False, "softness": case.softness}
     ours = sm.pcf(Z, np.c_[s, t], depths, **options)
     endless = sm.pcf(padded, np.c_[(s * W + P) / (W + 2 * P), (t * H + P) / (H + 2 * P)], depths,
                      **options)  # fmt: skip
@@ -1653,15 +1653,17 @@ def test_fuzz_pcf_border_texels(case: PcfCase, data: st.DataObject) -> None:
         Z2[H // 2, b - 1] = 0.0
         point = np.array([[-0.5 / W, (H // 2 + 0.5) / H]])
         on_padded = (point * [W, H] + P) / [W + 2 * P, H + 2 * P]
-        assert float(sm.pcf(Z2, point, [0.5], radius=k)[0]) == 1.0
-        assert float(sm.pcf(np.pad(Z2, P, constant_values=1.0), on_padded, [0.5], radius=k)[0]) < 1
+        assert float(sm.pcf(Z2, point, [0.5], pcf_radius=k)[0]) == 1.0
+        assert (
+            float(sm.pcf(np.pad(Z2, P, constant_values=1.0), on_padded, [0.5], pcf_radius=k)[0]) < 1
+        )
 
 
 PCF_INVALID = {
-    "radius_negative": ({"radius": -1}, "radius: expected an integer >= 0"),
-    "radius_fraction": ({"radius": 1.5}, "radius: expected an integer >= 0"),
-    "radius_bool": ({"radius": True}, "radius: expected an integer >= 0"),
-    "filter": ({"filter": "gaussian"}, "filter: expected 'box' or 'bilinear'"),
+    "radius_negative": ({"pcf_radius": -1}, "radius: expected an integer >= 0"),
+    "radius_fraction": ({"pcf_radius": 1.5}, "radius: expected an integer >= 0"),
+    "radius_bool": ({"pcf_radius": True}, "radius: expected an integer >= 0"),
+    "pcf_filter": ({"pcf_filter": "gaussian"}, "filter: expected 'box' or 'bilinear'"),
     "reversed_z": ({"reversed_z": 1}, "reversed_z: expected True or False"),
     "softness_negative": ({"softness": -0.1}, "softness: expected a finite number >= 0"),
     "softness_nan": ({"softness": np.nan}, "softness: expected a finite number >= 0"),
@@ -1669,7 +1671,7 @@ PCF_INVALID = {
     "map_shape": ({"depth_map": "1d"}, "depth_map: expected shape"),
     "coords_shape": ({"coords": "3d"}, "coords: expected shape"),
     "batch": ({"depths": "batch"}, "batch dimensions do not broadcast"),
-    "too_small": ({"radius": 40}, "radius: a box kernel of radius 40"),
+    "too_small": ({"pcf_radius": 40}, "radius: a box kernel of radius 40"),
     "nan_map": ({"depth_map": "nan"}, "depth_map: " + NON_FINITE),
     "nan_coords": ({"coords": "nan"}, "coords: " + NON_FINITE),
     "inf_depth": ({"depths": "inf"}, "depths: " + NON_FINITE),
@@ -1681,7 +1683,7 @@ def test_fuzz_pcf_invalid(case: PcfCase, name: str) -> None:
     CASES["pcf invalid"] += 1
     change, message = PCF_INVALID[name]
     Z, c, d = case.depth_map, case.coords, case.depths
-    options: dict[str, Any] = {"radius": case.radius, "filter": "box", "softness": 0.0}
+    options: dict[str, Any] = {"pcf_radius": case.radius, "pcf_filter": "box", "softness": 0.0}
     value = next(iter(change.values()))
     if name == "integer_map":
         Z = (Z * 64).astype(np.int32)
@@ -1724,7 +1726,7 @@ def test_fuzz_pcf_jax_eager_jit_vmap(data: st.DataObject) -> None:
     case = case._replace(coords=coords)
     bad = coords.copy()
     bad[data.draw(st.integers(0, 5))] = np.nan
-    fn = functools.partial(sm.pcf, radius=case.radius, filter=case.filter,
+    fn = functools.partial(sm.pcf, pcf_radius=case.radius, pcf_filter=case.filter,
                            reversed_z=case.reversed_z, softness=case.softness)  # fmt: skip
     want = _pcf(case, dtype)
     eager, jitted, batched = _jax_modes(fn, case[:3], (case.depth_map, bad, case.depths), dtype)
@@ -1858,13 +1860,11 @@ def test_fuzz_area_light_jax_eager_jit_vmap(
     _assert_close(got, want, 64 * _eps(dtype) * cond, "area_light_samples JAX")
     # Keyed jitter under jit and vmap: on the light, one sample per cell; NaN for a bad light.
     key = jax.random.key(data.draw(st.integers(0, 2**31 - 1)))
-    fn = jax.jit(sm.area_light_samples_jax, static_argnums=4)
-    _check_samples(light, _f64(fn(key, *(jnp.asarray(a) for a in args), count)), count, dtype)
-    both = jax.jit(jax.vmap(sm.area_light_samples_jax, in_axes=(None, 0, 0, 0, None)),
-                   static_argnums=4)  # fmt: skip
+    fn = jax.jit(sm.area_light_samples, static_argnums=3)
+    _check_samples(light, _f64(fn(*(jnp.asarray(a) for a in args), count, key=key)), count, dtype)
+    both = jax.jit(jax.vmap(lambda c, u, v: sm.area_light_samples(c, u, v, count, key=key)))
     edges_v = np.stack([light.edge_v, light.edge_u * 2.0]).astype(dtype)  # parallel: bad
-    out = both(key, *(jnp.asarray(np.stack([a, a])) for a in args[:2]), jnp.asarray(edges_v),
-               count)  # fmt: skip
+    out = both(*(jnp.asarray(np.stack([a, a])) for a in args[:2]), jnp.asarray(edges_v))
     _check_samples(light, _f64(out[0]), count, dtype)
     assert np.all(np.isnan(_f64(out[1])))
     # The pyramid matrix: NumPy's, eagerly, under jit and under vmap (a flat pyramid is NaN).
@@ -2277,7 +2277,7 @@ def test_fuzz_bias_invalid(data: st.DataObject, name: str) -> None:
         value = {"radius": -1, "filter": "tent", "slope_factor": data.draw(st.sampled_from(
             [-1.0, np.nan, np.inf])), "constant": -2.0, "depth_bits": data.draw(st.sampled_from(
             [0, 33, True, 16.0])), "scale": np.nan}[name]  # fmt: skip
-        options[name] = value
+        options[{"radius": "pcf_radius", "filter": "pcf_filter"}.get(name, name)] = value
     with pytest.raises(ValueError, match=re.escape(message)):
         _bias_call(fn, M, p, n, size, **options)
 
@@ -2290,7 +2290,7 @@ def test_fuzz_bias_jax_eager_jit_vmap(data: st.DataObject) -> None:
     bad = case.points.copy()
     row = data.draw(st.integers(0, 3))
     bad[row, 0] = np.nan
-    options = {"radius": case.radius, "filter": case.filter}
+    options = {"pcf_radius": case.radius, "pcf_filter": case.filter}
     for name in BIAS_FUNCTIONS:
         extra = options if name in ("slope_scaled_bias", "normal_offset") else {}
         fn = functools.partial(_bias_call, name, size=case.size, **extra)
@@ -2520,7 +2520,6 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "api_convention": ("test_fuzz_api_convention", "test_fuzz_fit_shadow_scene_options"),
     "area_light_samples": ("test_fuzz_area_light_samples",
                            "test_fuzz_area_light_jax_eager_jit_vmap"),
-    "area_light_samples_jax": ("test_fuzz_area_light_jax_eager_jit_vmap",),
     "blocker_projection": ("test_fuzz_projections_of_any_frustum",),
     "border_margin": ("test_fuzz_border_margin", "test_fuzz_shadow_map_spec"),
     "check_finite": ("test_fuzz_check_finite",),

@@ -62,7 +62,7 @@ def test_constant_map_is_all_or_nothing(filt: str, reversed_z: bool, radius: int
     nearer = np.full(50, 0.25)
     farther = np.full(50, 0.75)
     lit_near = 1.0 if not reversed_z else 0.0
-    kw = {"radius": radius, "filter": filt, "reversed_z": reversed_z}
+    kw = {"pcf_radius": radius, "pcf_filter": filt, "reversed_z": reversed_z}
     np.testing.assert_array_equal(pcf(depth_map, coords, nearer, **kw), lit_near)
     np.testing.assert_array_equal(pcf(depth_map, coords, farther, **kw), 1 - lit_near)
 
@@ -77,7 +77,7 @@ def test_half_plane_edge_box(radius: int, edge: int, seed: int) -> None:
     t = rng.uniform((radius + 1) / H, 1 - (radius + 1) / H, 64)
     col = np.floor(s * W)
     expected = np.clip(col + radius + 1 - np.maximum(col - radius, edge), 0, 2 * radius + 1)
-    lit = pcf(depth_map, np.stack([s, t], -1), np.full(64, 0.5), radius=radius)
+    lit = pcf(depth_map, np.stack([s, t], -1), np.full(64, 0.5), pcf_radius=radius)
     np.testing.assert_allclose(lit, expected / (2 * radius + 1), rtol=1e-12)
 
 
@@ -92,7 +92,9 @@ def test_half_plane_edge_bilinear(radius: int, edge: int, seed: int) -> None:
     u = s * W - 0.5
     taps = np.arange(-radius, radius + 1)
     expected = np.clip(u[:, None] + taps - (edge - 1), 0, 1).mean(axis=1)
-    lit = pcf(depth_map, np.stack([s, t], -1), np.full(64, 0.5), radius=radius, filter="bilinear")
+    lit = pcf(
+        depth_map, np.stack([s, t], -1), np.full(64, 0.5), pcf_radius=radius, pcf_filter="bilinear"
+    )
     np.testing.assert_allclose(lit, expected, rtol=1e-12, atol=1e-14)
 
 
@@ -107,7 +109,7 @@ def test_weights_sum_to_one(filt: str, radius: int, seed: int) -> None:
     margin = (radius + 1.5) / np.array([W, H])
     coords = rng.uniform(margin, 1 - margin, (40, 2))
     d = np.full(40, 0.5)
-    kw = {"radius": radius, "filter": filt}
+    kw = {"pcf_radius": radius, "pcf_filter": filt}
     total = pcf(depth_map, coords, d, **kw) + pcf(1 - depth_map, coords, d, **kw)
     np.testing.assert_allclose(total, 1.0, rtol=1e-12)
 
@@ -121,7 +123,7 @@ def test_matches_brute_force(filt: str, reversed_z: bool, radius: int, seed: int
     depth_map = rng.uniform(0, 1, (H, W))
     coords = rng.uniform(-0.3, 1.3, (30, 2))  # outside the map too: clamp-to-border
     d = rng.uniform(0, 1, 30)
-    got = pcf(depth_map, coords, d, radius=radius, filter=filt, reversed_z=reversed_z)
+    got = pcf(depth_map, coords, d, pcf_radius=radius, pcf_filter=filt, reversed_z=reversed_z)
     expected = [
         brute_force(depth_map, *c, di, radius, filt, reversed_z)
         for c, di in zip(coords, d, strict=True)
@@ -133,7 +135,7 @@ def test_matches_brute_force(filt: str, reversed_z: bool, radius: int, seed: int
 def test_far_outside_the_map_is_lit() -> None:
     depth_map = np.zeros((8, 8))  # everything shadowed inside
     coords = np.array([[-1.0, 0.5], [0.5, 2.0], [1e6, -1e6]])
-    np.testing.assert_array_equal(pcf(depth_map, coords, np.full(3, 0.5), radius=2), 1.0)
+    np.testing.assert_array_equal(pcf(depth_map, coords, np.full(3, 0.5), pcf_radius=2), 1.0)
 
 
 @pytest.mark.parametrize("filt", FILTERS)
@@ -158,8 +160,8 @@ def test_border_rule(filt: str, radius: int) -> None:
         depth_map[:, border : W - border] = 0.0  # the caster fills the inside
         infinite = np.pad(depth_map, pad, constant_values=1.0)
         inf_coords = (coords * [W, H] + pad) / [W + 2 * pad, H + 2 * pad]
-        finite = pcf(depth_map, coords, d, radius=radius, filter=filt)
-        unbounded = pcf(infinite, inf_coords, d, radius=radius, filter=filt)
+        finite = pcf(depth_map, coords, d, pcf_radius=radius, pcf_filter=filt)
+        unbounded = pcf(infinite, inf_coords, d, pcf_radius=radius, pcf_filter=filt)
         return not np.allclose(finite, unbounded, atol=1e-12)
 
     assert not cut_off(b)
@@ -179,14 +181,14 @@ def test_batches_broadcast(filt: str) -> None:
     maps = rng.uniform(0, 1, (3, 1, 10, 12))
     coords = rng.uniform(0, 1, (3, 5, 2))
     d = rng.uniform(0, 1, (3, 5))
-    got = pcf(maps, coords, d, filter=filt)
+    got = pcf(maps, coords, d, pcf_filter=filt)
     assert got.shape == (3, 5)
     for b in range(3):
-        np.testing.assert_allclose(got[b], pcf(maps[b, 0], coords[b], d[b], filter=filt))
+        np.testing.assert_allclose(got[b], pcf(maps[b, 0], coords[b], d[b], pcf_filter=filt))
     # One map, a grid of points; and depths broadcasting against coords.
-    one = pcf(maps[0, 0], coords, 0.5, filter=filt)
+    one = pcf(maps[0, 0], coords, 0.5, pcf_filter=filt)
     assert one.shape == (3, 5)
-    assert pcf(maps[0, 0], coords[0, 0], 0.5, filter=filt).shape == ()
+    assert pcf(maps[0, 0], coords[0, 0], 0.5, pcf_filter=filt).shape == ()
 
 
 @pytest.mark.parametrize("filt", FILTERS)
@@ -195,16 +197,16 @@ def test_jax_equals_numpy_under_jit_and_vmap(to, dtype, filt: str) -> None:
     depth_map = rng.uniform(0, 1, (9, 11))
     coords = rng.uniform(-0.1, 1.1, (20, 2))
     d = rng.uniform(0, 1, 20)
-    expected = pcf(depth_map, coords, d, radius=1, filter=filt)
-    got = pcf(to(depth_map), to(coords), to(d), radius=1, filter=filt)
+    expected = pcf(depth_map, coords, d, pcf_radius=1, pcf_filter=filt)
+    got = pcf(to(depth_map), to(coords), to(d), pcf_radius=1, pcf_filter=filt)
     assert got.dtype == np.dtype(dtype)
     assert type(got) is type(to(d))
     np.testing.assert_allclose(np.asarray(got), expected, atol=1e-6)
-    f = jax.jit(lambda m, c, z: pcf(m, c, z, radius=1, filter=filt))
+    f = jax.jit(lambda m, c, z: pcf(m, c, z, pcf_radius=1, pcf_filter=filt))
     np.testing.assert_allclose(
         f(jnp.asarray(depth_map), jnp.asarray(coords), jnp.asarray(d)), expected, atol=1e-12
     )
-    g = jax.vmap(lambda c, z: pcf(jnp.asarray(depth_map), c, z, radius=1, filter=filt))
+    g = jax.vmap(lambda c, z: pcf(jnp.asarray(depth_map), c, z, pcf_radius=1, pcf_filter=filt))
     np.testing.assert_allclose(g(jnp.asarray(coords), jnp.asarray(d)), expected, atol=1e-12)
 
 
@@ -219,7 +221,9 @@ def test_grad_coords_bilinear_matches_finite_differences() -> None:
     d = rng.uniform(0.2, 0.8, 10)
 
     def f(c):
-        return jnp.sum(pcf(jnp.asarray(depth_map), c, jnp.asarray(d), radius=1, filter="bilinear"))
+        return jnp.sum(
+            pcf(jnp.asarray(depth_map), c, jnp.asarray(d), pcf_radius=1, pcf_filter="bilinear")
+        )
 
     grad = np.asarray(jax.grad(f)(jnp.asarray(coords)))
     assert np.isfinite(grad).all()
@@ -242,7 +246,7 @@ def test_grad_depths_through_the_smooth_step(filt: str) -> None:
 
     def f(z):
         return jnp.sum(
-            pcf(jnp.asarray(depth_map), jnp.asarray(coords), z, filter=filt, softness=0.2)
+            pcf(jnp.asarray(depth_map), jnp.asarray(coords), z, pcf_filter=filt, softness=0.2)
         )
 
     grad = np.asarray(jax.grad(f)(jnp.asarray(d)))
@@ -286,18 +290,18 @@ def test_bad_depth_maps(depth_map, match: str) -> None:
 
 def test_no_room_inside_the_map() -> None:
     with pytest.raises(ValueError, match=r"radius: a box kernel of radius 2 needs 2 .* 4 x 8 map"):
-        pcf(np.ones((8, 4)), [0.5, 0.5], 0.5, radius=2)
+        pcf(np.ones((8, 4)), [0.5, 0.5], 0.5, pcf_radius=2)
     with pytest.raises(ValueError, match=r"radius: a bilinear kernel of radius 1 needs 2"):
-        pcf(np.ones((4, 8)), [0.5, 0.5], 0.5, filter="bilinear")
-    pcf(np.ones((5, 5)), [0.5, 0.5], 0.5, filter="bilinear")
+        pcf(np.ones((4, 8)), [0.5, 0.5], 0.5, pcf_filter="bilinear")
+    pcf(np.ones((5, 5)), [0.5, 0.5], 0.5, pcf_filter="bilinear")
 
 
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"radius": -1}, "radius"),
-        ({"radius": 1.5}, "radius"),
-        ({"filter": "gauss"}, "filter"),
+        ({"pcf_radius": -1}, "radius"),
+        ({"pcf_radius": 1.5}, "radius"),
+        ({"pcf_filter": "gauss"}, "filter"),
         ({"softness": -0.1}, "softness"),
         ({"reversed_z": 1}, "reversed_z"),
     ],
@@ -325,3 +329,37 @@ def test_bad_shapes_and_values() -> None:
     )
     assert np.isnan(out[1])
     assert np.isfinite(np.asarray(out)[[0, 2]]).all()
+
+
+# ------------------------------------------------------------------ renamed keywords
+
+
+def test_the_old_keyword_names_still_work_and_warn() -> None:
+    """``radius=`` and ``filter=`` are ``pcf_radius=`` and ``pcf_filter=`` (one name per idea)."""
+    import shadowmath as sm
+
+    depth_map = np.where(np.arange(8)[None, :] < 4, 0.2, 1.0) * np.ones((8, 1))
+    coords, d = np.array([[0.4, 0.5], [0.6, 0.5]]), np.array([0.5, 0.5])
+    M = np.array([[0.1, 0, 0, 0.5], [0, 0.1, 0, 0.5], [0, 0, -0.1, 0], [0, 0, 0, 1]])
+    p, n = [0.0, 0.0, -3.0], [1.0, 0.0, 1.0]
+    calls = [
+        (pcf, (depth_map, coords, d), "radius", 2, "filter", "bilinear"),
+        (pcf_border_texels, (), "radius", 2, "filter", "bilinear"),
+        (sm.slope_scaled_bias, (M, p, n), "radius", 1, "filter", "bilinear"),
+        (sm.normal_offset, (M, p, n), "radius", 1, "filter", "bilinear"),
+    ]
+    for fn, args, r, k, f, filt in calls:
+        extra = {"map_size": 100} if fn in (sm.slope_scaled_bias, sm.normal_offset) else {}
+        new = fn(*args, pcf_radius=k, pcf_filter=filt, **extra)
+        with pytest.warns(
+            DeprecationWarning, match=r"\(radius=\.\.\.\) is deprecated.*pcf_radius="
+        ):
+            old = fn(*args, **{r: k}, pcf_filter=filt, **extra)
+        np.testing.assert_array_equal(old, new)
+        with pytest.warns(
+            DeprecationWarning, match=r"\(filter=\.\.\.\) is deprecated.*pcf_filter="
+        ):
+            old = fn(*args, pcf_radius=k, **{f: filt}, **extra)
+        np.testing.assert_array_equal(old, new)
+        with pytest.raises(TypeError, match="got radius= and pcf_radius="):
+            fn(*args, radius=k, pcf_radius=k, **extra)

@@ -287,30 +287,45 @@ def test_batched_lights() -> None:
 
 
 def test_jax_key_variant_under_jit() -> None:
-    fn = jax.jit(sm.area_light_samples_jax, static_argnums=4)
+    fn = jax.jit(sm.area_light_samples, static_argnums=3)
     corner, eu, ev = jnp.asarray([1.0, 0, 0]), jnp.asarray([0, 2.0, 0]), jnp.asarray([0, 0, 3.0])
     key = jax.random.key(3)
-    s = fn(key, corner, eu, ev, 12)
+    s = fn(corner, eu, ev, 12, key=key)
     assert isinstance(s, jax.Array) and s.shape == (12, 3)
-    np.testing.assert_array_equal(s, fn(key, corner, eu, ev, 12))
-    np.testing.assert_array_equal(s, sm.area_light_samples_jax(key, corner, eu, ev, 12))
-    assert not np.array_equal(s, fn(jax.random.split(key)[0], corner, eu, ev, 12))
+    np.testing.assert_array_equal(s, fn(corner, eu, ev, 12, key=key))
+    np.testing.assert_array_equal(s, sm.area_light_samples(corner, eu, ev, 12, key=key))
+    assert not np.array_equal(s, fn(corner, eu, ev, 12, key=jax.random.split(key)[0]))
     u, v, _ = light_uv(np.asarray(s), [1.0, 0, 0], [0, 2.0, 0], [0, 0, 3.0])
     k = np.arange(12)
     assert np.all(
         (u * 4 >= k % 4) & (u * 4 <= k % 4 + 1) & (v * 3 >= k // 4) & (v * 3 <= k // 4 + 1)
     )
     # NumPy inputs and the legacy uint32 keys work too.
-    s2 = sm.area_light_samples_jax(jax.random.PRNGKey(0), [0.0, 0, 0], [1.0, 0, 0], [0, 1.0, 0], 3)
+    s2 = sm.area_light_samples([0.0, 0, 0], [1.0, 0, 0], [0, 1.0, 0], 3, key=jax.random.PRNGKey(0))
     assert isinstance(s2, jax.Array) and s2.shape == (3, 3)
+
+
+def test_the_old_name_of_the_keyed_samples_still_works_and_warns() -> None:
+    key, corner, eu, ev = jax.random.key(5), [1.0, 0, 0], [0, 2.0, 0], [0, 0, 3.0]
+    with pytest.warns(DeprecationWarning, match=r"area_light_samples\(\.\.\., key=key\)"):
+        old = sm.area_light_samples_jax(key, corner, eu, ev, 6)
+    np.testing.assert_array_equal(old, sm.area_light_samples(corner, eu, ev, 6, key=key))
+    assert "area_light_samples_jax" not in sm.__all__  # still an attribute, no longer listed
+
+
+def test_seed_and_key_together_are_refused() -> None:
+    with pytest.raises(ValueError, match="seed, key: give one of them"):
+        sm.area_light_samples(
+            [0.0, 0, 0], [1.0, 0, 0], [0, 1.0, 0], 3, seed=1, key=jax.random.key(0)
+        )
 
 
 def test_samples_are_differentiable_in_the_light() -> None:
     key = jax.random.key(0)
 
     def mean_x(corner: Any) -> Any:
-        s = sm.area_light_samples_jax(
-            key, corner, jnp.asarray([2.0, 0, 0]), jnp.asarray([0, 1.0, 0]), 8
+        s = sm.area_light_samples(
+            corner, jnp.asarray([2.0, 0, 0]), jnp.asarray([0, 1.0, 0]), 8, key=key
         )
         return jnp.mean(s[:, 0])
 
@@ -355,8 +370,8 @@ def test_bad_values_give_nan_under_jit() -> None:
         jax.vmap(sm.pyramid_to_unit_cube, in_axes=(None, None, None, 0))(apex[0], corner, eu, ev)
     )
     assert np.all(np.isfinite(M[0])) and np.all(np.isnan(M[1]))
-    fn = jax.jit(sm.area_light_samples_jax, static_argnums=4)
-    s = np.asarray(fn(jax.random.key(0), corner, eu, ev, 4))
+    fn = jax.jit(sm.area_light_samples, static_argnums=3)
+    s = np.asarray(fn(corner, eu, ev, 4, key=jax.random.key(0)))
     assert np.all(np.isfinite(s[0])) and np.all(np.isnan(s[1]))
 
 
@@ -386,10 +401,10 @@ A, B, EU, EV = [0.0, 0, 2], [0.0, 0, 0], [1.0, 0, 0], [0, 1.0, 0]
         (lambda: sm.area_light_samples(B, [0.0, 0, 0], EV, 4), "parallelogram is degenerate"),
         (lambda: sm.area_light_samples([np.inf, 0, 0], EU, EV, 4), "corner: contains non-finite"),
         (
-            lambda: sm.area_light_samples_jax(jax.random.key(0), B, EU, EU, 4),
+            lambda: sm.area_light_samples(B, EU, EU, 4, key=jax.random.key(0)),
             "parallelogram is degenerate",
         ),
-        (lambda: sm.area_light_samples_jax(jax.random.key(0), B, EU, EV, 0), "count: must be"),
+        (lambda: sm.area_light_samples(B, EU, EV, 0, key=jax.random.key(0)), "count: must be"),
     ],
 )
 def test_bad_input_raises_a_value_error_naming_the_argument(call: Any, message: str) -> None:

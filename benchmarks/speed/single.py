@@ -24,13 +24,23 @@ import numpy
 t1 = time.perf_counter()
 import shadowmath
 t2 = time.perf_counter()
-heavy = sorted(m for m in ("jax", "jaxlib", "numba", "torch", "cupy", "tensorflow")
+heavy = sorted(m for m in ("jax", "jaxlib", "numba", "scipy", "torch", "cupy", "tensorflow")
                if m in sys.modules)
-print(json.dumps({"numpy": t1 - t0, "shadowmath": t2 - t0, "heavy": heavy}))
+shadowmath.fit_shadow  # its modules load on first use
+t3 = time.perf_counter()
+print(json.dumps({"numpy": t1 - t0, "shadowmath": t2 - t0, "fit_shadow": t3 - t0,
+                  "heavy": heavy}))
+"""
+
+_IMPORT_NUMPY = """
+import json, time
+t0 = time.perf_counter()
+import numpy
+print(json.dumps({"numpy": time.perf_counter() - t0}))
 """
 
 _FIRST_FIT = """
-import json, time
+import json, sys, time
 t0 = time.perf_counter()
 import numpy as np
 import shadowmath as sm
@@ -48,7 +58,8 @@ else:
 t1 = time.perf_counter()
 block(sm.fit_shadow(light, box, 256, **options))
 t2 = time.perf_counter()
-print(json.dumps({{"import": t1 - t0, "first": t2 - t1, "total": t2 - t0}}))
+print(json.dumps({{"import": t1 - t0, "first": t2 - t1, "total": t2 - t0,
+                  "scipy": "scipy.linalg" in sys.modules}}))
 """
 
 # The first fits timed in fresh processes: (label, backend, light, options).
@@ -85,15 +96,16 @@ def first_fit_rows(cfg: Config) -> list[Row]:
         first, *warm = _fresh(code, 1 + max(cfg.repeats(3), 1))
         total = _median_timing([float(r["total"]) for r in warm])
         call = _median_timing([float(r["first"]) for r in warm])
+        scipy = " (Numba's BLAS check imported scipy.linalg)" if warm[-1]["scipy"] else ""
         rows.append(
             Row(
                 f"import + first fit_shadow in a fresh process, {label}, 8 vertices",
                 total,
-                target="≤ 1 s",
-                limit=1.0,
+                target="≤ 0.5 s",
+                limit=0.5,
                 limit_on="seconds",
                 note=(
-                    f"the first call alone: {fmt_time(call.median)}; the first process "
+                    f"the first call alone: {fmt_time(call.median)}{scipy}; the first process "
                     f"(disk cache as found): {fmt_time(float(first['total']))}"
                 ),
             )
@@ -240,7 +252,9 @@ def run(cfg: Config) -> Section:
     cols = np.minimum((coords[:, 0] * MAP_SIZE).astype(int), MAP_SIZE - 1)
     rows_ = np.minimum((coords[:, 1] * MAP_SIZE).astype(int), MAP_SIZE - 1)
     base = measure(lambda: depths <= depth_map[rows_, cols], repeats=reps, min_time=fast)
-    t = measure(lambda: sm.pcf(depth_map, coords, depths, radius=1), repeats=reps, min_time=fast)
+    t = measure(
+        lambda: sm.pcf(depth_map, coords, depths, pcf_radius=1), repeats=reps, min_time=fast
+    )
     rows.append(
         Row(
             f"pcf, {count:,} lookups, 3x3 box, {MAP_SIZE}² map, NumPy float64",
@@ -269,21 +283,26 @@ def run(cfg: Config) -> Section:
 
     # import shadowmath, and the first fit, in fresh processes.
     imports = _fresh(_IMPORT, cfg.repeats(5))
+    numpy_alone = _median_timing([float(r["numpy"]) for r in _fresh(_IMPORT_NUMPY, cfg.repeats(5))])
     heavy = sorted({m for r in imports for m in r["heavy"]})
-    rows.append(
-        Row(
-            "import shadowmath (fresh process, NumPy's import included)",
-            _median_timing([float(r["shadowmath"]) for r in imports]),
-            "import numpy (same process)",
-            _median_timing([float(r["numpy"]) for r in imports]),
-            target="≤ 0.15 s",
-            limit=0.15,
-            limit_on="seconds",
+    for label, field in (
+        ("import shadowmath", "shadowmath"),
+        ("import shadowmath; shadowmath.fit_shadow", "fit_shadow"),
+    ):
+        rows.append(
+            Row(
+                f"{label} (fresh process, NumPy's import included)",
+                _median_timing([float(r[field]) for r in imports]),
+                "python -c 'import numpy' (fresh process)",
+                numpy_alone,
+                target="≤ 0.15 s",
+                limit=0.15,
+                limit_on="seconds",
+            )
         )
-    )
     section.notes.append(
         "after `import shadowmath` these heavy modules were in sys.modules: "
-        + (", ".join(heavy) if heavy else "none (no jax, jaxlib, numba, torch, cupy, tensorflow)")
+        + (", ".join(heavy) if heavy else "none (of jax, jaxlib, numba, scipy, torch, cupy, tf)")
     )
     section.figures["import_heavy_modules"] = float(len(heavy))
     rows.extend(first_fit_rows(cfg))

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from shadowmath._boundary._renamed import warn_renamed
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -145,6 +146,7 @@ def area_light_samples(
     count: int,
     *,
     seed: int | np.random.Generator | None = None,
+    key: Any = None,
 ) -> Array:
     r"""Stratified, jittered samples of a parallelogram area light.
 
@@ -165,8 +167,12 @@ def area_light_samples(
     ``numpy.random.default_rng(seed)`` on the host, in the working dtype, and is
     then a constant: JAX inputs give JAX outputs (differentiable in the
     corner and edges), but under ``jax.jit`` it is drawn once, at trace time.
-    Use :func:`area_light_samples_jax` for fresh jitter from a key inside
-    ``jit``.
+    With a JAX PRNG ``key`` instead, ``ξ, η = jax.random.uniform(key, (*batch, count,
+    2))`` and the result is a JAX array: fresh jitter inside ``jit`` (``count`` fixes
+    the output's shape, so it is static: ``jax.jit(area_light_samples,
+    static_argnums=3)``; split the key for a new set of samples, one set per frame,
+    say). ``area_light_samples_jax(key, corner, edge_u, edge_v, count)`` is the
+    deprecated name of this call.
 
     Arguments:
         corner: ``(*batch, 3)`` one corner of the light.
@@ -174,14 +180,17 @@ def area_light_samples(
         count: the number of samples (a Python integer, static), ``>= 1``.
         seed: anything ``numpy.random.default_rng`` accepts; ``None`` for fresh
             entropy, an integer for reproducible samples.
+        key: a JAX PRNG key (``jax.random.key(0)`` or ``jax.random.PRNGKey(0)``) to
+            draw the jitter with JAX instead (not with ``seed``).
 
     Returns:
         ``(*batch, count, 3)`` sample positions, row by row (``k = i cols + j``).
 
     Raises:
         ValueError: wrong shapes; ``count < 1`` or not an integer; non-finite
-            values; a degenerate parallelogram (a zero edge or parallel edges).
-            Under JAX transformations the affected samples are NaN instead.
+            values; a degenerate parallelogram (a zero edge or parallel edges);
+            both ``seed`` and ``key``. Under JAX transformations the affected samples
+            are NaN instead.
 
     Example:
         >>> samples = area_light_samples([0.0, 0, 5], [2.0, 0, 0], [0, 1.0, 0], 6, seed=1)
@@ -189,7 +198,15 @@ def area_light_samples(
         (6, 3)
         >>> bool(((samples[:, 0] // (2 / 3)) == [0, 1, 2, 0, 1, 2]).all())
         True
+        >>> import jax
+        >>> s = area_light_samples([0.0, 0, 5], [2.0, 0, 0], [0, 1.0, 0], 4, key=jax.random.key(0))
+        >>> s.shape, bool((s[:, 2] == 5).all())
+        ((4, 3), True)
     """
+    if key is not None:
+        if seed is not None:
+            raise ValueError("seed, key: give one of them (seed for NumPy, key for JAX)")
+        return _jax_samples(key, corner, edge_u, edge_v, count)
     ctx, checks, c, eu, ev, shape, (rows, cols) = _checked_light(corner, edge_u, edge_v, count)
     rng = np.random.default_rng(seed)
     jitter_np = rng.random((*shape, rows * cols, 2), dtype=np.dtype(ctx.dtype).type)
@@ -198,29 +215,12 @@ def area_light_samples(
 
 
 def area_light_samples_jax(key: Any, corner: Any, edge_u: Any, edge_v: Any, count: int) -> Array:
-    r""":func:`area_light_samples` with the jitter drawn from a JAX PRNG key (works under ``jit``).
+    """Deprecated: ``area_light_samples(corner, edge_u, edge_v, count, key=key)``."""
+    warn_renamed("area_light_samples_jax(key, ...)", "area_light_samples(..., key=key)")
+    return area_light_samples(corner, edge_u, edge_v, count, key=key)
 
-    The same grid and formula; ``ξ, η = jax.random.uniform(key, (*batch, count, 2))``.
-    The result is always a JAX array. ``count`` fixes the output's shape, so it
-    is static under ``jit``: ``jax.jit(area_light_samples_jax, static_argnums=4)``.
-    Split the key for a new set of samples (one set per frame, say).
 
-    Arguments:
-        key: a JAX PRNG key (``jax.random.key(0)`` or ``jax.random.PRNGKey(0)``).
-        corner, edge_u, edge_v, count: as for :func:`area_light_samples`.
-
-    Returns:
-        ``(*batch, count, 3)`` JAX array of sample positions.
-
-    Raises:
-        ValueError: as :func:`area_light_samples` (NaN under JAX transformations).
-
-    Example:
-        >>> import jax
-        >>> s = area_light_samples_jax(jax.random.key(0), [0.0, 0, 5], [2.0, 0, 0], [0, 1.0, 0], 4)
-        >>> s.shape, bool((s[:, 2] == 5).all())
-        ((4, 3), True)
-    """
+def _jax_samples(key: Any, corner: Any, edge_u: Any, edge_v: Any, count: int) -> Array:
     import jax
     import jax.numpy as jnp
 

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from shadowmath._boundary._renamed import renamed_keywords
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -36,7 +37,7 @@ def _map_size(map_size: object) -> tuple[int, int]:
 
 
 def check_kernel(
-    radius: object, filter: object, names: tuple[str, str] = ("radius", "filter")
+    radius: object, filter: object, names: tuple[str, str] = ("pcf_radius", "pcf_filter")
 ) -> tuple[int, PcfFilter]:
     """The kernel checked; ``names`` are the caller's argument names for the messages."""
     if not isinstance(radius, int | np.integer) or isinstance(radius, bool) or radius < 0:
@@ -138,14 +139,15 @@ def texel_world_size(
     return checks.poison(xp.asarray(size), 0)
 
 
+@renamed_keywords(radius="pcf_radius", filter="pcf_filter")
 def slope_scaled_bias(
     world_to_texture: Any,
     points: Any,
     normals: Any,
     *,
     map_size: int | tuple[int, int],
-    radius: int = 0,
-    filter: PcfFilter = "box",
+    pcf_radius: int = 0,
+    pcf_filter: PcfFilter = "box",
     slope_factor: float | None = None,
     constant: float = DEFAULT_CONSTANT_BIAS,
     depth_bits: int | None = 24,
@@ -191,8 +193,10 @@ def slope_scaled_bias(
         points: ``(*batch, 3)`` receiver points in front of the light.
         normals: ``(*batch, 3)`` their surface normals (need not be unit).
         map_size: ``size`` or ``(width, height)`` in texels.
-        radius: the PCF kernel radius the lookup uses (sets the default ``slope_factor``).
-        filter: ``"box"`` or ``"bilinear"``, the PCF filter (same).
+        pcf_radius: the PCF kernel radius the lookup uses (sets the default
+            ``slope_factor``; ``radius=``, deprecated).
+        pcf_filter: ``"box"`` or ``"bilinear"``, the PCF filter (same; ``filter=``,
+            deprecated).
         slope_factor: the factor of ``m``; ``None`` for the derived minimum above.
         constant: the factor of ``r_min`` (default 2).
         depth_bits: the bits of a fixed-point depth buffer, ``r_min = 1 / (2^bits - 1)``
@@ -205,7 +209,7 @@ def slope_scaled_bias(
 
     Raises:
         ValueError: as :func:`texel_world_size`, plus a zero normal and a bad
-            ``radius``, ``filter``, ``slope_factor``, ``constant`` or ``depth_bits``.
+            ``pcf_radius``, ``pcf_filter``, ``slope_factor``, ``constant`` or ``depth_bits``.
 
     Example:
         >>> import numpy as np
@@ -218,7 +222,7 @@ def slope_scaled_bias(
         0.01
     """
     W, H = _map_size(map_size)
-    k, filt = check_kernel(radius, filter)
+    k, filt = check_kernel(pcf_radius, pcf_filter)
     factor = 2 * _bias.kernel_reach(k, filt) if slope_factor is None else slope_factor
     if not (isinstance(factor, int | float) and math.isfinite(factor) and factor >= 0):
         raise ValueError(f"slope_factor: expected a finite number >= 0, got {slope_factor!r}")
@@ -237,14 +241,15 @@ def slope_scaled_bias(
     return checks.poison(xp.asarray(bias), 0)
 
 
+@renamed_keywords(radius="pcf_radius", filter="pcf_filter")
 def normal_offset(
     world_to_texture: Any,
     points: Any,
     normals: Any,
     *,
     map_size: int | tuple[int, int],
-    radius: int = 0,
-    filter: PcfFilter = "box",
+    pcf_radius: int = 0,
+    pcf_filter: PcfFilter = "box",
     scale: float = 1.0,
 ) -> Array:
     r"""The world-space normal offset: look the map up at ``points + normal_offset(...)``.
@@ -292,8 +297,9 @@ def normal_offset(
         points: ``(*batch, 3)`` receiver points in front of the light.
         normals: ``(*batch, 3)`` their surface normals (need not be unit).
         map_size: ``size`` or ``(width, height)`` in texels.
-        radius: the PCF kernel radius of the lookup (``c`` above).
-        filter: ``"box"`` or ``"bilinear"``.
+        pcf_radius: the PCF kernel radius of the lookup (``c`` above; ``radius=``,
+            deprecated).
+        pcf_filter: ``"box"`` or ``"bilinear"`` (``filter=``, deprecated).
         scale: a safety factor on the derived minimum (``>= 0``, default 1).
 
     Returns:
@@ -301,7 +307,7 @@ def normal_offset(
 
     Raises:
         ValueError: as :func:`texel_world_size`, plus a zero normal and a bad
-            ``radius``, ``filter`` or ``scale``.
+            ``pcf_radius``, ``pcf_filter`` or ``scale``.
 
     Example:
         >>> import numpy as np
@@ -311,7 +317,7 @@ def normal_offset(
         array([0.025, 0.   , 0.025])
     """
     W, H = _map_size(map_size)
-    k, filt = check_kernel(radius, filter)
+    k, filt = check_kernel(pcf_radius, pcf_filter)
     if not (isinstance(scale, int | float) and math.isfinite(scale) and scale >= 0):
         raise ValueError(f"scale: expected a finite number >= 0, got {scale!r}")
     checks, xp, M, p, n, _ = _prepare(world_to_texture, points, normals)

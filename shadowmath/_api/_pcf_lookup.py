@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from shadowmath._boundary._renamed import renamed_keywords
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -24,7 +25,8 @@ from shadowmath._math._bias import PcfFilter
 from ._depth_bias import check_kernel
 
 
-def pcf_border_texels(radius: int, filter: PcfFilter = "box") -> int:
+@renamed_keywords(radius="pcf_radius", filter="pcf_filter")
+def pcf_border_texels(pcf_radius: int, pcf_filter: PcfFilter = "box") -> int:
     r"""The empty border a shadow map needs around the silhouette for a PCF kernel.
 
     A lookup compares texel centres up to ``c`` texels away from ``(s, t)`` along
@@ -43,30 +45,31 @@ def pcf_border_texels(radius: int, filter: PcfFilter = "box") -> int:
     Pass it as ``border_texels`` when fitting the map.
 
     Arguments:
-        radius: the kernel radius ``k >= 0`` in texels.
-        filter: ``"box"`` or ``"bilinear"``.
+        pcf_radius: the kernel radius ``k >= 0`` in texels (``radius=``, deprecated).
+        pcf_filter: ``"box"`` or ``"bilinear"`` (``filter=``, deprecated).
 
     Returns:
         The number of empty texels needed on each side.
 
     Raises:
-        ValueError: a negative or non-integer ``radius``, an unknown ``filter``.
+        ValueError: a negative or non-integer ``pcf_radius``, an unknown ``pcf_filter``.
 
     Example:
         >>> pcf_border_texels(0), pcf_border_texels(2), pcf_border_texels(2, "bilinear")
         (1, 2, 3)
     """
-    k, filt = check_kernel(radius, filter)
+    k, filt = check_kernel(pcf_radius, pcf_filter)
     return _pcf.border_texels(k, filt)
 
 
+@renamed_keywords(radius="pcf_radius", filter="pcf_filter")
 def pcf(
     depth_map: Any,
     coords: Any,
     depths: Any,
     *,
-    radius: int = 1,
-    filter: PcfFilter = "box",
+    pcf_radius: int = 1,
+    pcf_filter: PcfFilter = "box",
     reversed_z: bool = False,
     softness: float = 0.0,
 ) -> Array:
@@ -112,8 +115,8 @@ def pcf(
         coords: ``(*batch, 2)`` texture coordinates ``(s, t)``.
         depths: ``(*batch,)`` the receivers' depths in the map's units (``r`` of
             ``world_to_texture``, minus any bias).
-        radius: kernel radius ``k >= 0`` in texels.
-        filter: ``"box"`` or ``"bilinear"``.
+        pcf_radius: kernel radius ``k >= 0`` in texels (``radius=``, deprecated).
+        pcf_filter: ``"box"`` or ``"bilinear"`` (``filter=``, deprecated).
         reversed_z: the map stores ``1`` at the near plane (lit when ``d >= z``).
         softness: width of the smooth comparison in depth units (``0``: a step).
 
@@ -123,7 +126,7 @@ def pcf(
     Raises:
         ValueError: a map that is not ``(*batch, H, W)`` with ``H, W >= 1``, or
             not of a floating dtype; ``coords`` not ``(*batch, 2)``; batch shapes
-            that do not broadcast; a bad ``radius``, ``filter`` or ``softness``; a
+            that do not broadcast; a bad ``pcf_radius``, ``pcf_filter`` or ``softness``; a
             kernel whose border (:func:`pcf_border_texels`) leaves no texel inside
             the map; non-finite values (NaN under JAX transformations).
 
@@ -131,10 +134,10 @@ def pcf(
         >>> import numpy as np
         >>> depth_map = np.ones((4, 4))
         >>> depth_map[:, :2] = 0.25  # a caster over the left half
-        >>> pcf(depth_map, [[0.375, 0.5], [0.625, 0.5]], [0.5, 0.5], radius=1)
+        >>> pcf(depth_map, [[0.375, 0.5], [0.625, 0.5]], [0.5, 0.5], pcf_radius=1)
         array([0.33333333, 0.66666667])
     """
-    k, filt = check_kernel(radius, filter)
+    k, filt = check_kernel(pcf_radius, pcf_filter)
     if not isinstance(reversed_z, bool | np.bool_):
         raise ValueError(f"reversed_z: expected True or False, got {reversed_z!r}")
     if not (isinstance(softness, int | float) and math.isfinite(softness) and softness >= 0):
@@ -161,7 +164,7 @@ def pcf(
     border = _pcf.border_texels(k, filt)
     if min(H, W) <= 2 * border:
         raise ValueError(
-            f"radius: a {filt} kernel of radius {k} needs {border} empty border texels "
+            f"pcf_radius: a {filt} kernel of radius {k} needs {border} empty border texels "
             f"on each side, which leaves no texel inside a {W} x {H} map"
         )
     checks = Checks(ctx)

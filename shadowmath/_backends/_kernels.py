@@ -13,13 +13,10 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import hashlib
 import importlib.util
 import os
 import sys
-import tempfile
 from collections.abc import Iterator
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
@@ -68,7 +65,9 @@ def array_path() -> Iterator[None]:
         _python[0] = old
 
 
-_PACKAGE = Path(__file__).resolve().parent.parent
+# hashlib, tempfile and pathlib are imported where used: they cost ``from shadowmath import
+# fit_shadow`` about 10 ms, and only the first compiled fit of a process needs them.
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
 
 
 def sources_hash() -> str:
@@ -77,11 +76,15 @@ def sources_hash() -> str:
     The whole package (every ``*.py`` under it), not a list of the files the loops
     import today: a new import can never escape the key.
     """
+    import hashlib
+    from pathlib import Path
+
     import numba
 
+    package = Path(_PACKAGE)
     digest = hashlib.sha256(f"{sys.version}|{numba.__version__}".encode())
-    for path in sorted(_PACKAGE.rglob("*.py")):
-        digest.update(str(path.relative_to(_PACKAGE)).encode())
+    for path in sorted(package.rglob("*.py")):
+        digest.update(str(path.relative_to(package)).encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:16]
 
@@ -93,7 +96,9 @@ def cache_dir(key: str) -> str:
     package's ``__pycache__/shadowmath-<key>``, else (read-only installs) a folder
     of the system's temporary directory.
     """
-    base = os.environ.get("NUMBA_CACHE_DIR") or str(_PACKAGE / "__pycache__")
+    import tempfile
+
+    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(_PACKAGE, "__pycache__")
     for root in (base, os.path.join(tempfile.gettempdir(), f"shadowmath-numba-{os.getuid()}")):
         path = os.path.join(root, f"shadowmath-{key}")
         with contextlib.suppress(OSError):

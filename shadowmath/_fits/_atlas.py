@@ -22,6 +22,7 @@ The rule, the borders and the API conventions are written out in ``docs/atlas.md
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -31,6 +32,7 @@ from shadowmath._api._adaptive_frustum import border_margin
 from shadowmath._api._api_convention import check_api as _check_api
 from shadowmath._api._depth_bias import check_kernel as _check_kernel
 from shadowmath._backends import _kernels
+from shadowmath._boundary._shapes import ArrayLike, Bool, Float, Int, Real
 from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import (
     RECEIVER_KINDS,
@@ -55,7 +57,8 @@ from shadowmath._math._cube import depth_row as _depth_row
 from shadowmath._math._frame import stack_matrix
 from shadowmath._math._pcf import border_texels as _border_texels
 from shadowmath._math._rows import tile_rows
-from shadowmath.lights import DirectionalLight, PointLight, SpotLight
+from shadowmath.lights import DirectionalLight, Light, PointLight, SpotLight
+from shadowmath.receivers import Mesh, Triangles
 
 from . import _compiled
 from ._cube_depth import AT_LIGHT, cube_depth_core
@@ -120,21 +123,21 @@ class ShadowAtlas(NamedTuple):
     """
 
     atlas_size: int
-    tile_light: Ints
-    tile_face: Ints
-    tile_rect: Ints
-    light_size: Ints
-    light_tiles: Ints
-    moved: NDArray[np.bool_]
+    tile_light: Int[Ints, " T"]
+    tile_face: Int[Ints, " T"]
+    tile_rect: Int[Ints, "T 3"]
+    light_size: Int[Ints, " L"]
+    light_tiles: Int[Ints, "L 6"]
+    moved: Bool[NDArray[np.bool_], " T"]
     used: float
-    light_wish: Ints
-    light_ids: Ints
-    light_cube: NDArray[np.bool_]
-    light_border: Ints
-    tile_clamp: NDArray[np.float64]
+    light_wish: Int[Ints, " L"]
+    light_ids: Int[Ints, " L"]
+    light_cube: Bool[NDArray[np.bool_], " L"]
+    light_border: Int[Ints, " L"]
+    tile_clamp: Float[NDArray[np.float64], "T 4"]
     repacked: bool
-    tile_id: Ints
-    previous_index: Ints
+    tile_id: Int[Ints, " T"]
+    previous_index: Int[Ints, " T"]
 
 
 class AtlasFit(NamedTuple):
@@ -165,15 +168,15 @@ class AtlasFit(NamedTuple):
     changed, or the texture did.
     """
 
-    world_to_clip: Array
-    world_to_texture: Array
-    viewports: Ints
-    tile_clamp: NDArray[np.float64]
-    near: Array
-    far: Array
+    world_to_clip: Float[Array, "T 4 4"]
+    world_to_texture: Float[Array, "T 4 4"]
+    viewports: Int[Ints, "T 4"]
+    tile_clamp: Float[NDArray[np.float64], "T 4"]
+    near: Float[Array, " T"]
+    far: Float[Array, " T"]
     texture_size: tuple[int, int]
-    tile_id: Ints
-    tile_face: Ints
+    tile_id: Int[Ints, " T"]
+    tile_face: Int[Ints, " T"]
     light_errors: tuple[str | None, ...] = ()
 
 
@@ -181,17 +184,17 @@ class AtlasFit(NamedTuple):
 
 
 def allocate_atlas(
-    coverage: Any,
+    coverage: Real[ArrayLike, " L"],
     *,
     atlas_size: int = 4096,
-    cube: Any = False,
-    border_texels: Any = 1,
+    cube: bool | Bool[ArrayLike, " L"] = False,
+    border_texels: int | Real[ArrayLike, " L"] = 1,
     previous: ShadowAtlas | None = None,
     min_tile: int | None = None,
     max_tile: int | None = None,
     budget: float = 1.0,
     hysteresis: float = 0.1,
-    light_ids: Any = None,
+    light_ids: Real[ArrayLike, " L"] | None = None,
 ) -> ShadowAtlas:
     r"""Give each light a power-of-two tile of a shadow atlas, stable from frame to frame.
 
@@ -481,7 +484,7 @@ def _layout(
 # ------------------------------------------------------------------ conventions
 
 
-def atlas_viewports(atlas: ShadowAtlas, *, api: GraphicsApi = "opengl") -> Ints:
+def atlas_viewports(atlas: ShadowAtlas, *, api: GraphicsApi = "opengl") -> Int[Ints, "T 4"]:
     r"""Each tile's viewport ``(x, y, width, height)`` in ``api``'s viewport convention.
 
     OpenGL counts viewport ``y`` from the bottom row of the framebuffer, which is
@@ -513,7 +516,7 @@ def atlas_viewports(atlas: ShadowAtlas, *, api: GraphicsApi = "opengl") -> Ints:
 
 def atlas_tile_transforms(
     atlas: ShadowAtlas, *, api: GraphicsApi = "opengl"
-) -> NDArray[np.float64]:
+) -> Float[NDArray[np.float64], "T 4 4"]:
     r"""The matrices from each tile's own texture coordinates to the atlas's.
 
     A tile at ``(x, y, n)`` in an ``A``-texel atlas holds its map's ``s, t in [0, 1]``
@@ -562,13 +565,13 @@ _POINT, _SPOT, _SUN = POINT, SPOT, SUN
 
 
 def fit_atlas(
-    lights: Any,
-    blocker_vertices: Any,
+    lights: Sequence[Light] | Real[ArrayLike, "L 4"] | Real[ArrayLike, "L 3"],
+    blocker_vertices: Real[ArrayLike, "*#l N 3"] | Triangles | Mesh,
     atlas: ShadowAtlas,
     *,
-    receivers: Any = None,
-    near: Any = None,
-    far: Any = None,
+    receivers: Real[ArrayLike, "M 3"] | Triangles | Mesh | None = None,
+    near: Real[ArrayLike, "*#l"] | None = None,
+    far: Real[ArrayLike, "*#l"] | None = None,
     api: GraphicsApi = "opengl",
     reversed_z: bool = False,
     pcf_radius: int | None = None,

@@ -11,12 +11,14 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from shadowmath._boundary._shapes import Bool
+
 from ._atlas import AtlasFit, _find_tiles
 
 __all__ = ["atlas_redraw"]
 
 
-def atlas_redraw(fit: AtlasFit, previous: AtlasFit | None) -> NDArray[np.bool_]:
+def atlas_redraw(fit: AtlasFit, previous: AtlasFit | None) -> Bool[NDArray[np.bool_], " T"]:
     r"""Which tiles of ``fit`` to draw this frame; the others already hold their depths.
 
     ``previous`` is the fit whose tiles the atlas texture holds (last frame's, every

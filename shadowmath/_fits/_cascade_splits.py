@@ -21,6 +21,7 @@ from typing import Any, Literal
 import numpy as np
 
 from shadowmath._boundary._messages import LOG_NEAR
+from shadowmath._boundary._shapes import ArrayLike, Float, Real
 from shadowmath._boundary._validate import Array, Checks, all_finite, convert, non_finite
 from shadowmath._math._specialize import formulas
 
@@ -31,13 +32,13 @@ SCHEMES: dict[str, float | None] = {"uniform": 0.0, "log": 1.0, "practical": Non
 
 
 def cascade_splits(
-    near: Any,
-    far: Any,
+    near: Real[ArrayLike, "*#batch"],
+    far: Real[ArrayLike, "*#batch"],
     count: int,
     *,
     scheme: SplitScheme = "practical",
-    lam: Any = 0.75,
-) -> Array:
+    lam: Real[ArrayLike, "*#batch"] = 0.75,
+) -> Float[Array, "*batch {count}+1"]:
     r"""The ``count + 1`` view depths that cut ``[near, far]`` into ``count`` cascades.
 
     .. math:: s_i = \lambda\, n (f / n)^{i/N} + (1 - \lambda) (n + (f - n)\, i / N)

@@ -25,6 +25,7 @@ import numpy as np
 from shadowmath._api._api_convention import check_api as _check_api
 from shadowmath._backends import _kernels
 from shadowmath._boundary._projection import check_projection
+from shadowmath._boundary._shapes import ArrayLike, Float, Int, Real
 from shadowmath._boundary._status import cascade_messages
 from shadowmath._boundary._validate import (
     Array,
@@ -94,32 +95,32 @@ class Cascades(NamedTuple):
             (a texture array), 1 with ``layout="atlas"``.
     """
 
-    world_to_light: Array
+    world_to_light: Float[Array, "*batch n 4 4"]
     frustum: Frustum
-    world_to_clip: Array
-    world_to_texture: Array
-    splits: Array
-    band_end: Array
-    texel_size: Array
-    viewports: Array
+    world_to_clip: Float[Array, "*batch n 4 4"]
+    world_to_texture: Float[Array, "*batch n 4 4"]
+    splits: Float[Array, "*batch n+1"]
+    band_end: Float[Array, "*batch n"]
+    texel_size: Float[Array, "*batch n 2"]
+    viewports: Int[Array, "n 4"]
     texture_size: tuple[int, int]
     texture_layers: int
 
 
 def fit_cascades(
-    light: Any,
-    view: Any,
-    projection: Any,
-    scene_bounds: Any,
+    light: Real[ArrayLike, "*#batch 3"] | Real[ArrayLike, "*#batch 4"] | DirectionalLight,
+    view: Real[ArrayLike, "*#batch 4 4"],
+    projection: Real[ArrayLike, "*#batch 4 4"],
+    scene_bounds: Real[ArrayLike, "*#batch 2 3"],
     map_size: int | tuple[int, int] | ShadowMapSpec,
     *,
     count: int = 4,
-    splits: Any = None,
+    splits: Real[ArrayLike, "*#batch _"] | None = None,
     scheme: SplitScheme = "practical",
-    lam: Any = 0.75,
-    max_distance: Any = None,
-    overlap: Any = 0.1,
-    up: Any = None,
+    lam: Real[ArrayLike, "*#batch"] = 0.75,
+    max_distance: Real[ArrayLike, "*#batch"] | None = None,
+    overlap: Real[ArrayLike, "*#batch"] = 0.1,
+    up: Real[ArrayLike, "*#batch 3"] | None = None,
     stable: bool = False,
     border_texels: int | None = None,
     pcf_radius: int | None = None,

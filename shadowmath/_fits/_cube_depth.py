@@ -14,6 +14,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from shadowmath._api._cube_faces import face_scale
+from shadowmath._boundary._shapes import ArrayLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -26,6 +27,7 @@ from shadowmath._boundary._validate import (
     require_vertices,
 )
 from shadowmath._math._frustum import NEAR_FAR_SLACK
+from shadowmath.receivers import Mesh, Triangles
 
 from ._setup import _receiver_kind, _receiver_rows, caster_triangles
 
@@ -35,8 +37,8 @@ class CubeDepthRange(NamedTuple):
     distances along a face's axis to give :func:`cube_face_projection` and
     :func:`cube_face_depth`."""
 
-    near: Array
-    far: Array
+    near: Float[Array, "*batch"]
+    far: Float[Array, "*batch"]
 
 
 #: A triangle whose bounding box is this near the nearest corner (in ulps of its size)
@@ -203,10 +205,10 @@ def border_scale(map_size: int | None, border_texels: int) -> float:
 
 
 def cube_depth_range(
-    light_position: Any,
-    casters: Any,
+    light_position: Real[ArrayLike, "*#batch 3"],
+    casters: Real[ArrayLike, "*#batch N 3"] | Real[ArrayLike, "*#batch N 3 3"] | Triangles | Mesh,
     *,
-    receivers: Any = None,
+    receivers: Real[ArrayLike, "*#batch M 3"] | Triangles | Mesh | None = None,
     map_size: int | None = None,
     border_texels: int = 0,
 ) -> CubeDepthRange:

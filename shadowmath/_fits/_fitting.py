@@ -33,6 +33,7 @@ import numpy as np
 from shadowmath._api._adaptive_frustum import bounded_frustum, check_blocker, margins
 from shadowmath._api._light_frame import frame_along
 from shadowmath._api._smooth_frustum import rolled_frame
+from shadowmath._boundary._shapes import ArrayLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -67,9 +68,9 @@ class FrustumFit(NamedTuple):
 
     frame: LightFrame
     frustum: Frustum
-    direction: Array
-    roll: Array
-    losses: Array
+    direction: Float[Array, "*batch 3"]
+    roll: Float[Array, "*batch"]
+    losses: Float[Array, "*batch {steps}"]
 
 
 def _pad_size(n: int) -> int:
@@ -262,8 +263,8 @@ def _optimize_core(
 
 
 def optimize_frustum(
-    light_position: Any,
-    vertices: Any,
+    light_position: Real[ArrayLike, "*#batch 3"],
+    vertices: Real[ArrayLike, "*#batch N 3"],
     map_size: int | tuple[int, int],
     *,
     symmetric: bool = False,
@@ -272,8 +273,8 @@ def optimize_frustum(
     learning_rate: float = 0.1,
     border_texels: int = 1,
     margin: float | tuple[float, float] | None = None,
-    near: Any = None,
-    far: Any = None,
+    near: Real[ArrayLike, "*#batch"] | None = None,
+    far: Real[ArrayLike, "*#batch"] | None = None,
 ) -> FrustumFit:
     r"""Fit the light frame's direction and roll to the blocker by gradient descent.
 

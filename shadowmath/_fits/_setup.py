@@ -24,6 +24,7 @@ import numpy as np
 from shadowmath._api._light_frame import check_aim
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._shapes import ArrayLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -47,7 +48,7 @@ from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._frame import LightFrame, stack_matrix
 from shadowmath._math._frustum import Frustum
 from shadowmath._math._specialize import formulas, scalar_formulas
-from shadowmath.lights import DirectionalLight, PointLight, SpotLight
+from shadowmath.lights import DirectionalLight, Light, PointLight, SpotLight
 from shadowmath.receivers import Mesh, Triangles
 
 from . import _compiled
@@ -61,15 +62,15 @@ __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
 
 def fit_shadow(
-    light: Any,
-    blocker_vertices: Any,
+    light: Real[ArrayLike, "*#batch 3"] | Real[ArrayLike, "*#batch 4"] | Light,
+    blocker_vertices: Real[ArrayLike, "*#batch N 3"] | Triangles | Mesh,
     map_size: int | tuple[int, int] | ShadowMapSpec,
     *,
-    blocker_to_world: Any = None,
-    receivers: Any = None,
-    up: Any = None,
-    near: Any = None,
-    far: Any = None,
+    blocker_to_world: Real[ArrayLike, "*#batch 4 4"] | None = None,
+    receivers: Real[ArrayLike, "*#batch M 3"] | Triangles | Mesh | None = None,
+    up: Real[ArrayLike, "*#batch 3"] | None = None,
+    near: Real[ArrayLike, "*#batch"] | None = None,
+    far: Real[ArrayLike, "*#batch"] | None = None,
     aim: Literal["mean", "bbox"] = "mean",
     method: Literal["mdv", "optimized"] = "mdv",
     border_texels: int | None = None,
@@ -268,7 +269,7 @@ def open_door(g: Operands, spec: ShadowMapSpec, aim_bbox: bool) -> Door:
     """Convert and check :func:`fit_shadow`'s arrays once: kinds, dtypes and shapes."""
     light = g.light
     spot = isinstance(light, SpotLight)
-    if spot:
+    if isinstance(light, SpotLight):  # (not `spot`: mypy narrows the type)
         named = {"light.position": light[0], "light.direction": light[1], "light.angle": light[2]}
     else:
         named = {"light": light[0] if isinstance(light, PointLight | DirectionalLight) else light}
@@ -610,7 +611,9 @@ def _batch_of(setup: ShadowSetup) -> tuple[int, ...]:
     return tuple(setup.frustum.near.shape)
 
 
-def receiver_texture_matrix(setup: ShadowSetup, receiver_to_world: Any) -> Array:
+def receiver_texture_matrix(
+    setup: ShadowSetup, receiver_to_world: Real[ArrayLike, "*#batch 4 4"]
+) -> Float[Array, "*batch 4 4"]:
     """Receiver local coordinates straight to homogeneous shadow-map texture coordinates.
 
     ``setup.world_to_texture @ receiver_to_world``: the matrix a receiver's

@@ -22,6 +22,7 @@ from typing import Any, Literal, NamedTuple, TypeAlias
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Bool, Float
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -76,16 +77,16 @@ class ShadowCamera(NamedTuple):
             point and directional lights.
     """
 
-    eye: Array
-    forward: Array
-    up: Array
-    left: Array
-    right: Array
-    bottom: Array
-    top: Array
-    near: Array
-    far: Array
-    orthographic: Array | bool
+    eye: Float[Array, "*camera 3"]
+    forward: Float[Array, "*camera 3"]
+    up: Float[Array, "*camera 3"]
+    left: Float[Array, "*camera"]
+    right: Float[Array, "*camera"]
+    bottom: Float[Array, "*camera"]
+    top: Float[Array, "*camera"]
+    near: Float[Array, "*camera"]
+    far: Float[Array, "*camera"]
+    orthographic: Bool[Array, "*#camera"] | bool
 
     @property
     def width(self) -> Array:
@@ -291,7 +292,9 @@ def _camera_from_frustum(ctx: Context, frame: LightFrame, fr: Frustum) -> Shadow
     )
 
 
-def camera_to_world(camera: ShadowCamera, *, look: CameraLook = "-z") -> Array:
+def camera_to_world(
+    camera: ShadowCamera, *, look: CameraLook = "-z"
+) -> Float[Array, "*camera 4 4"]:
     r"""The world matrix of an engine's camera node that shows ``camera``'s map.
 
     Engines differ in which local axis a camera looks along. The matrix's columns

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from shadowmath._boundary._shapes import Float, Int
 from shadowmath._boundary._validate import Array, Checks, Context
 from shadowmath._math._frame import LightFrame, light_entries, stack_matrix
 from shadowmath._math._frustum import Frustum, projection_terms
@@ -34,11 +35,11 @@ class ShadowSetup(NamedTuple):
 
     frame: LightFrame
     frustum: Frustum
-    world_to_light: Array
-    blocker_to_world: Array
-    blocker_to_clip: Array
-    world_to_texture: Array
-    casters_used: Array | None = None
+    world_to_light: Float[Array, "*batch 4 4"]
+    blocker_to_world: Float[Array, "*batch 4 4"]
+    blocker_to_clip: Float[Array, "*batch 4 4"]
+    world_to_texture: Float[Array, "*batch 4 4"]
+    casters_used: Int[Array, "*#batch"] | None = None
 
 
 def setup_from(

@@ -1,0 +1,172 @@
+"""Shapes in signatures: jaxtyping annotations of the public API, checked in the test suite.
+
+A public function writes its arrays' shapes and dtypes in its signature::
+
+    def fit_shadow(light: Real[ArrayLike, "*#batch 4"], ...) -> ShadowSetup: ...
+
+with ``Float`` (results: float32 or float64), ``Real`` (inputs: integers or floats),
+``Int`` (signed), ``Integer`` (signed or not) and ``Bool`` from jaxtyping, and two array
+types:
+
+* :data:`ArrayLike` for inputs: NumPy or JAX arrays, tracers, and nested lists or
+  scalars;
+* :data:`Array` for results: NumPy in gives NumPy out, JAX in gives JAX out.
+
+For mypy both are ``Any`` (``Float[Array, "4 4"]`` is ``Annotated[Any, ...]``): mypy checks
+the rest of each signature (options, light and mesh types, results' NamedTuples) and that
+the annotations are well formed; the shapes and dtypes are checked at run time, in the
+tests. (``numpy.typing.ArrayLike`` for inputs would make mypy refuse the cores' use of
+the arguments they receive, which are typed ``Any`` today.)
+
+``*#batch`` marks leading batch dimensions that broadcast against the other arguments'; a
+named size (``N``) is one size in every argument and result of a call, ``_`` any size (the
+fields of a type that one call may hold twice, such as :class:`Mesh`).
+
+**Cost outside the tests: none.** Every module that annotates uses ``from __future__
+import annotations``, so an annotation is a string that nothing evaluates; the names
+here are stand-ins that import jaxtyping only when an annotation is evaluated
+(``typing.get_type_hints``), and ``import shadowmath`` never imports it (jaxtyping's own
+import costs about 60 ms). :func:`shapes_checked` returns the function itself.
+
+**In the test suite** (``SHADOWMATH_CHECK_SHAPES=1``, set by the root ``conftest.py``
+before it imports shadowmath), :func:`shapes_checked` wraps each public function:
+the call runs first (the door converts and checks its arguments and raises its own
+messages, which the suite's tests of bad input assert), then jaxtyping with beartype
+checks, in one shape memo, every argument the door accepted against its annotation
+(lists converted as the door converts them), the result, and a NamedTuple result's
+annotated fields. A mismatch raises :class:`jaxtyping.TypeCheckError`: either the door
+accepted what the signature says it refuses, or a core returned a wrong shape or dtype.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar
+
+__all__ = ["Array", "ArrayLike", "Bool", "Float", "Int", "Integer", "Real", "shapes_checked"]
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+if TYPE_CHECKING:
+    from jaxtyping import Bool, Float, Int, Integer, Real
+
+    ArrayLike: TypeAlias = Any
+    Array: TypeAlias = Any
+else:
+
+    class ArrayLike:
+        """Run-time marker of an input array type (see the module's docstring)."""
+
+    class Array:
+        """Run-time marker of a result array type (see the module's docstring)."""
+
+    class _Dtype:
+        """A stand-in for jaxtyping's ``Float`` and the others: jaxtyping on first use."""
+
+        def __init__(self, name: str) -> None:
+            self.name = name
+
+        def __getitem__(self, item: tuple[Any, str]) -> Any:
+            array_type, dims = item
+            return _hint(self.name, array_type, dims)
+
+    Bool, Float, Int, Integer, Real = map(_Dtype, ("Bool", "Float", "Int", "Integer", "Real"))
+
+
+@functools.cache
+def _hint(dtype: str, array_type: Any, dims: str) -> Any:
+    """The jaxtyping hint of ``dtype[array_type, dims]``; an input also takes lists."""
+    import jaxtyping
+
+    if array_type not in (Array, ArrayLike):
+        return getattr(jaxtyping, dtype)[array_type, dims]
+    # Any: NumPy and JAX arrays and tracers alike (what has a shape and a dtype).
+    checked = getattr(jaxtyping, dtype)[Any, dims]
+    if array_type is Array:
+        return checked
+    from typing import Annotated
+
+    from beartype.vale import Is
+
+    return Annotated[object, Is[functools.partial(_array_like_is, checked)]]
+
+
+def _array_like_is(checked: Any, value: Any) -> bool:
+    """``value`` (an array, or lists and scalars as the door converts them) is ``checked``."""
+    import numpy as np
+
+    if not (hasattr(value, "shape") and hasattr(value, "dtype")):
+        try:
+            value = np.asarray(value)
+        except (TypeError, ValueError):
+            return False
+    return isinstance(value, checked)
+
+
+def shapes_checked(fn: F) -> F:
+    """``fn`` itself; in the test suite, ``fn`` with its annotations checked after each call."""
+    if os.environ.get("SHADOWMATH_CHECK_SHAPES") != "1":
+        return fn
+    return _checking(fn)  # type: ignore[return-value]
+
+
+def _checking(fn: Callable[..., Any]) -> Callable[..., Any]:
+    import inspect
+
+    signature = inspect.signature(fn)
+    hints: dict[str, Any] = {}
+
+    @functools.wraps(fn)
+    def checked(*args: Any, **kwargs: Any) -> Any:
+        out = fn(*args, **kwargs)  # the door first, with its own messages
+        if not hints:
+            import typing
+
+            hints.update(typing.get_type_hints(fn, include_extras=True))
+        try:
+            bound = signature.bind(*args, **kwargs)
+        except TypeError:  # a renamed keyword (_renamed.py): the result is still checked
+            _check(fn.__qualname__, hints, {}, out)
+            return out
+        bound.apply_defaults()
+        _check(fn.__qualname__, hints, bound.arguments, out)
+        return out
+
+    return checked
+
+
+@functools.cache
+def _field_hints(cls: type) -> dict[str, Any]:
+    import typing
+
+    return typing.get_type_hints(cls, include_extras=True)
+
+
+def _check(name: str, hints: dict[str, Any], arguments: dict[str, Any], out: Any) -> None:
+    from beartype import BeartypeConf
+    from beartype.door import die_if_unbearable
+    from jaxtyping import TypeCheckError
+    from jaxtyping._storage import pop_shape_memo, push_shape_memo
+
+    values = [(f"argument {k}", v, hints[k]) for k, v in arguments.items() if k in hints]
+    values.append(("result", out, hints.get("return", Any)))
+    # A NamedTuple's fields too; of two of one type (last frame's atlas beside this one's)
+    # only the result's, since their sizes differ.
+    named = [type(v) for _, v, _ in values if isinstance(v, tuple) and hasattr(v, "_fields")]
+    for what, value, _ in list(values):
+        if type(value) in named and (what == "result" or named.count(type(value)) == 1):
+            fields = _field_hints(value.__class__)
+            values += [(f"{what}.{f}", getattr(value, f), fields[f]) for f in value._fields]
+    # One memo, as jaxtyping's own decorator pushes it: a name such as N is one size in every
+    # value, and a size may name an argument ("{count}+1").
+    push_shape_memo(arguments)
+    try:
+        for what, value, hint in values:
+            try:
+                die_if_unbearable(value, hint, conf=BeartypeConf(is_pep484_tower=True))
+            except Exception as err:
+                raise TypeCheckError(f"{name}: {what} does not match {hint}: {err}") from err
+    finally:
+        pop_shape_memo()
