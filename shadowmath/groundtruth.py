@@ -32,6 +32,34 @@ def _points(name: str, value: Any) -> NDArray[np.float64]:
 
 
 @shapes_checked
+def _light(light_position: Any) -> tuple[NDArray[np.float64], bool]:
+    """The light's point (or direction toward it) and whether it is directional (checked)."""
+    light = np.asarray(light_position, dtype=np.float64)
+    if light.shape not in ((3,), (4,)):
+        raise ValueError(f"light_position: expected shape (3,) or (4,), got {light.shape}")
+    if not np.all(np.isfinite(light)):
+        raise ValueError("light_position: contains non-finite values (NaN or inf)")
+    directional = bool(light.shape == (4,) and light[3] == 0)
+    if directional:
+        if not np.any(light[:3]):
+            raise ValueError("light_position: a directional light (w = 0) needs a direction")
+        return light[:3], True
+    return (light[:3] / light[3] if light.shape == (4,) else light), False
+
+
+def _mesh(vertices: Any, triangles: Any) -> tuple[NDArray[np.float64], NDArray[np.integer]]:
+    """``(N, 3)`` vertices and ``(M, 3)`` integer indices into them (checked)."""
+    v = _points("vertices", vertices)
+    if v.ndim != 2:
+        raise ValueError(f"vertices: expected shape (N, 3), got {v.shape}")
+    t = np.asarray(triangles)
+    if t.ndim != 2 or t.shape[1] != 3 or t.dtype.kind not in "iu":
+        raise ValueError(f"triangles: expected (M, 3) integer indices, got {t.dtype} {t.shape}")
+    if t.size and (t.min() < 0 or t.max() >= len(v)):
+        raise ValueError(f"triangles: indices must lie in [0, {len(v)})")
+    return v, t
+
+
 def segment_hits_triangles(
     points: Real[ArrayLike, "*points 3"],
     light_position: Real[ArrayLike, " 3"] | Real[ArrayLike, " 4"],
@@ -84,29 +112,10 @@ def segment_hits_triangles(
         array([ True, False])
     """
     p = _points("points", points)
-    light = np.asarray(light_position, dtype=np.float64)
-    if light.shape not in ((3,), (4,)):
-        raise ValueError(f"light_position: expected shape (3,) or (4,), got {light.shape}")
-    if not np.all(np.isfinite(light)):
-        raise ValueError("light_position: contains non-finite values (NaN or inf)")
-    directional = light.shape == (4,) and light[3] == 0
-    if directional:
-        if not np.any(light[:3]):
-            raise ValueError("light_position: a directional light (w = 0) needs a direction")
-        light = light[:3]
-    elif light.shape == (4,):
-        light = light[:3] / light[3]
+    light, directional = _light(light_position)
     # A directional light's ray d = (x, y, z) has no far end: t is bounded below only.
     upper = np.inf if directional else 1 - eps
-    v = _points("vertices", vertices)
-    if v.ndim != 2:
-        raise ValueError(f"vertices: expected shape (N, 3), got {v.shape}")
-    t = np.asarray(triangles)
-    if t.ndim != 2 or t.shape[1] != 3 or t.dtype.kind not in "iu":
-        raise ValueError(f"triangles: expected (M, 3) integer indices, got {t.dtype} {t.shape}")
-    if t.size and (t.min() < 0 or t.max() >= len(v)):
-        raise ValueError(f"triangles: indices must lie in [0, {len(v)})")
-
+    v, t = _mesh(vertices, triangles)
     a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
     e1, e2 = b - a, c - a
 

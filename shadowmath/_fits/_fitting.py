@@ -90,9 +90,9 @@ def _import_jax() -> Any:
 
 
 @functools.lru_cache(maxsize=8)
-def _optimizer(steps: int, starts: int, symmetric: bool) -> Any:
-    """The jitted, batched optimiser for one configuration (compiled once per vertex bucket)."""
-    jax = _import_jax()
+def _loss(symmetric: bool) -> Any:
+    """The optimiser's loss: the log cross-section of the frustum turned by ``p``
+    (exact: ``hard``; or with soft bounds at temperature ``T``)."""
     import jax.numpy as jnp
 
     F = formulas(jnp)
@@ -117,6 +117,15 @@ def _optimizer(steps: int, starts: int, symmetric: bool) -> Any:
         value = jnp.log((hx - lx) / (2 * sx)) + jnp.log((hy - ly) / (2 * sy))
         return jnp.where(valid, value, jnp.inf) if hard else value
 
+    return loss
+
+
+def _optimizer(steps: int, starts: int, symmetric: bool) -> Any:
+    """The jitted, batched optimiser for one configuration (compiled once per vertex bucket)."""
+    jax = _import_jax()
+    import jax.numpy as jnp
+
+    loss = _loss(symmetric)
     grad = jax.grad(loss)
 
     def one_start(p0: Any, data: tuple[Any, ...], lr: Any) -> tuple[Any, Any, Any]:
@@ -179,6 +188,29 @@ def _hull_candidates(rx: np.ndarray, ry: np.ndarray) -> list[np.ndarray]:
     return out
 
 
+def _candidates(
+    ctx: Context, offsets: Array, ext: Any, shape: tuple[int, ...], jdtype: Any
+) -> tuple[Any, Any]:
+    """The vertices the optimiser reads (``(flat, size, 3)`` offsets from the light, JAX)
+    and their weights: those on the hull of their MDV ratios, padded to a bucket size."""
+    import jax.numpy as jnp
+
+    flat, n = int(np.prod(shape, dtype=np.int64)), int(offsets.shape[-2])
+    offsets = ctx.xp.broadcast_to(offsets, (*shape, n, 3))
+    offsets = jnp.reshape(jnp.asarray(offsets, dtype=jdtype), (flat, n, 3))
+    if ctx.lazy:
+        keep = [np.arange(n)] * flat
+    else:
+        rx = np.broadcast_to(np.asarray(ext.rx), (*shape, n))
+        keep = _hull_candidates(rx, np.broadcast_to(np.asarray(ext.ry), (*shape, n)))
+    size = _pad_size(max(len(k) for k in keep))
+    # Padding repeats the first candidate with weight 0: the hard bounds see a
+    # duplicate, the soft ones drop it.
+    index = np.stack([np.concatenate([k, np.full(size - len(k), k[0])]) for k in keep])
+    weights = np.stack([np.arange(size) < len(k) for k in keep]).astype(jdtype)
+    return jnp.take_along_axis(offsets, jnp.asarray(index)[..., None], axis=1), jnp.asarray(weights)
+
+
 def _optimize_core(
     ctx: Context,
     checks: Checks,
@@ -209,21 +241,8 @@ def _optimize_core(
 
     shape = tuple(ref.origin.shape[:-1])
     flat = int(np.prod(shape, dtype=np.int64))
-    n = int(verts.shape[-2])
-    offsets = xp.broadcast_to(verts - light[..., None, :], (*shape, n, 3))
     jdtype = jnp.zeros(()).dtype if ctx.dtype == np.float64 else jnp.float32
-    offsets = jnp.reshape(jnp.asarray(offsets, dtype=jdtype), (flat, n, 3))
-    if ctx.lazy:
-        keep = [np.arange(n)] * flat
-    else:
-        rx = np.broadcast_to(np.asarray(ext.rx), (*shape, n))
-        keep = _hull_candidates(rx, np.broadcast_to(np.asarray(ext.ry), (*shape, n)))
-    size = _pad_size(max(len(k) for k in keep))
-    # Padding repeats the first candidate with weight 0: the hard bounds see a
-    # duplicate, the soft ones drop it.
-    index = np.stack([np.concatenate([k, np.full(size - len(k), k[0])]) for k in keep])
-    weights = np.stack([np.arange(size) < len(k) for k in keep]).astype(jdtype)
-    chosen = jnp.take_along_axis(offsets, jnp.asarray(index)[..., None], axis=1)
+    chosen, weights = _candidates(ctx, verts - light[..., None, :], ext, shape, jdtype)
 
     def to_jax(v: Array, tail: tuple[int, ...]) -> Any:
         v = xp.broadcast_to(v, (*shape, *tail))
@@ -231,7 +250,7 @@ def _optimize_core(
 
     data = (
         chosen,
-        jnp.asarray(weights),
+        weights,
         to_jax(ref.x_axis, (3,)),
         to_jax(ref.y_axis, (3,)),
         to_jax(ref.z_axis, (3,)),

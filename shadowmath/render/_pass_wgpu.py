@@ -292,6 +292,30 @@ def read_wgpu_texture(
     return np.frombuffer(data, dtype=np.float32).reshape(h, w, components).copy()
 
 
+def _depth_map(device: Any, texels: tuple[int, int], bias: tuple[float, float], draws: Any) -> Any:
+    """A ``depth32float`` map drawn with the pipeline's depth bias ``(factor, units)``."""
+    depth_tex = device.create_texture(
+        size=(*texels, 1),
+        format="depth32float",
+        usage=wgpu.TextureUsage.RENDER_ATTACHMENT
+        | wgpu.TextureUsage.TEXTURE_BINDING
+        | wgpu.TextureUsage.COPY_SRC,
+    )
+    draw_depth(device, depth_pipeline(device, bias), depth_tex.create_view(), draws)
+    return depth_tex
+
+
+def _compare_sampler(device: Any) -> Any:
+    """The map's comparison sampler: ``less-equal``, nearest texel, clamped to the edge."""
+    return device.create_sampler(
+        compare="less-equal",
+        mag_filter="nearest",
+        min_filter="nearest",
+        address_mode_u="clamp-to-edge",
+        address_mode_v="clamp-to-edge",
+    )
+
+
 def render_depth_wgpu(
     receivers: Sequence[Body],
     blockers: Sequence[Body],
@@ -360,26 +384,13 @@ def render_depth_wgpu(
     counts = [count for _, count in buffers]
 
     # Pass 1: the depth map.
-    depth_tex = device.create_texture(
-        size=(*map_texels, 1),
-        format="depth32float",
-        usage=wgpu.TextureUsage.RENDER_ATTACHMENT
-        | wgpu.TextureUsage.TEXTURE_BINDING
-        | wgpu.TextureUsage.COPY_SRC,
-    )
     draws = [
         (light_to_clip @ b.to_world, vbo, n) for b, (vbo, n) in zip(bodies, buffers, strict=True)
     ]
-    draw_depth(device, depth_pipeline(device, (factor, units)), depth_tex.create_view(), draws)
+    depth_tex = _depth_map(device, map_texels, (factor, units), draws)
 
     # Pass 2: the bodies from the camera, compared with the map.
-    sampler = device.create_sampler(
-        compare="less-equal",
-        mag_filter="nearest",
-        min_filter="nearest",
-        address_mode_u="clamp-to-edge",
-        address_mode_v="clamp-to-edge",
-    )
+    sampler = _compare_sampler(device)
     depth_view = depth_tex.create_view()
     draws = []
     for i, (b, vbo, count) in enumerate(zip(bodies, vbos, counts, strict=True)):

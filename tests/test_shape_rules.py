@@ -1,0 +1,116 @@
+"""The shape rules of the package's code (issue 26): short functions, few positional arguments.
+
+Read from the source with ``ast``: a function's length counts the lines of its body after
+the docstring; its positional parameters leave out ``self`` and ``cls``.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "shadowmath"
+MAX_LINES = 60
+MAX_POSITIONAL = 5
+
+#: Functions with more positional parameters than the rule allows, from before the rule:
+#: most are per-entry formulas on scalars that Numba compiles (records cost a dispatch
+#: there) and render helpers. The list may only shrink: a new function keeps the rule.
+POSITIONAL_DEBT = frozenset(
+    {
+        "_api/_adaptive_frustum.py:assemble",
+        "_api/_adaptive_frustum.py:bounded_frustum",
+        "_api/_smooth_frustum.py:rolled_frame",
+        "_fits/_atlas.py:_allocate",
+        "_fits/_atlas.py:_fit_2d",
+        "_fits/_atlas.py:_fit_cubes",
+        "_fits/_atlas.py:_group_key",
+        "_fits/_atlas.py:_layout",
+        "_fits/_cube_depth.py:cube_depth_core",
+        "_fits/_fitting.py:_optimize_core",
+        "_fits/_fitting.py:optimized_setup",
+        "_fits/_lispsm.py:_rows",
+        "_fits/_lispsm.py:warp_cascades",
+        "_fits/_setup.py:assemble",
+        "_fits/_spot_select.py:spot_selection",
+        "_math/_bias.py:_depth_slope",
+        "_math/_bias.py:normal_offset",
+        "_math/_bias.py:slope_scaled_bias",
+        "_math/_bias.py:texel_size_on_surface",
+        "_math/_cube.py:cube_face_projection",
+        "_math/_cube.py:cube_face_projection_scalar",
+        "_math/_fit_formulas.py:_corner_far",
+        "_math/_fit_formulas.py:_edge_far",
+        "_math/_fit_formulas.py:box_sides",
+        "_math/_fit_formulas.py:directional_origin",
+        "_math/_fit_formulas.py:fit_rows",
+        "_math/_fit_formulas.py:ortho_rows",
+        "_math/_fit_formulas.py:point_sides",
+        "_math/_fit_formulas.py:safe_box",
+        "_math/_fit_formulas.py:stable_sides",
+        "_math/_formulas.py:light_rows",
+        "_math/_formulas.py:projection_rows",
+        "_math/_formulas.py:rolled_axes",
+        "_math/_passes.py:extent",
+        "_math/_pcf.py:pcf",
+        "_math/_soft.py:area_light_samples",
+        "render/_pass_atlas.py:_frame",
+        "render/_pass_atlas.py:_shade_all",
+        "render/_pass_cascades.py:_shade",
+        "render/_pass_cascades.py:prepare_cascades",
+        "render/_pass_cascades_wgpu.py:_draw_camera",
+        "render/_pass_wgpu.py:_scene_uniforms",
+        "render/_resources.py:__init__",
+    }
+)
+
+
+def _functions() -> Iterator[tuple[str, ast.FunctionDef | ast.AsyncFunctionDef]]:
+    for path in sorted(PACKAGE.rglob("*.py")):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                yield f"{path.relative_to(PACKAGE).as_posix()}:{node.name}", node
+
+
+def _code_lines(node: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    body = node.body
+    first = body[0]
+    docstring = isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant)
+    if docstring and isinstance(first.value.value, str):
+        if len(body) == 1:
+            return 0
+        first = body[1]
+    end = node.end_lineno or first.lineno
+    return end - first.lineno + 1
+
+
+def _positional(node: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    names = [a.arg for a in (*node.args.posonlyargs, *node.args.args)]
+    return len(names) - (1 if names[:1] in (["self"], ["cls"]) else 0)
+
+
+def test_no_function_is_longer_than_a_screen() -> None:
+    long = {name: n for name, node in _functions() if (n := _code_lines(node)) > MAX_LINES}
+    assert long == {}
+
+
+def test_no_new_function_takes_more_than_five_positional_arguments() -> None:
+    many = {name for name, node in _functions() if _positional(node) > MAX_POSITIONAL}
+    assert many - POSITIONAL_DEBT == set()
+    assert POSITIONAL_DEBT - many == set(), "paid off: remove it from POSITIONAL_DEBT"
+
+
+@pytest.mark.parametrize(
+    ("source", "lines", "positional"),
+    [
+        ('def f(a, b):\n    """Doc."""\n    x = 1\n    return x\n', 2, 2),
+        ("class C:\n    def m(self, a, b, c, d, e, f):\n        return a\n", 1, 6),
+    ],
+)
+def test_the_rules_read_the_source(source: str, lines: int, positional: int) -> None:
+    node = next(n for n in ast.walk(ast.parse(source)) if isinstance(n, ast.FunctionDef))
+    assert (_code_lines(node), _positional(node)) == (lines, positional)
