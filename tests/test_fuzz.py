@@ -890,6 +890,49 @@ def test_fuzz_fit_shadow_scene_options(dtype: Any, data: st.DataObject) -> None:
         _check_stable_scale(call, s, dtype, data.draw(st.integers(0, 2**32 - 1)))
 
 
+_FRAME_OPERANDS = ("blocker_to_world", "receivers", "up", "near", "far")
+
+
+def _fit_or_message(fn: Any, *args: Any, **kwargs: Any) -> Any:
+    """``fn``'s result, or the message of the ValueError it raised (warnings silenced)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sm.ShadowFitWarning)
+        try:
+            return fn(*args, **kwargs)
+        except ValueError as error:
+            return str(error)
+
+
+@DTYPES
+@given(data=st.data())
+def test_fuzz_shadow_fitter(dtype: Any, data: st.DataObject) -> None:
+    """A ShadowFitter prepared on one call fits each later frame (the casters moved) exactly as
+    fit_shadow fits that frame, into the caller's buffers, and refuses what fit_shadow refuses
+    with the same message."""
+    call = data.draw(fit_calls(dtype))
+    CASES[f"ShadowFitter ({call.scene.kind})"] += 1
+    (light, local, map_size), kwargs = _fit_args(call, dtype)
+    frame = {k: v for k, v in kwargs.items() if k in _FRAME_OPERANDS}
+    fitter = _fit_or_message(sm.ShadowFitter, light, local, map_size, **kwargs)
+    if isinstance(fitter, str):  # refused as fit_shadow refuses it
+        assert fitter == _fit_or_message(sm.fit_shadow, light, local, map_size, **kwargs)
+        return
+    out = fitter.buffers()
+    shift = np.asarray(data.draw(st.tuples(*[st.floats(-0.5, 0.5)] * 3)))
+    verts = np.asarray(local, np.float64)
+    size = float(np.ptp(verts, axis=0).max())
+    moved = (verts + shift * size).astype(dtype)
+    got = _fit_or_message(fitter.fit, light, moved, out=out, **frame)
+    want = _fit_or_message(sm.fit_shadow, light, moved, map_size, **kwargs)
+    if isinstance(want, str):
+        assert got == want
+        return
+    assert isinstance(got, sm.PreparedFit)
+    for name in ("world_to_texture", "blocker_to_clip", "world_to_light"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(want, name))
+    assert np.shares_memory(got.blocker_to_clip, out.mats)
+
+
 def _check_wide_warning(call: FitCall, s: sm.ShadowSetup, dtype: Any, messages: list[str]) -> None:
     """A point or spot fit warns exactly when its frustum is wider than 120 degrees: the widest
     ratio at the map's edge, |c| + h / m, beyond tan 60 degrees (NumPy only)."""
@@ -2493,6 +2536,8 @@ def test_fuzz_gather_meshes(data: st.DataObject) -> None:
 
 
 PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
+    "ShadowFitter": ("test_fuzz_shadow_fitter",),
+    "PreparedFit": ("test_fuzz_shadow_fitter",),
     "GRAPHICS_APIS": ("test_fuzz_api_convention", "test_fuzz_fit_shadow_scene_options"),
     "NEAR_FAR_SLACK": ("test_fuzz_fit_shadow_scene_options",),
     "ApiConvention": ("test_fuzz_api_convention",),

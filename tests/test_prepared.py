@@ -118,3 +118,12 @@ def test_jax_is_refused() -> None:
 
     with pytest.raises(TypeError, match=r"jax\.jit"):
         sm.ShadowFitter(sm.PointLight(jnp.zeros(3)), jnp.asarray(_box()), 64)
+
+
+def test_a_homogeneous_light_is_read_every_frame() -> None:
+    box = _box()
+    fitter = sm.ShadowFitter(np.array([0.0, 0.0, 0.0, 1.0]), box, 64)
+    for light in (np.array([0.0, 0.2, 0.0, 0.5]), np.array([0.1, 0.0, 0.0, 2.0])):
+        _same(fitter.fit(light, box), sm.fit_shadow(light, box, 64))
+    with pytest.raises(ValueError, match="not the prepared fit"):
+        fitter.fit(np.array([0.0, 0.0, -1.0, 0.0]), box)  # a directional light now

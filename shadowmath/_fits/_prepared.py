@@ -28,6 +28,7 @@ from ._setup import (
     Operands,
     _check_static,
     _fit,
+    _light_kind,
     _receiver_rows,
     _spot_array,
     open_door,
@@ -168,7 +169,11 @@ class ShadowFitter:
         door = self._door
         ctx = door.ctx
         light, casters, B, R, U, n, f = _arrays(g)
-        if door.key.spot:
+        if not isinstance(g.light, tuple):  # a raw (x, y, z) or (x, y, z, w): read its kind
+            directional, light = _light_kind(ctx, None, light)
+            if directional != door.key.directional:
+                return None  # (the full door refuses it)
+        elif door.key.spot:
             angle = np.asarray(g.light[2], dtype=ctx.dtype)
             light = _spot_array(ctx, light, g.light[1], angle)
         rows = casters.reshape(*casters.shape[:-3], -1, 3) if door.triangles else casters
