@@ -12,7 +12,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import example, given
 from hypothesis import strategies as st
 
 from shadowmath import api_convention, normal_offset, slope_scaled_bias, texel_world_size
@@ -232,7 +232,10 @@ def lookup_ok(M, n, c, points, bias, W, H, reach: float, reversed_z: bool) -> np
             d, drawn = stored_depth(M, n, c, col, row, W, H)
             used &= drawn
             scale = 1 + 1e-9
-            lit = r + bias * scale >= d if reversed_z else r - bias * scale <= d
+            # r and d are the same plane's depth computed along two paths: a few ulps apart
+            # where the plane faces the light and the bias or offset is (nearly) zero.
+            ulps = 64 * np.finfo(np.float64).eps * np.maximum(np.abs(r), np.abs(d))
+            lit = r + bias * scale >= d - ulps if reversed_z else r - bias * scale <= d + ulps
             ok &= lit | ~used
     return ok
 
@@ -312,6 +315,7 @@ def test_constant_term_and_depth_bits() -> None:
 
 @pytest.mark.parametrize(("radius", "filt"), [(0, "box"), (1, "box"), (1, "bilinear")])
 @given(seed=seeds, size=sizes)
+@example(seed=4393, size=(128, 272))  # a plane facing the light within 0.01 degrees
 def test_normal_offset_makes_a_plane_acne_free_directional(
     radius: int, filt: str, seed: int, size
 ) -> None:
