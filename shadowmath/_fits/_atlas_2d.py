@@ -16,11 +16,7 @@ from numpy.typing import NDArray
 from shadowmath._api._adaptive_frustum import border_margin
 from shadowmath._backends import _kernels
 from shadowmath._boundary._status import WIDE_WARNING, fit_messages
-from shadowmath._boundary._validate import (
-    Array,
-    Checks,
-    Context,
-)
+from shadowmath._boundary._validate import Array, Checks, Context
 from shadowmath._math._frame import stack_matrix
 
 from . import _compiled

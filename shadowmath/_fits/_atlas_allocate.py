@@ -13,13 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shadowmath._boundary._shapes import ArrayLike, Bool, Float, Int, Real
-from shadowmath._boundary._validate import (
-    integer,
-    non_finite,
-    real,
-    real_array,
-    shape_error,
-)
+from shadowmath._boundary._validate import integer, non_finite, real, real_array, shape_error
 from shadowmath._math import _atlas_tiles as tiles
 
 __all__ = ["ShadowAtlas", "allocate_atlas", "find_tiles"]

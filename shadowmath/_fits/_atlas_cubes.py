@@ -12,11 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._boundary._validate import (
-    Array,
-    Context,
-    non_finite,
-)
+from shadowmath._boundary._validate import Array, Context, non_finite
 from shadowmath._math._conventions import texture_from_clip as _texture_from_clip
 from shadowmath._math._cube import APIS as _APIS
 from shadowmath._math._cube import cube_face_views as _cube_face_views

@@ -26,13 +26,7 @@ from numpy.typing import NDArray
 from shadowmath._api._api_convention import check_api as _check_api
 from shadowmath._api._depth_bias import check_kernel as _check_kernel
 from shadowmath._boundary._shapes import ArrayLike, Float, Int, Real
-from shadowmath._boundary._validate import (
-    RECEIVER_KINDS,
-    Array,
-    convert,
-    non_finite,
-    shape_error,
-)
+from shadowmath._boundary._validate import RECEIVER_KINDS, Array, convert, non_finite, shape_error
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._pcf import border_texels as _border_texels

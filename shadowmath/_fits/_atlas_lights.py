@@ -12,10 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._boundary._validate import (
-    require_last,
-    shape_error,
-)
+from shadowmath._boundary._validate import require_last, shape_error
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 
 from ._light_kinds import KIND_OF, POINT, SPOT, SUN, homogeneous, spot_row

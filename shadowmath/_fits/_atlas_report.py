@@ -12,10 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._boundary._validate import (
-    Array,
-    Context,
-)
+from shadowmath._boundary._validate import Array, Context
 
 from ._spec import api_rows
 
