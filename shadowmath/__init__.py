@@ -78,13 +78,13 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._api._smooth_frustum import smooth_frustum as smooth_frustum
     from ._api._smooth_frustum import smooth_max as smooth_max
     from ._boundary._messages import ShadowFitWarning as ShadowFitWarning
-    from ._fits._atlas import AtlasFit as AtlasFit
-    from ._fits._atlas import ShadowAtlas as ShadowAtlas
-    from ._fits._atlas import allocate_atlas as allocate_atlas
-    from ._fits._atlas import atlas_tile_transforms as atlas_tile_transforms
-    from ._fits._atlas import atlas_viewports as atlas_viewports
-    from ._fits._atlas import fit_atlas as fit_atlas
+    from ._fits._atlas_allocate import ShadowAtlas as ShadowAtlas
+    from ._fits._atlas_allocate import allocate_atlas as allocate_atlas
+    from ._fits._atlas_fit import AtlasFit as AtlasFit
+    from ._fits._atlas_fit import fit_atlas as fit_atlas
     from ._fits._atlas_redraw import atlas_redraw as atlas_redraw
+    from ._fits._atlas_viewports import atlas_tile_transforms as atlas_tile_transforms
+    from ._fits._atlas_viewports import atlas_viewports as atlas_viewports
     from ._fits._cascade_splits import cascade_splits as cascade_splits
     from ._fits._cascades import Cascades as Cascades
     from ._fits._cascades import fit_cascades as fit_cascades
@@ -173,15 +173,10 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "smooth_max",
     ),
     "._boundary._messages": ("ShadowFitWarning",),
-    "._fits._atlas": (
-        "AtlasFit",
-        "ShadowAtlas",
-        "allocate_atlas",
-        "atlas_tile_transforms",
-        "atlas_viewports",
-        "fit_atlas",
-    ),
+    "._fits._atlas_allocate": ("ShadowAtlas", "allocate_atlas"),
+    "._fits._atlas_fit": ("AtlasFit", "fit_atlas"),
     "._fits._atlas_redraw": ("atlas_redraw",),
+    "._fits._atlas_viewports": ("atlas_tile_transforms", "atlas_viewports"),
     "._fits._cascade_splits": ("cascade_splits",),
     "._fits._cascades": (
         "Cascades",

@@ -13,7 +13,8 @@ from numpy.typing import NDArray
 
 from shadowmath._boundary._shapes import Bool
 
-from ._atlas import AtlasFit, _find_tiles
+from ._atlas_allocate import find_tiles
+from ._atlas_fit import AtlasFit
 
 __all__ = ["atlas_redraw"]
 
@@ -83,7 +84,7 @@ def atlas_redraw(fit: AtlasFit, previous: AtlasFit | None) -> Bool[NDArray[np.bo
         return np.ones(count, dtype=bool)
     if tuple(previous.texture_size) != tuple(fit.texture_size):
         return np.ones(count, dtype=bool)
-    at = _find_tiles(fit.tile_id, fit.tile_face, previous.tile_id, previous.tile_face)
+    at = find_tiles(fit.tile_id, fit.tile_face, previous.tile_id, previous.tile_face)
     had = at >= 0
     old = np.where(had, at, 0)
     same_port = np.all(np.asarray(previous.viewports)[old] == np.asarray(fit.viewports), axis=1)
