@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 
 import shadowmath as sm
-from shadowmath._fits import _atlas, _spot_select
+from shadowmath._fits import _atlas_2d, _spot_select
 from shadowmath.render import render_atlas
 
 from .depth_scenes import compare
@@ -119,7 +119,7 @@ def test_dropping_a_caster_that_shadows_a_lit_point_loses_pixels(
 ) -> None:
     """Light 16's selection with the box at (2, -2) taken out (its triangles moved behind
     the light): the box is clipped out of its map and its shadow lost off the band."""
-    monkeypatch.setattr(_atlas, "spot_selection", losing_box(_spot_select.spot_selection))
+    monkeypatch.setattr(_atlas_2d, "spot_selection", losing_box(_spot_select.spot_selection))
     frame = render(gl)
     lost = compare(frame.shadow[16] > 0.5, truth(frame, ALL[16]))
     assert lost.differ_off_band > 100, lost
