@@ -141,6 +141,24 @@ def cube_rows(cfg: Config, light: np.ndarray) -> list[Row]:
     ]
 
 
+def _full_door_row(cfg: Config, light: np.ndarray, verts: np.ndarray, base: Timing) -> Row:
+    """A call whose arguments are of a kind not seen before: the whole door (conversion,
+    kinds, shapes, static key) runs, as on the first call of each kind."""
+    from shadowmath._fits import _door
+
+    def fresh() -> object:
+        _door._DOORS.clear()
+        return sm.fit_shadow(light, verts, MAP_SIZE)
+
+    t = measure(fresh, repeats=cfg.repeats(7), min_time=cfg.min_time)
+    return Row(
+        "fit_shadow, 8 vertices, NumPy float64, the whole door (a new kind of arguments)",
+        t,
+        "PyGLM lookAt + perspective, bounding sphere",
+        base,
+    )
+
+
 def _prepared_row(cfg: Config, light: np.ndarray, verts: np.ndarray, base: Timing) -> Row:
     """The per-frame path: a :class:`ShadowFitter` fitting into buffers it was given."""
     typed = sm.PointLight(light)
@@ -188,6 +206,7 @@ def run(cfg: Config) -> Section:
             )
         )
         if is8:
+            rows.append(_full_door_row(cfg, light, verts, base))
             rows.append(_prepared_row(cfg, light, verts, base))
     assert glm8 is not None
 

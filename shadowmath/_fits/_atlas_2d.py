@@ -101,7 +101,7 @@ class _Block:
     def run(self, key: FitKey, a: Inputs, part: slice, lights: Ints, report: Report) -> None:
         count = part.stop - part.start
         status = self.status[part]
-        operands = _compiled.operands((count,), a, count == 1)
+        operands = _compiled.operands((count,), a)
         options, _ = _compiled.options(key, self.ctx.dtype)
         _kernels.loops().fit_loop(operands, options, (self.out[part], self.mats[part], status))
         errors = status & ~WIDE_WARNING

@@ -39,8 +39,8 @@ from ._atlas_cubes import fit_cubes
 from ._atlas_lights import read_lights
 from ._atlas_report import Report, gather
 from ._atlas_viewports import atlas_viewports, tile_transforms
+from ._door import _receiver_kind, _receiver_rows, caster_triangles
 from ._light_kinds import POINT
-from ._setup import _receiver_kind, _receiver_rows, caster_triangles
 from ._spec import ShadowMapSpec, map_spec
 
 __all__ = ["AtlasFit", "fit_atlas"]

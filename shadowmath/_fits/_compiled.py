@@ -59,20 +59,20 @@ class Buffers(NamedTuple):
 def buffers(count: int, dtype: Any) -> Buffers:
     """Empty :class:`Buffers` for ``count`` entries of ``dtype``."""
     return Buffers(
-        np.empty((count, ROW), dtype=dtype),
-        np.empty((count, 4, 4, 4), dtype=dtype),
-        np.empty(count, dtype=np.int32),
+        np.empty((count, ROW), dtype), np.empty((count, 4, 4, 4), dtype), np.empty(count, np.int32)
     )
 
 
 def fit(
-    ctx: Context, key: FitKey, shape: tuple[int, ...], a: Inputs, *, python: bool = False
-) -> ShadowSetup:
+    ctx: Context, key: FitKey, shape: tuple[int, ...], a: Inputs, *, used: Array,
+    python: bool = False,
+) -> ShadowSetup:  # fmt: skip
     """The fit of ``key`` for every batch entry, from the compiled loop (or, ``python``,
-    the same loop run by Python on lists: one small fit without Numba)."""
+    the same loop run by Python on lists: one small fit without Numba), with
+    ``casters_used``."""
     out = buffers(math.prod(shape), ctx.dtype)
     run(ctx, key, shape, a, out, python=python)
-    return _views(key, shape, out.rows, out.mats)
+    return views(key, shape, out, used)
 
 
 def run(
@@ -85,14 +85,15 @@ def run(
     """
     status = out.status
     one = len(status) == 1
-    arrays = operands(shape, a, one)
+    arrays = operands(shape, a)
     if python:
         lists = tuple(v.tolist() for v in arrays)
         python_record = options(key, ctx.dtype)[1]
         scalar_formulas().fit_loop(lists, [python_record], out)
     else:
         record = options(key, ctx.dtype)[0] if record is None else record
-        _kernels.loops().fit_loop(arrays, record, out)
+        # (a plain tuple: Numba dispatches it about 0.6 us faster than the NamedTuple)
+        _kernels.loops().fit_loop(arrays, record, (out.rows, out.mats, status))
     if status[0] if one else status.any():
         errors = status & ~WIDE_WARNING
         if errors[0] if one else errors.any():
@@ -101,13 +102,16 @@ def run(
         msg.warn_wide()
 
 
-def operands(shape: tuple[int, ...], a: Inputs, one: bool) -> tuple[Array, ...]:
+def operands(shape: tuple[int, ...], a: Inputs) -> tuple[Array, ...]:
     """The loop's array operands, ``(count or 1, ...)`` each."""
+    if not shape:  # one entry: no batch axes to flatten
+        light, verts = a.light[None], a.verts[None]
+    else:
+        light = flat_batch(a.light, shape, a.light.shape[-1:])
+        verts = flat_batch(a.verts, shape, a.verts.shape[-2:])
     return (
-        a.light.reshape(1, -1) if one else flat_batch(a.light, shape, a.light.shape[-1:]),
-        a.verts.reshape(1, *a.verts.shape[-2:])
-        if one
-        else flat_batch(a.verts, shape, a.verts.shape[-2:]),
+        light,
+        verts,
         _IDENTITY if a.B is None else flat_batch(a.B, shape, (4, 4)),
         _NO_POINTS if a.R is None else flat_batch(a.R, shape, a.R.shape[-2:]),
         _NO_VECTOR if a.U is None else flat_batch(a.U, shape, (3,)),
@@ -116,23 +120,21 @@ def operands(shape: tuple[int, ...], a: Inputs, one: bool) -> tuple[Array, ...]:
     )
 
 
-def _views(key: FitKey, shape: tuple[int, ...], out: Array, mats: Array) -> ShadowSetup:
-    """The setup as views of the two output blocks (first-axis indexing: the cheapest views)."""
+def views(key: FitKey, shape: tuple[int, ...], out: Buffers, used: Array) -> ShadowSetup:
+    """The setup as views of the output blocks, with ``casters_used`` (first-axis
+    indexing: the cheapest views; one entry's frustum fields are NumPy scalars)."""
+    rows, mats = out.rows, out.mats
     if shape:
-        v = np.moveaxis(out.reshape(*shape, ROW), -1, 0)
+        v = np.moveaxis(rows.reshape(*shape, ROW), -1, 0)
         M = np.moveaxis(mats.reshape(*shape, 4, 4, 4), -3, 0)
         frame = LightFrame(*(np.moveaxis(v[i : i + 3], 0, -1) for i in (0, 3, 6, 9)))
-        frustum = _frustum(tuple(v[12:20]), key.directional)
+        fields: Any = v[12:20]
     else:
-        v, M = out[0], mats[0]
-        frame = LightFrame(v[0:3], v[3:6], v[6:9], v[9:12])
-        fields = tuple(v[..., i] for i in range(12, 20))  # 0-d arrays, not scalars
-        frustum = _frustum(fields, key.directional)
-    return ShadowSetup(frame, frustum, M[0], M[3], M[1], M[2])
-
-
-def _frustum(v: tuple[Array, ...], directional: bool) -> Frustum:
-    return Frustum(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], directional)
+        v, M = rows[0], mats[0]
+        frame = LightFrame._make((v[0:3], v[3:6], v[6:9], v[9:12]))
+        fields = v[12:20]
+    frustum = Frustum._make((*fields, key.directional))
+    return ShadowSetup._make((frame, frustum, M[0], M[3], M[1], M[2], used))
 
 
 #: The compiled loop's options record: :class:`FitOptions`' fields by name, then the

@@ -29,7 +29,7 @@ from shadowmath._boundary._validate import (
 from shadowmath._math._frustum import NEAR_FAR_SLACK
 from shadowmath.receivers import Mesh, Triangles
 
-from ._setup import _receiver_kind, _receiver_rows, caster_triangles
+from ._door import _receiver_kind, _receiver_rows, caster_triangles
 
 
 class CubeDepthRange(NamedTuple):

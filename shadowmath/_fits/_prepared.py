@@ -17,23 +17,11 @@ import numpy as np
 
 from shadowmath._backends import _kernels
 from shadowmath._boundary._validate import Array
-from shadowmath.lights import SpotLight
-from shadowmath.receivers import Mesh, Triangles
 
 from . import _compiled
 from ._compiled import Buffers
-from ._fit_arrays import Inputs
-from ._setup import (
-    Door,
-    Operands,
-    _check_static,
-    _fit,
-    _light_kind,
-    _receiver_rows,
-    _spot_array,
-    open_door,
-    select_casters,
-)
+from ._door import Door, Operands, PreparedDoor, _check_static, open_door, select_casters, signature
+from ._setup import _fit
 from ._spec import ShadowMapSpec, map_spec
 
 __all__ = ["PreparedFit", "ShadowFitter"]
@@ -117,8 +105,8 @@ class ShadowFitter:
                 "ShadowFitter prepares NumPy fits; under JAX, jax.jit(fit_shadow) is "
                 "prepared per static key already"
             )
-        self._door = door
-        self._signature = _signature(g)
+        self._door = PreparedDoor.of(door, signature(g))  # no arrays kept
+        self._views: tuple[Any, ...] = ()
         self._record = _compiled.options(door.key, door.ctx.dtype)[0]
         self._count = int(np.prod(door.shape, dtype=np.int64))
 
@@ -140,7 +128,9 @@ class ShadowFitter:
     ) -> PreparedFit:
         """This frame's fit of the prepared kind (see the class): views of ``out``."""
         g = Operands(light, blocker_vertices, blocker_to_world, receivers, up, near, far)
-        door = self._fast_door(g)
+        prepared, door = self._door, None
+        if prepared.signature is not None and signature(g) == prepared.signature:
+            door = prepared.reopen(g)
         if door is None:
             door = self._checked_door(g)
         a, used = select_casters(door)
@@ -148,38 +138,18 @@ class ShadowFitter:
         if _kernels.available():
             _compiled.run(door.ctx, door.key, door.shape, a, out, record=self._record)
         else:
-            setup = _fit(door.ctx, a, door.shape, door.key, "mdv")
-            _copy(setup, out, self._count)
-        shape = (*door.shape, 4, 4)
-        M = out.mats
-        return PreparedFit(
-            M[:, 2].reshape(shape), M[:, 1].reshape(shape), M[:, 0].reshape(shape), used, out
-        )
+            _copy(_fit(door.ctx, a, door.shape, door.key, "mdv", used=used), out, self._count)
+        views = self._views
+        if not views or views[0] is not out:  # the matrices' views of these buffers, once
+            M, shape = out.mats, (*self._door.shape, 4, 4)
+            views = (out, *(M[:, k].reshape(shape) for k in (2, 1, 0)))
+            self._views = views
+        return PreparedFit(views[1], views[2], views[3], used, out)
 
     def setup(self, frame: PreparedFit) -> Any:
         """The whole :class:`ShadowSetup` of a :meth:`fit` (frame, frustum, every matrix)."""
         key, shape = self._door.key, self._door.shape
-        setup = _compiled._views(key, shape, frame.buffers.rows, frame.buffers.mats)
-        return setup._replace(casters_used=frame.casters_used)
-
-    def _fast_door(self, g: Operands) -> Door | None:
-        """The prepared door when every operand is of the prepared kind, shape and dtype."""
-        if self._signature is None or _signature(g) != self._signature:
-            return None
-        door = self._door
-        ctx = door.ctx
-        light, casters, B, R, U, n, f = _arrays(g)
-        if not isinstance(g.light, tuple):  # a raw (x, y, z) or (x, y, z, w): read its kind
-            directional, light = _light_kind(ctx, None, light)
-            if directional != door.key.directional:
-                return None  # (the full door refuses it)
-        elif door.key.spot:
-            angle = np.asarray(g.light[2], dtype=ctx.dtype)
-            light = _spot_array(ctx, light, g.light[1], angle)
-        rows = casters.reshape(*casters.shape[:-3], -1, 3) if door.triangles else casters
-        if R is not None:
-            R = _receiver_rows(ctx, "triangles" if door.key.triangles else "points", R, g.receivers)
-        return door._replace(a=Inputs(light, rows, B, R, U, n, f), casters=casters)
+        return _compiled.views(key, shape, frame.buffers, frame.casters_used)
 
     def _checked_door(self, g: Operands) -> Door:
         door = open_door(g, self._spec, self._aim_bbox)
@@ -192,43 +162,6 @@ class ShadowFitter:
                 "ShadowFitter for them"
             )
         return door
-
-
-def _arrays(g: Operands) -> tuple[Any, ...]:
-    """The operands' arrays (a typed light's first array; surfaces' corners)."""
-    light = g.light[0] if isinstance(g.light, tuple) else g.light
-    casters = g.blocker_vertices
-    casters = casters[0] if isinstance(casters, tuple) else casters
-    receivers = g.receivers[0] if isinstance(g.receivers, tuple) else g.receivers
-    return (light, casters, g.blocker_to_world, receivers, g.up, g.near, g.far)
-
-
-def _signature(g: Operands) -> tuple[Any, ...] | None:
-    """The operands' types, dtypes and shapes; None where one is not a NumPy array (or
-    is a Mesh: its faces index per call, through the full door).
-
-    The number of casters and receivers may change from frame to frame: their axis is
-    left out (``-2`` of points, ``-3`` of triangles' corners).
-    """
-    if isinstance(g.blocker_vertices, Mesh) or isinstance(g.receivers, Mesh):
-        return None
-    out: list[Any] = [type(v) for v in g]
-    for i, v in enumerate(_arrays(g)):
-        if v is None:
-            continue
-        if type(v) is not np.ndarray:
-            return None
-        shape = v.shape
-        if i in (1, 3):  # casters, receivers
-            k = v.ndim - (3 if isinstance(g[i], Triangles) else 2)
-            shape = shape[:k] + shape[k + 1 :]
-        out += [v.dtype, shape]
-    if isinstance(g.light, SpotLight):
-        d = g.light.direction
-        if type(d) is not np.ndarray:
-            return None
-        out += [d.dtype, d.shape, np.shape(g.light.angle)]
-    return tuple(out)
 
 
 def _copy(setup: Any, out: Buffers, count: int) -> None:

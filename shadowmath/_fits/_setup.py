@@ -16,8 +16,7 @@ three ways:
 from __future__ import annotations
 
 import functools
-import math
-from typing import Any, Literal, NamedTuple
+from typing import Any, Literal
 
 import numpy as np
 
@@ -30,33 +29,25 @@ from shadowmath._boundary._validate import (
     Checks,
     Context,
     all_finite,
-    batch_shape,
-    check_faces,
     convert,
-    is_tracer,
     non_finite,
     raise_recorded,
     recorded_jit,
-    require_last,
     require_matrix,
-    require_no_new_batch,
-    require_vertices,
-    shape_error,
 )
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._frame import LightFrame, stack_matrix
 from shadowmath._math._frustum import Frustum
 from shadowmath._math._specialize import formulas, scalar_formulas
-from shadowmath.lights import DirectionalLight, Light, PointLight, SpotLight
+from shadowmath.lights import Light
 from shadowmath.receivers import Mesh, Triangles
 
 from . import _compiled
+from ._door import Operands, _check_shapes, door_for, select_casters
 from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
-from ._light_kinds import homogeneous, spot_rows
 from ._shadow_setup import ShadowSetup
-from ._spec import FitKey, ShadowMapSpec, api_rows, map_spec
-from ._spot_select import spot_selection
+from ._spec import FitKey, ShadowMapSpec, map_spec
 
 __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
@@ -236,99 +227,36 @@ def fit_shadow(
                     pcf_filter=pcf_filter, margin=margin, api=api, reversed_z=reversed_z,
                     stable=stable)  # fmt: skip
     operands = Operands(light, blocker_vertices, blocker_to_world, receivers, up, near, far)
-    door = open_door(operands, spec, aim == "bbox")
-    _check_static(door.key, method, spec)
+    door = door_for(operands, spec, aim == "bbox", method)
     a, used = select_casters(door)
-    return _fit(door.ctx, a, door.shape, door.key, method)._replace(casters_used=used)
+    return _fit(door.ctx, a, door.shape, door.key, method, used=used)
 
 
-class Operands(NamedTuple):
-    """:func:`fit_shadow`'s arrays as given (before the door)."""
-
-    light: Any
-    blocker_vertices: Any
-    blocker_to_world: Any = None
-    receivers: Any = None
-    up: Any = None
-    near: Any = None
-    far: Any = None
-
-
-class Door(NamedTuple):
-    """What the door of :func:`fit_shadow` read: trusted arrays, batch shape, static key."""
-
-    ctx: Context
-    a: Inputs
-    shape: tuple[int, ...]
-    key: FitKey
-    casters: Array  # (*batch, N, 3) points or (*batch, M, 3, 3) triangles
-    triangles: bool  # casters are triangles
-
-
-def open_door(g: Operands, spec: ShadowMapSpec, aim_bbox: bool) -> Door:
-    """Convert and check :func:`fit_shadow`'s arrays once: kinds, dtypes and shapes."""
-    light = g.light
-    spot = isinstance(light, SpotLight)
-    if isinstance(light, SpotLight):  # (not `spot`: mypy narrows the type)
-        named = {"light.position": light[0], "light.direction": light[1], "light.angle": light[2]}
-    else:
-        named = {"light": light[0] if isinstance(light, PointLight | DirectionalLight) else light}
-    kind, r_name, r_array = _receiver_kind(g.receivers)
-    c_kind, c_name, c_array = _receiver_kind(g.blocker_vertices, "blocker_vertices")
-    ctx, (*parts, verts, B, n, f, R, U) = convert(
-        **named, **{c_name: c_array}, blocker_to_world=g.blocker_to_world, near=g.near,
-        far=g.far, **{r_name: r_array}, up=g.up,
-    )  # fmt: skip
-    if R is not None:
-        R = _receiver_rows(ctx, kind, R, g.receivers)
-    if spot:
-        directional, L = False, _spot_array(ctx, *parts)
-    else:
-        typed = None  # a raw array: its kind is read from w
-        if isinstance(light, PointLight | DirectionalLight):
-            typed = isinstance(light, DirectionalLight)
-        directional, L = _light_kind(ctx, typed, parts[0])
-    casters = verts
-    if c_kind != "points":
-        casters = caster_triangles(ctx, c_kind, verts, g.blocker_vertices, "blocker_vertices")
-        verts = ctx.xp.reshape(casters, (*casters.shape[:-3], -1, 3))
-    a = Inputs(L, verts, B, R, U, n, f)
-    shape = _check_shapes(a)
-    given = (B is not None, R is not None, U is not None, n is not None, f is not None)
-    key = _fit_key(directional, spot, aim_bbox, spec, (*given, kind != "points"))
-    return Door(ctx, a, shape, key, casters, c_kind != "points")
-
-
-def select_casters(door: Door) -> tuple[Inputs, Array]:
-    """The casters the fit uses (a spot light's, clipped to its cone) and their count."""
-    ctx, a, shape = door.ctx, door.a, door.shape
-    xp = ctx.xp
-    if door.key.spot:
-        selection = spot_selection(ctx, a.light, a.U, a.B, door.casters, door.triangles)
-        used = selection.kept
-        if tuple(used.shape) != shape:
-            used = xp.broadcast_to(used, shape)
-        return a._replace(verts=selection.points), used
-    # every caster, in every entry (a 0-d array costs a fraction of broadcast_to)
-    count = door.casters.shape[-3 if door.triangles else -2]
-    return a, np.array(count) if not shape and xp is np else xp.full(shape, count)
-
-
-def _fit(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey, method: str) -> ShadowSetup:
-    """The fit of trusted, shape-checked inputs by the driver that suits them."""
+def _fit(
+    ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey, method: str, *, used: Array
+) -> ShadowSetup:
+    """The fit of trusted, shape-checked inputs by the driver that suits them, with
+    ``casters_used``."""
     if method == "optimized":
-        return _optimized(ctx, a, key.margins)
+        return _optimized(ctx, a, key.margins)._replace(casters_used=used)
+    if not ctx.is_jax:
+        if _kernels.available():
+            return _compiled.fit(ctx, key, shape, a, used=used)
+        small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
+        if small and _kernels.python_loop():
+            return _compiled.fit(ctx, key, shape, a, used=used, python=True)
+    return _fit_arrays(ctx, a, shape, key)._replace(casters_used=used)
+
+
+def _fit_arrays(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey) -> ShadowSetup:
+    """The fit on whole arrays: JAX (under one cached ``jax.jit`` when concrete), or NumPy
+    without Numba."""
     if ctx.is_jax and not ctx.lazy:
         run, messages = _jitted_fit(key)
         setup: ShadowSetup
         setup, bad = run(*a)
         raise_recorded(messages, bad)
         return setup
-    if not ctx.is_jax and _kernels.available():
-        return _compiled.fit(ctx, key, shape, a)
-    small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
-    if not ctx.is_jax and small and _kernels.python_loop():
-        return _compiled.fit(ctx, key, shape, a, python=True)
     checks = Checks(ctx)
     if ctx.is_jax:
         entries = fit_arrays(ctx, checks, key, a, driver(ctx, scalar=False))
@@ -341,175 +269,9 @@ def _fit(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey, method: s
     return assemble(ctx, checks, key, shape, a.B, entries)
 
 
-@functools.lru_cache(maxsize=256)
-def _fit_key(
-    directional: bool, spot: bool, aim_bbox: bool, spec: ShadowMapSpec, given: tuple[bool, ...]
-) -> FitKey:
-    """The static key of a call (cached: the same few recur every frame)."""
-    return FitKey(
-        directional,
-        spot,
-        aim_bbox,
-        bool(spec.stable),
-        spec.margins,
-        spec.size,
-        api_rows(spec.api, bool(spec.reversed_z)),
-        *given,
-    )
-
-
-def _spot_array(ctx: Context, position: Array, direction: Array, angle: Array) -> Array:
-    """A spot light as one ``(*batch, 8)`` array: position, axis, ``tan(angle)``, angle."""
-    xp = ctx.xp
-    require_last("light.position", position, 3, hint="a position is (x, y, z)")
-    require_last("light.direction", direction, 3, hint="the cone's axis is (x, y, z)")
-    names = ("light.position", "light.direction", "light.angle")
-    shapes = (position.shape[:-1], direction.shape[:-1], angle.shape)
-    shape = batch_shape(*shapes, names=names)
-    parts = (xp.broadcast_to(position, (*shape, 3)), xp.broadcast_to(direction, (*shape, 3)))
-    return spot_rows(xp, *parts, xp.broadcast_to(angle, shape))
-
-
-def _light_kind(ctx: Context, directional: bool | None, L: Array) -> tuple[bool, Array]:
-    """The light's kind and its ``(*batch, 3)`` array: a position or a direction toward it."""
-    hint = "a point light is (x, y, z); a homogeneous light (x, y, z, w), w = 0 directional"
-    if directional is not None:
-        require_last("light", L, 3, hint="a typed light holds (*batch, 3) arrays")
-        return directional, L
-    if L.ndim < 1 or L.shape[-1] not in (3, 4):
-        raise shape_error("light", "(*batch, 3) or (*batch, 4)", tuple(L.shape), hint)
-    if L.shape[-1] == 3:
-        return False, L
-    if L.ndim == 1 and not ctx.is_jax:  # one NumPy light: read w as a Python float
-        w1 = float(L[3])
-        if w1 == 0:
-            return True, L[:3]
-        if math.isfinite(w1):
-            return False, L[:3] / w1
-    if ctx.lazy and is_tracer(L):
-        raise ValueError(
-            "light: the kind of a homogeneous light (x, y, z, w) is read from the values of "
-            "w, which a traced JAX array does not have; pass sm.PointLight(position) or "
-            "sm.DirectionalLight(direction) under jit, vmap or grad"
-        )
-    with np.errstate(all="ignore"):
-        sun, xyz = homogeneous(ctx.xp, L)
-    kinds = np.asarray(sun)
-    if kinds.all() or not kinds.any():
-        return bool(kinds.all()), xyz
-    raise ValueError(
-        "light: a batch mixes point lights (w != 0) and directional lights (w = 0); their "
-        "fits differ in kind: call fit_shadow once per kind (split the batch by w == 0), "
-        "or pass sm.PointLight / sm.DirectionalLight"
-    )
-
-
-def _check_shapes(a: Inputs) -> tuple[int, ...]:
-    """The arrays' shapes, and the broadcast batch shape."""
-    require_vertices("blocker_vertices", a.verts)
-    named = [("light", a.light.shape[:-1]), ("blocker_vertices", a.verts.shape[:-2])]
-    if a.B is not None:
-        require_matrix("blocker_to_world", a.B)
-        named.append(("blocker_to_world", a.B.shape[:-2]))
-    if a.U is not None:
-        require_last("up", a.U, 3, hint="an up hint is (x, y, z)")
-        named.append(("up", a.U.shape[:-1]))
-    named += [(n, v.shape) for n, v in (("near", a.near), ("far", a.far)) if v is not None]
-    shape = batch_shape(*(s for _, s in named), names=[n for n, _ in named])
-    if a.R is not None:  # rows checked by _receiver_rows
-        require_no_new_batch("receivers", a.R.shape[:-2], shape)
-    return shape
-
-
 def _points(a: Inputs) -> int:
     """Vertices plus receiver points (three per triangle)."""
     return int(a.verts.shape[-2]) + (0 if a.R is None else a.R.shape[-2] * a.R.shape[-1] // 3)
-
-
-ReceiverKind = Literal["points", "triangles", "mesh"]
-
-
-def _receiver_kind(receivers: Any, name: str = "receivers") -> tuple[ReceiverKind, str, Any]:
-    """The kind of a set of surfaces or points (from its type: receivers, or a cube map's
-    casters), the name to convert it under and the array to convert."""
-    if isinstance(receivers, Triangles):
-        return "triangles", name, receivers.corners
-    if isinstance(receivers, Mesh):
-        return "mesh", f"{name}.vertices", receivers.vertices
-    return "points", name, receivers
-
-
-def _receiver_rows(ctx: Context, kind: ReceiverKind, R: Array, receivers: Any) -> Array:
-    """Receivers as ``(*batch, M, 3)`` points or ``(*batch, M, 9)`` triangles (shape-checked)."""
-    if kind == "points":
-        hint = "receivers= takes points (*batch, N, 3), sm.Triangles or sm.Mesh"
-        require_last("receivers", R, 3, min_ndim=2, hint=hint)
-        if R.shape[-2] == 0:
-            raise ValueError(_NO_RECEIVERS.format("points"))
-        return R
-    if kind == "triangles":
-        if R.ndim < 3 or tuple(R.shape[-2:]) != (3, 3):
-            raise shape_error(
-                "receivers",
-                "(*batch, M, 3, 3)",
-                tuple(R.shape),
-                "sm.Triangles holds M triangles of three corners (x, y, z)",
-            )
-    else:
-        require_last(
-            "receivers.vertices", R, 3, min_ndim=2, hint="a mesh's vertices are (*batch, V, 3)"
-        )
-        R = _mesh_corners(ctx, R, receivers.faces)
-    if R.shape[-3] == 0:
-        raise ValueError(_NO_RECEIVERS.format("triangles"))
-    return R.reshape(*R.shape[:-2], 9)
-
-
-_NO_RECEIVERS = "receivers: no receiver {} (M = 0); pass receivers=None when there are none"
-
-
-def _mesh_corners(ctx: Context, vertices: Array, faces: Any, name: str = "receivers") -> Array:
-    """A mesh's triangles' corners ``(*batch, F, 3, 3)``; faces checked (NaN under tracing)."""
-    xp = ctx.xp
-    F = xp.asarray(faces)
-    check_faces(f"{name}.faces", F, vertices.shape[-2], concrete=not (ctx.lazy and is_tracer(F)))
-    if ctx.is_jax:  # a traced index out of range fills NaN instead of clamping silently
-        return xp.take(vertices, F, axis=-2, mode="fill", fill_value=xp.nan)
-    return xp.take(vertices, F, axis=-2)
-
-
-def caster_triangles(ctx: Context, kind: str, C: Array, casters: Any, name: str) -> Array:
-    """Casters given as surfaces (``kind`` "triangles" or "mesh") as their triangles
-    ``(*batch, M, 3, 3)``, shape-checked."""
-    if kind == "triangles":
-        if C.ndim < 3 or tuple(C.shape[-2:]) != (3, 3):
-            hint = "sm.Triangles holds M triangles of three corners (x, y, z)"
-            raise shape_error(name, "(*batch, M, 3, 3)", tuple(C.shape), hint)
-        T = C
-    else:
-        require_vertices(f"{name}.vertices", C)
-        T = _mesh_corners(ctx, C, casters.faces, name=name)
-    if T.shape[-3] == 0:
-        raise ValueError(f"{name}: no caster triangles (M = 0); a shadow needs casters")
-    return T
-
-
-def _check_static(key: FitKey, method: str, spec: ShadowMapSpec) -> None:
-    """The option combinations refused whatever the values."""
-    if key.directional and (key.has_near or key.has_far):
-        raise ValueError(
-            "near/far: a directional light's depth range is placed by the fit (its frame's "
-            "origin moves behind every caster); leave near and far None and pass receivers= "
-            "(sm.Triangles for surfaces) to hold what the shadows fall on"
-        )
-    if key.stable and not key.directional and not key.has_up:
-        raise ValueError(msg.STABLE_NEEDS_UP)
-    options = key.directional or key.spot or key.has_receivers or key.has_up or spec.api != "opengl"
-    if method == "optimized" and (options or spec.reversed_z or spec.stable):
-        raise ValueError(
-            "method: 'optimized' fits point lights without receivers, api, reversed_z, up "
-            "or stable; use method='mdv' with them"
-        )
 
 
 def _optimized(ctx: Context, a: Inputs, m: tuple[float, float]) -> ShadowSetup:

@@ -33,7 +33,7 @@ import numpy as np
 import pytest
 
 import shadowmath as sm
-from shadowmath._fits import _setup, _spot_select
+from shadowmath._fits import _door, _spot_select
 from shadowmath.meshes import box
 from shadowmath.render import Body as RenderBody
 
@@ -194,7 +194,7 @@ def test_a_fit_that_drops_a_caster_loses_its_shadow(gfx, pygfx_canvas, fitted, m
     (test_render_caster_selection's losing_box): that box's shadow is lost off the band."""
     from shadowmath.integrations.pygfx import fit_scene_shadows
 
-    monkeypatch.setattr(_setup, "spot_selection", losing_box(_spot_select.spot_selection))
+    monkeypatch.setattr(_door, "spot_selection", losing_box(_spot_select.spot_selection))
     scene, lights = build(gfx)
     reports = fit_scene_shadows(scene)
     assert int(reports[16].fit.casters_used) < int(fitted[2][16].fit.casters_used)
