@@ -271,7 +271,7 @@ def rolled_frame(
     """:func:`rolled_light_frame` on trusted arrays (checks the direction and ``up``)."""
     xp = ctx.xp
     axes = formulas(xp).rolled_axes(
-        d[..., 0], d[..., 1], d[..., 2], U[..., 0], U[..., 1], U[..., 2],
+        (d[..., 0], d[..., 1], d[..., 2]), (U[..., 0], U[..., 1], U[..., 2]),
         xp.cos(theta), xp.sin(theta),
     )  # fmt: skip
     checks.require(axes[9] > 0, "direction: the light's viewing direction is zero")

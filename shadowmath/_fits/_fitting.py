@@ -101,7 +101,7 @@ def _loss(symmetric: bool) -> Any:
         offsets, w, x0, y0, z0, sx, sy = data
         d = z0 + p[0] * sx * x0 + p[1] * sy * y0
         # The frame of rolled_light_frame with up = Y0: the MDV frame itself at p = 0.
-        ax = F.rolled_axes(*d, *y0, jnp.cos(p[2]), jnp.sin(p[2]))
+        ax = F.rolled_axes(tuple(d), tuple(y0), jnp.cos(p[2]), jnp.sin(p[2]))
         X, Y, Z = jnp.stack(ax[0:3]), jnp.stack(ax[3:6]), jnp.stack(ax[6:9])
         ext = extent(jnp, jnp.zeros_like(d), offsets, X, Y, Z)
         valid = jnp.all(ext.z > 0)
