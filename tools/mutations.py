@@ -165,7 +165,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     Mutation(
         "triangle-no-map-edges",
         "shadowmath/_math/_fit_formulas.py",
-        "        best = _corner_far((g0, g1, g2), z, k // 2, 2 + k % 2, best, tau)",
+        "        best = _corner_far((g0, g1, g2), z, (k // 2, 2 + k % 2), best, tau)",
         "        best = best",
         "triangle_far: the map's edges piercing a triangle not considered",
         ("tests/test_receivers.py",),
@@ -173,7 +173,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     Mutation(
         "triangle-no-edge-crossings",
         "shadowmath/_math/_fit_formulas.py",
-        "    best = _edge_far(g1, g2, z[1], z[2], best, tau)",
+        "    best = _edge_far((g1, g2), (z[1], z[2]), best, tau)",
         "    best = best",
         "triangle_far: one edge's crossings of the side planes not considered",
         ("tests/test_receivers.py",),

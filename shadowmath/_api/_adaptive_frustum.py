@@ -184,8 +184,9 @@ def adaptive_frustum(
     m = margins(map_size, border_texels, margin)
     ctx, checks, f, (verts, n, fa) = frame_arrays(frame, vertices=vertices, near=near, far=far)
     check_blocker(checks, verts, n, fa)
-    ext = extent(ctx.xp, f.origin, verts, f.x_axis, f.y_axis, f.z_axis)
-    return bounded_frustum(ctx, checks, ext, blocker_reach(ctx.xp, f.origin, verts), m, n, fa)
+    ext = extent(ctx.xp, f.origin, verts, (f.x_axis, f.y_axis, f.z_axis))
+    reach = blocker_reach(ctx.xp, f.origin, verts)
+    return bounded_frustum(ctx, checks, ext, reach, m, near=n, far=fa)
 
 
 def check_blocker(checks: Checks, verts: Array, near: Array | None, far: Array | None) -> None:
@@ -205,9 +206,9 @@ def bounded_frustum(
     ext: Extent,
     reach: Array,
     margins: tuple[float, float],
+    *,
     near: Array | None,
     far: Array | None,
-    *,
     symmetric: bool = True,
     bounds: tuple[Array, Array, Array, Array] | None = None,
 ) -> Frustum:
@@ -231,7 +232,8 @@ def bounded_frustum(
     else:
         half_x, half_y = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
         cx, cy = 0.5 * (hi_x + lo_x), 0.5 * (hi_y + lo_y)
-    return assemble(ctx, checks, ext.z, reach, margins, (half_x, half_y, cx, cy), near, far)
+    extents = (half_x, half_y, cx, cy)
+    return assemble(ctx, checks, ext.z, reach, margins, extents=extents, near=near, far=far)
 
 
 def assemble(
@@ -240,6 +242,7 @@ def assemble(
     z: Array,
     reach: Array,
     margins: tuple[float, float],
+    *,
     extents: tuple[Array, Array, Array, Array],
     near: Array | None,
     far: Array | None,

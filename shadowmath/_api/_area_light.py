@@ -211,7 +211,7 @@ def area_light_samples(
     rng = np.random.default_rng(seed)
     jitter_np = rng.random((*shape, rows * cols, 2), dtype=np.dtype(ctx.dtype).type)
     jitter = ctx.xp.asarray(jitter_np, dtype=ctx.dtype)
-    return checks.poison(_soft.area_light_samples(ctx.xp, c, eu, ev, jitter, rows, cols), 2)
+    return checks.poison(_soft.area_light_samples(ctx.xp, c, eu, ev, jitter, grid=(rows, cols)), 2)
 
 
 def area_light_samples_jax(key: Any, corner: Any, edge_u: Any, edge_v: Any, count: int) -> Array:
@@ -227,4 +227,4 @@ def _jax_samples(key: Any, corner: Any, edge_u: Any, edge_v: Any, count: int) ->
     c, eu, ev = (v if is_jax(v) else jnp.asarray(np.asarray(v)) for v in (corner, edge_u, edge_v))
     ctx, checks, c, eu, ev, shape, (rows, cols) = _checked_light(c, eu, ev, count)
     jitter = jax.random.uniform(key, (*shape, rows * cols, 2), dtype=ctx.dtype)
-    return checks.poison(_soft.area_light_samples(ctx.xp, c, eu, ev, jitter, rows, cols), 2)
+    return checks.poison(_soft.area_light_samples(ctx.xp, c, eu, ev, jitter, grid=(rows, cols)), 2)

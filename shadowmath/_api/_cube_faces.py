@@ -181,20 +181,21 @@ def cube_face_projection(
     """
     check_api(api, reversed_z)
     zero_to_one, flip_y = _cube.APIS[api]
+    conv = {"zero_to_one": zero_to_one, "flip_y": flip_y, "reversed_z": reversed_z}
     scale = face_scale(map_size, border_texels)
     n, f = _numpy_scalar(near), _numpy_scalar(far)
     if n is not None and type(n) is type(f) and math.isfinite(n) and math.isfinite(f) and 0 < n < f:
         # One light's NumPy scalars that pass the checks below: no conversion to
         # arrays, no per-check round trips. Anything else, failures included
         # (which the checks below report), takes the general path.
-        return _cube.cube_face_projection_scalar(n, f, scale, zero_to_one, flip_y, reversed_z)
+        return _cube.cube_face_projection_scalar(n, f, scale, **conv)
     ctx, (n, f) = convert(near=near, far=far)
     xp = ctx.xp
     shape = batch_shape(tuple(n.shape), tuple(f.shape), names=("near", "far"))
     n, f = xp.broadcast_to(n, shape), xp.broadcast_to(f, shape)
     checks = Checks(ctx)
     _check_near_far(checks, xp, n, f)
-    P = _cube.cube_face_projection(xp, n, f, scale, zero_to_one, flip_y, reversed_z)
+    P = _cube.cube_face_projection(xp, n, f, scale, **conv)
     return checks.poison(P, 2)
 
 

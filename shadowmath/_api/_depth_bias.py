@@ -132,9 +132,9 @@ def texel_world_size(
     W, H = _map_size(map_size)
     checks, xp, M, p, n, _ = _prepare(world_to_texture, points, normals)
     size = (
-        _bias.texel_size(xp, M, p, W, H)
+        _bias.texel_size(xp, M, p, (W, H))
         if n is None
-        else _bias.texel_size_on_surface(xp, M, p, n, W, H)
+        else _bias.texel_size_on_surface(xp, M, p, n, (W, H))
     )
     return checks.poison(xp.asarray(size), 0)
 
@@ -237,7 +237,10 @@ def slope_scaled_bias(
     if normals is None:
         raise ValueError("normals: required (the slope is along the receiver's surface)")
     checks, xp, M, p, n, _ = _prepare(world_to_texture, points, normals)
-    bias = _bias.slope_scaled_bias(xp, M, p, n, W, H, float(constant), float(factor), r_min)
+    bias = _bias.slope_scaled_bias(
+        xp, M, p, n, (W, H), constant=float(constant), slope_factor=float(factor),
+        depth_resolution=r_min,
+    )  # fmt: skip
     return checks.poison(xp.asarray(bias), 0)
 
 
@@ -321,5 +324,7 @@ def normal_offset(
     if not (isinstance(scale, int | float) and math.isfinite(scale) and scale >= 0):
         raise ValueError(f"scale: expected a finite number >= 0, got {scale!r}")
     checks, xp, M, p, n, _ = _prepare(world_to_texture, points, normals)
-    offset = _bias.normal_offset(xp, M, p, n, W, H, _bias.kernel_reach(k, filt), float(scale))
+    offset = _bias.normal_offset(
+        xp, M, p, n, (W, H), reach=_bias.kernel_reach(k, filt), scale=float(scale)
+    )
     return checks.poison(offset, 1)

@@ -171,6 +171,8 @@ def pcf(
     checks.require(all_finite(xp, Z, 2), non_finite("depth_map"))
     checks.require(all_finite(xp, c, 1), non_finite("coords"))
     checks.require(xp.isfinite(d), non_finite("depths"))
-    lit = _pcf.pcf(xp, Z, c, d, k, filt, bool(reversed_z), float(softness))
+    lit = _pcf.pcf(
+        xp, Z, c, d, radius=k, filter=filt, reversed_z=bool(reversed_z), softness=float(softness)
+    )
     del shape
     return checks.poison(xp.asarray(lit), 0)

@@ -148,5 +148,5 @@ def receiver_texel_size(
     q = xp.sum(M[..., 3, :3] * p, axis=-1) + M[..., 3, 3]
     checks.require(q > 0, "points: a receiver point is behind the light (q <= 0)")
     unit_n = n / xp.sqrt(n_sq)[..., None]
-    size = _bias.texel_size_on_surface(xp, M, p, unit_n, W, H)
+    size = _bias.texel_size_on_surface(xp, M, p, unit_n, (W, H))
     return checks.poison(xp.broadcast_to(size, shape), 0)

@@ -86,14 +86,16 @@ def _ratio_frustum(
     )
     check_blocker(checks, verts, n, fa)
     xp = ctx.xp
-    ext = extent(xp, f.origin, verts, f.x_axis, f.y_axis, f.z_axis)
+    ext = extent(xp, f.origin, verts, (f.x_axis, f.y_axis, f.z_axis))
     bounds = None
     if T is not None:
         checks.require(xp.isfinite(T) & (T > 0), "temperature: must be finite and > 0")
         T = nan_unless(xp, T > 0, T)
         bounds = soft_bounds(xp, ext.rx, ext.ry, T, symmetric=symmetric)
     reach = blocker_reach(xp, f.origin, verts)
-    return bounded_frustum(ctx, checks, ext, reach, m, n, fa, symmetric=symmetric, bounds=bounds)
+    return bounded_frustum(
+        ctx, checks, ext, reach, m, near=n, far=fa, symmetric=symmetric, bounds=bounds
+    )
 
 
 def smooth_frustum(
@@ -262,16 +264,17 @@ def rolled_light_frame(
     for name, v in (("light_position", light), ("direction", d), ("up", U)):
         checks.require(all_finite(xp, v, 1), non_finite(name))
     checks.require(xp.isfinite(theta), non_finite("roll"))
-    return rolled_frame(ctx, checks, light, d, theta, U)
+    return rolled_frame(ctx, checks, light, d, theta=theta, up=U)
 
 
 def rolled_frame(
-    ctx: Context, checks: Checks, light: Array, d: Array, theta: Array, U: Array
+    ctx: Context, checks: Checks, light: Array, d: Array, *, theta: Array, up: Array
 ) -> LightFrame:
     """:func:`rolled_light_frame` on trusted arrays (checks the direction and ``up``)."""
     xp = ctx.xp
+    U = up
     axes = formulas(xp).rolled_axes(
-        d[..., 0], d[..., 1], d[..., 2], U[..., 0], U[..., 1], U[..., 2],
+        (d[..., 0], d[..., 1], d[..., 2]), (U[..., 0], U[..., 1], U[..., 2]),
         xp.cos(theta), xp.sin(theta),
     )  # fmt: skip
     checks.require(axes[9] > 0, "direction: the light's viewing direction is zero")

@@ -21,7 +21,7 @@ from shadowmath._math._frame import stack_matrix
 
 from . import _compiled
 from ._atlas_allocate import ShadowAtlas
-from ._atlas_report import Report, pick
+from ._atlas_report import AtlasInputs, Report, pick
 from ._fit_arrays import Inputs, driver, fit_arrays
 from ._light_kinds import SPOT, SUN
 from ._spec import FitKey
@@ -33,9 +33,8 @@ Ints = NDArray[np.int64]
 
 
 def fit_2d(
-    ctx: Context, atlas: ShadowAtlas, kinds: Ints, data: Array, verts: Array, R: Array | None,
-    n: Array | None, f: Array | None, *, tris: Array | None, report: Report,
-) -> list[tuple[Ints, Array, Array, Array, Array]]:  # fmt: skip
+    ctx: Context, atlas: ShadowAtlas, kinds: Ints, inputs: AtlasInputs, report: Report
+) -> list[tuple[Ints, Array, Array, Array, Array]]:
     """One fit per group of 2D lights of one (kind, size, border).
 
     The lights are sorted by group, so each group is a slice; the compiled loop of each
@@ -46,6 +45,7 @@ def fit_2d(
     lights = np.flatnonzero((~atlas.light_cube) & (atlas.light_size > 0))
     if lights.size == 0:
         return []
+    data, verts, tris, R, n, f = inputs
     code = (kinds[lights] << 40) | (atlas.light_size[lights] << 16) | atlas.light_border[lights]
     order = np.argsort(code, kind="stable")
     lights, code = lights[order], code[order]
@@ -64,7 +64,7 @@ def fit_2d(
         kind, size, border = c >> 40, (c >> 16) & 0xFFFFFF, c & 0xFFFF
         sun = kind == SUN
         given = (not sun and n is not None, not sun and f is not None)
-        key = _group_key(kind, size, border, rows, _receiver_flags(R), given)
+        key = _group_key((kind, size, border), rows, _receiver_flags(R), given)
         part = slice(start, end)
         group = verts if per_light is None else per_light[part]
         if kind == SPOT:
@@ -122,9 +122,10 @@ def _receiver_flags(R: Array | None) -> tuple[bool, bool]:
 
 @functools.lru_cache(maxsize=256)
 def _group_key(
-    kind: int, size: int, border: int, rows: Any, receivers: tuple[bool, bool],
-    given: tuple[bool, bool],
-) -> FitKey:  # fmt: skip
+    group: tuple[int, int, int], rows: Any, receivers: tuple[bool, bool], given: tuple[bool, bool]
+) -> FitKey:
+    """The fit's key of a group ``(kind, size, border)`` of lights."""
+    kind, size, border = group
     margins = border_margin(size, border_texels=border)
     return FitKey(kind == SUN, kind == SPOT, False, False, margins, (size, size), rows,
                   False, receivers[0], False, *given, triangles=receivers[1])  # fmt: skip

@@ -173,7 +173,7 @@ def allocate_atlas(
     if previous is not None and not isinstance(previous, ShadowAtlas):
         raise ValueError(f"previous: expected a ShadowAtlas or None, got {type(previous).__name__}")
     options = _Options(size, lo, hi, float(budget), float(hysteresis))
-    return _allocate(cov, is_cube, border, ids, previous, options)
+    return _allocate(cov, is_cube, border, ids, previous=previous, o=options)
 
 
 class _Options(NamedTuple):
@@ -285,6 +285,7 @@ def _allocate(
     is_cube: NDArray[np.bool_],
     border: Ints,
     ids: Ints,
+    *,
     previous: ShadowAtlas | None,
     o: _Options,
 ) -> ShadowAtlas:
@@ -330,7 +331,7 @@ def _allocate(
         prev_rect[exists] = previous.tile_rect[prev_tile[exists]]
         same = had & (previous.light_size[safe] == sizes) & (previous.light_cube[safe] == is_cube)
         keep = same[tile_light] & exists
-    rect, repacked = _layout(side, rank, keep, prev_rect, grid, o.min_tile)
+    rect, repacked = _layout(side, rank, keep, prev_rect, grid=grid, cell=o.min_tile)
     # Index-safe: tile t keeps its meaning only if it was tile t, of the same key, there.
     moved = ~np.all(rect == prev_rect, axis=1) | (prev_tile != np.arange(count))
     x, y, s = (rect[:, i].astype(np.float64) for i in range(3))
@@ -356,7 +357,7 @@ def _unchanged(
 
 
 def _layout(
-    side: Ints, rank: Ints, keep: NDArray[np.bool_], prev_rect: Ints, grid: int, cell: int
+    side: Ints, rank: Ints, keep: NDArray[np.bool_], prev_rect: Ints, *, grid: int, cell: int
 ) -> tuple[Ints, bool]:
     """Each tile's ``(x, y, size)``: kept ones where they were, the others placed."""
     rect = np.empty((side.size, 3), dtype=np.int64)

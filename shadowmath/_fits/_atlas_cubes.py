@@ -20,7 +20,7 @@ from shadowmath._math._cube import depth_row as _depth_row
 from shadowmath._math._frame import stack_matrix
 
 from ._atlas_allocate import ShadowAtlas
-from ._atlas_report import Report, pick
+from ._atlas_report import AtlasInputs, Report, pick
 from ._cube_depth import AT_LIGHT, cube_depth_core
 
 __all__ = ["fit_cubes"]
@@ -29,13 +29,12 @@ Ints = NDArray[np.int64]
 
 
 def fit_cubes(
-    ctx: Context, atlas: ShadowAtlas, cubes: Ints, data: Array, verts: Array,
-    tris: Array | None, R: Array | None, n: Array | None, f: Array | None, api: str,
-    report: Report,
-) -> tuple[Ints, Array, Array, Array, Array]:  # fmt: skip
+    ctx: Context, atlas: ShadowAtlas, cubes: Ints, inputs: AtlasInputs, *, api: str, report: Report
+) -> tuple[Ints, Array, Array, Array, Array]:
     """The six faces of every cube light at once: ``(tiles, clip, texture, near, far)``;
     a light with a non-finite position, a caster at it or a bad depth range is reported."""
     xp = ctx.xp
+    data, verts, tris, R, n, f = inputs
     finite = np.asarray(xp.all(xp.isfinite(data[cubes, :3]), axis=1))
     P = xp.where(xp.asarray(finite)[:, None], data[cubes, :3], 0.0)
     size = atlas.light_size[cubes].astype(np.float64)
@@ -43,7 +42,7 @@ def fit_cubes(
     VT = xp.matrix_transpose(verts[None] if verts.ndim == 2 else verts[cubes])
     corners = None if R is None else xp.reshape(R, (-1, 3))[None]
     T = None if tris is None else (tris[None] if tris.ndim == 3 else tris[cubes])
-    near, far, clear = cube_depth_core(xp, P, VT, corners, k, ctx.eps, T)
+    near, far, clear = cube_depth_core(xp, P, VT, corners, k=k, eps=ctx.eps, triangles=T)
     lo = near if n is None else pick(ctx, n, cubes)
     hi = far if f is None else pick(ctx, f, cubes)
     ranged = np.asarray(xp.isfinite(lo) & xp.isfinite(hi) & (lo > 0) & (hi > lo))

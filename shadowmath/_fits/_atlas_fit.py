@@ -37,7 +37,7 @@ from ._atlas_2d import fit_2d
 from ._atlas_allocate import ShadowAtlas
 from ._atlas_cubes import fit_cubes
 from ._atlas_lights import read_lights
-from ._atlas_report import Report, gather
+from ._atlas_report import AtlasInputs, Report, gather
 from ._atlas_viewports import atlas_viewports, tile_transforms
 from ._door import _receiver_kind, _receiver_rows, caster_triangles
 from ._light_kinds import POINT
@@ -215,11 +215,11 @@ def fit_atlas(
         raise ValueError(f"lights[{i}]: a cube map needs a point light (atlas cube=True)")
     report = Report(ctx, api, reversed_z, count)
     parts: list[tuple[Ints, Array, Array, Array, Array]] = []
-    flat = fit_2d(ctx, atlas, kinds, data, verts, R, n, f, tris=tris, report=report)
-    parts.extend(flat)
+    inputs = AtlasInputs(data, verts, tris, R, n, f)
+    parts.extend(fit_2d(ctx, atlas, kinds, inputs, report))
     cubes = np.flatnonzero(atlas.light_cube & (atlas.light_size > 0))
     if cubes.size:
-        parts.append(fit_cubes(ctx, atlas, cubes, data, verts, tris, R, n, f, api, report))
+        parts.append(fit_cubes(ctx, atlas, cubes, inputs, api=api, report=report))
     T = xp.asarray(tile_transforms(atlas.tile_rect, atlas.atlas_size), dtype=ctx.dtype)
     clip, tex, lo, hi = gather(ctx, parts, atlas.tile_light.shape[0])
     errors = tuple(report.errors)

@@ -7,7 +7,7 @@ tile order (:func:`gather`).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -16,9 +16,23 @@ from shadowmath._boundary._validate import Array, Context
 
 from ._spec import api_rows
 
-__all__ = ["Report", "gather", "pick"]
+__all__ = ["AtlasInputs", "Report", "gather", "pick"]
 
 Ints = NDArray[np.int64]
+
+
+class AtlasInputs(NamedTuple):
+    """What the atlas's lights are fitted to, checked at the door: ``data`` the lights'
+    rows ``(count, 8)``, the casters' points ``verts`` (``(N, 3)`` shared or
+    ``(count, N, 3)``) and triangles ``tris`` (or None), the receivers' rows ``R`` and the
+    given ``near``, ``far`` per light (or None)."""
+
+    data: Array
+    verts: Array
+    tris: Array | None
+    R: Array | None
+    n: Array | None
+    f: Array | None
 
 
 class Report:

@@ -427,8 +427,9 @@ def _warp(call: _Call, steps: tuple[Any, ...], VP: tuple[Array, Array], row: lis
     size = xp.stack(xp.broadcast_arrays(row[57], row[58]), axis=-1)
     ortho = (tuple(row[16:32]), tuple(row[32:48]), size)
     clip, tex, size = warp_cascades(
-        xp, F, body, cam, V, e[2], call.spec, ortho, lambda rows: F.cascade_tile(rows, j, o)
-    )
+        xp, F, body, cam, V, a=e[2], spec=call.spec, ortho=ortho,
+        tile=lambda rows: F.cascade_tile(rows, j, o),
+    )  # fmt: skip
     row[16:32], row[32:48] = clip, tex
     row[57], row[58] = size[..., 0], size[..., 1]
 

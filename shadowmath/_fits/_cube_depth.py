@@ -59,6 +59,7 @@ def cube_depth_core(
     light: Array,
     vertices_t: Array,
     corners: Array | None,
+    *,
     k: Any,
     eps: float,
     triangles: Array | None = None,
@@ -296,7 +297,7 @@ def cube_depth_range(
     if corners is not None:
         checks.require(xp.all(xp.isfinite(corners), axis=(-2, -1)), non_finite("receivers"))
     near, far, ok = cube_depth_core(
-        xp, light, xp.matrix_transpose(points), corners, k, ctx.eps, triangles
+        xp, light, xp.matrix_transpose(points), corners, k=k, eps=ctx.eps, triangles=triangles
     )
     checks.require(ok, f"casters: {AT_LIGHT}")
     near, far = xp.broadcast_to(near, shape), xp.broadcast_to(far, shape)

@@ -101,9 +101,9 @@ def _loss(symmetric: bool) -> Any:
         offsets, w, x0, y0, z0, sx, sy = data
         d = z0 + p[0] * sx * x0 + p[1] * sy * y0
         # The frame of rolled_light_frame with up = Y0: the MDV frame itself at p = 0.
-        ax = F.rolled_axes(*d, *y0, jnp.cos(p[2]), jnp.sin(p[2]))
+        ax = F.rolled_axes(tuple(d), tuple(y0), jnp.cos(p[2]), jnp.sin(p[2]))
         X, Y, Z = jnp.stack(ax[0:3]), jnp.stack(ax[3:6]), jnp.stack(ax[6:9])
-        ext = extent(jnp, jnp.zeros_like(d), offsets, X, Y, Z)
+        ext = extent(jnp, jnp.zeros_like(d), offsets, (X, Y, Z))
         valid = jnp.all(ext.z > 0)
         if hard:  # padding repeats a real vertex: the hard bounds are unchanged
             hx, lx, hy, ly = jnp.max(ext.rx), jnp.min(ext.rx), jnp.max(ext.ry), jnp.min(ext.ry)
@@ -216,10 +216,10 @@ def _optimize_core(
     checks: Checks,
     light: Array,
     verts: Array,
+    *,
     m: tuple[float, float],
     near: Array | None,
     far: Array | None,
-    *,
     symmetric: bool,
     steps: int,
     starts: int,
@@ -236,8 +236,8 @@ def _optimize_core(
     # The MDV frame and frustum: the starting point and the scale of the parameters.
     s = spread(xp, light, verts, aim="mean")
     ref = frame_along(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
-    ext = extent(xp, light, verts, ref.x_axis, ref.y_axis, ref.z_axis)
-    ref_frustum = bounded_frustum(ctx, checks, ext, s.reach, m, None, None)
+    ext = extent(xp, light, verts, (ref.x_axis, ref.y_axis, ref.z_axis))
+    ref_frustum = bounded_frustum(ctx, checks, ext, s.reach, m, near=None, far=None)
 
     shape = tuple(ref.origin.shape[:-1])
     flat = int(np.prod(shape, dtype=np.int64))
@@ -274,10 +274,10 @@ def _optimize_core(
         + (alpha * ref_frustum.rx_max)[..., None] * ref.x_axis
         + (beta * ref_frustum.ry_max)[..., None] * ref.y_axis
     )
-    frame = rolled_frame(ctx, checks, ref.origin, direction, roll, ref.y_axis)
-    ext = extent(xp, light, verts, frame.x_axis, frame.y_axis, frame.z_axis)
+    frame = rolled_frame(ctx, checks, ref.origin, direction, theta=roll, up=ref.y_axis)
+    ext = extent(xp, light, verts, (frame.x_axis, frame.y_axis, frame.z_axis))
     reach = blocker_reach(xp, light, verts)
-    frustum = bounded_frustum(ctx, checks, ext, reach, m, near, far, symmetric=symmetric)
+    frustum = bounded_frustum(ctx, checks, ext, reach, m, near=near, far=far, symmetric=symmetric)
     return FrustumFit(frame=frame, frustum=frustum, direction=direction, roll=roll, losses=history)
 
 
@@ -362,9 +362,9 @@ def optimize_frustum(
         Checks(ctx),
         light,
         verts,
-        m,
-        n,
-        f,
+        m=m,
+        near=n,
+        far=f,
         symmetric=bool(symmetric),
         steps=int(steps),
         starts=int(starts),
@@ -384,7 +384,7 @@ def optimized_setup(
 ) -> ShadowSetup:
     """``fit_shadow(method="optimized")`` on shape-checked arrays (world-space vertices)."""
     fit = _optimize_core(
-        ctx, checks, light, world, m, near, far,
+        ctx, checks, light, world, m=m, near=near, far=far,
         symmetric=False, steps=80, starts=6, learning_rate=0.1,
     )  # fmt: skip
     return setup_from(ctx, checks, fit.frame, fit.frustum, B)

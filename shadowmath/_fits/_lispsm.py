@@ -137,7 +137,7 @@ def _warp(xp: Any, F: Any, body: tuple[Any, ...], view: _View) -> _Warp:
 
 
 def _rows(
-    xp: Any, F: Any, body: tuple[Any, ...], view: _View, wp: _Warp, margins: tuple[float, float]
+    xp: Any, F: Any, body: tuple[Any, ...], view: _View, wp: _Warp, *, margins: tuple[float, float]
 ) -> tuple[Rows, Any, Any]:
     r"""The OpenGL clip rows in light coordinates (16 entries), the half width ``h``, and ok.
 
@@ -198,6 +198,7 @@ def warp_cascades(
     body: tuple[Any, ...],
     cam: Any,
     V: Any,
+    *,
     a: tuple[Any, ...],
     spec: ShadowMapSpec,
     ortho: tuple[Rows, Rows, Any],
@@ -224,7 +225,7 @@ def warp_cascades(
     """
     view = _view(xp, F, cam, V, a)
     wp = _warp(xp, F, body, view)
-    rows, h, ok = _rows(xp, F, body, view, wp, spec.margins)
+    rows, h, ok = _rows(xp, F, body, view, wp, margins=spec.margins)
     gl = _to_world(rows, a)
     C, TC = api_rows(spec.api, spec.reversed_z)
     clip, tex = F.const_times(C, gl), tile(F.const_times(TC, gl))

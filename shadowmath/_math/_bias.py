@@ -64,15 +64,22 @@ def texture_gradients(xp: ModuleType, M: Array, p: Array) -> tuple[Array, Array,
     return grads[..., 0, :], grads[..., 1, :], grads[..., 2, :]
 
 
-def texel_size(xp: ModuleType, M: Array, p: Array, W: int, H: int) -> Array:
-    """``sqrt(1 / (W H |grad s x grad t|))``: the texel's width across the ray."""
+def texel_size(xp: ModuleType, M: Array, p: Array, size: tuple[int, int]) -> Array:
+    """``sqrt(1 / (W H |grad s x grad t|))``: the width across the ray, ``size = (W, H)``."""
+    W, H = size
     gs, gt, _ = texture_gradients(xp, M, p)
     D = cross(xp, gs, gt)
     return 1 / xp.sqrt(W * H * norm(xp, D))  # |D| without squaring it (float32's range)
 
 
-def texel_size_on_surface(xp: ModuleType, M: Array, p: Array, n: Array, W: int, H: int) -> Array:
-    """``sqrt(1 / (W H |(grad s x grad t) . n|))`` with ``n`` unit: the texel on the surface."""
+def texel_size_on_surface(
+    xp: ModuleType, M: Array, p: Array, n: Array, size: tuple[int, int]
+) -> Array:
+    """``sqrt(1 / (W H |(grad s x grad t) . n|))`` with ``n`` unit: the texel on the surface.
+
+    ``size = (W, H)``: the map's texels.
+    """
+    W, H = size
     gs, gt, _ = texture_gradients(xp, M, p)
     det = xp.abs(dot(xp, cross(xp, gs, gt), n))
     edge_on = det == 0
@@ -80,15 +87,16 @@ def texel_size_on_surface(xp: ModuleType, M: Array, p: Array, n: Array, W: int, 
     return xp.where(edge_on, xp.asarray(math.inf, dtype=det.dtype), size)
 
 
-def _depth_slope(xp: ModuleType, M: Array, p: Array, n: Array, W: int, H: int) -> Array:
+def _depth_slope(xp: ModuleType, M: Array, p: Array, n: Array, size: tuple[int, int]) -> Array:
     """``(*batch, 2)``: ``dr/dx`` and ``dr/dy`` per texel along the surface of normal ``n``.
 
     In the tangent plane the step ``v = (grad t x n) / ((grad s x grad t) . n)`` has
     ``ds = 1``, ``dt = 0``; ``(n x grad s) / (...)`` has ``ds = 0``, ``dt = 1``. So
     ``dr/ds = grad r . (grad t x n) / det`` and ``dr/dt = grad r . (n x grad s) / det``;
     one texel is ``1/W`` in ``s`` and ``1/H`` in ``t``. Infinite where the surface is
-    seen edge-on (``det = 0``).
+    seen edge-on (``det = 0``). ``size = (W, H)``: the map's texels.
     """
+    W, H = size
     gs, gt, gr = texture_gradients(xp, M, p)
     det = dot(xp, cross(xp, gs, gt), n)
     dr_ds = dot(xp, gr, cross(xp, gt, n))
@@ -106,21 +114,30 @@ def slope_scaled_bias(
     M: Array,
     p: Array,
     n: Array,
-    W: int,
-    H: int,
+    size: tuple[int, int],
+    *,
     constant: float,
     slope_factor: float,
     depth_resolution: float,
 ) -> Array:
-    slope = xp.max(_depth_slope(xp, M, p, n, W, H), axis=-1)
+    slope = xp.max(_depth_slope(xp, M, p, n, size), axis=-1)
     return constant * depth_resolution + slope_factor * slope
 
 
 def normal_offset(
-    xp: ModuleType, M: Array, p: Array, n: Array, W: int, H: int, reach: float, scale: float
+    xp: ModuleType,
+    M: Array,
+    p: Array,
+    n: Array,
+    size: tuple[int, int],
+    *,
+    reach: float,
+    scale: float,
 ) -> Array:
     """``n * scale * reach * (|grad r . (grad t x n)| / W + |grad r . (n x grad s)| / H)
-    / (|D| |grad r . d|)`` with ``n`` unit, ``D = grad s x grad t``, ``d = D / |D|``."""
+    / (|D| |grad r . d|)`` with ``n`` unit, ``D = grad s x grad t``, ``d = D / |D|``,
+    ``size = (W, H)``."""
+    W, H = size
     gs, gt, gr = texture_gradients(xp, M, p)
     D = cross(xp, gs, gt)
     length = xp.sqrt(dot(xp, D, D))

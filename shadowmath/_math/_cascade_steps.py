@@ -315,7 +315,7 @@ def stable_box(vc: Any, iV: Any, a: Any, b: Any, o: Any) -> Any:
     vx, vy, vz, r2 = slice_sphere(corners)
     c = affine(iV, vx, vy, vz)
     r = sqrt(r2)
-    hx, hy, ox, oy, _ = stable_sides(r2, c, a, (o.mx, o.my, o.width, o.height), r, o.eps)
+    hx, hy, ox, oy, _ = stable_sides((c, r2), a, (o.mx, o.my, o.width, o.height), r, o.eps)
     cx = c[0] * a[0] + c[1] * a[1] + c[2] * a[2] + ox
     cy = c[0] * a[3] + c[1] * a[4] + c[2] * a[5] + oy
     cz = c[0] * a[6] + c[1] * a[7] + c[2] * a[8]
@@ -339,8 +339,8 @@ def store_cascade(a: Any, box6: Any, z_lo: Any, jo: Any, row: Any) -> None:
     origin = (shift * a[6], shift * a[7], shift * a[8])
     near, far = near * (1.0 - o.slack), far * (1.0 + o.slack)
     api = (row16(o.map_clip, 0), row16(o.map_texture, 0))
-    box = safe_box(hx, hy, cx, cy, near, far)
-    w, clip, tex = fit_rows(origin, a, box, (o.mx, o.my), True, api)
+    box = safe_box((hx, hy, cx, cy, near, far))
+    w, clip, tex = fit_rows((origin, a), box, (o.mx, o.my), True, api)
     tex = cascade_tile(tex, j, o)
     for k in range(12):
         row[k] = w[k]

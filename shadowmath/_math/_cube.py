@@ -212,6 +212,7 @@ def cube_face_projection(
     near: Array,
     far: Array,
     scale: float,
+    *,
     zero_to_one: bool,
     flip_y: bool,
     reversed_z: bool,
@@ -224,7 +225,7 @@ def cube_face_projection(
 
 
 def cube_face_projection_scalar(
-    near: Any, far: Any, scale: float, zero_to_one: bool, flip_y: bool, reversed_z: bool
+    near: Any, far: Any, scale: float, *, zero_to_one: bool, flip_y: bool, reversed_z: bool
 ) -> Array:
     """:func:`cube_face_projection` of one light's NumPy scalars, entry by entry."""
     a, b = depth_row(near, far, zero_to_one, reversed_z)

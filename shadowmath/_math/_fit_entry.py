@@ -115,8 +115,8 @@ def fit_entry(given: Any, vs: Any, R: Any, o: Any, api: Any) -> Any:
     n, f, ok = depth_range(z, nf, (o.has_near, o.has_far), o.slack)
     st = st | flags(ok, 5)
     hx, hy, cx, cy = sides
-    safe = safe_box(hx, hy, cx, cy, n, f)
-    W, clip, tex = fit_rows(origin, a, safe, (o.margin_x, o.margin_y), o.directional, api)
+    safe = safe_box((hx, hy, cx, cy, n, f))
+    W, clip, tex = fit_rows((origin, a), safe, (o.margin_x, o.margin_y), o.directional, api)
     return Entry(st, origin, a, (hx, hy, n, f, cx, cy), W, clip, tex)
 
 
@@ -181,7 +181,7 @@ def point_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
         )
         st = st | flag(ok_cone, OUTSIDE_CONE)
     else:
-        half_x, half_y, ok_behind, ok_sil = point_sides(hx, lx, hy, ly, zb_min, reach, eps)
+        half_x, half_y, ok_behind, ok_sil = point_sides((hx, lx, hy, ly), zb_min, reach, eps)
         cx = cy = 0.0 * half_x
     st = st | flags((ok_behind, ok_sil), 3) | flag(near_clear(zb_min, coords, eps), NEAR_ROUNDING)
     ok_fov, calm = fov_ok((half_x, half_y, cx, cy), (o.margin_x, o.margin_y))
@@ -217,13 +217,13 @@ def directional_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
     hx, lx, hy, ly, zb_max, zb_min = bounds
     if o.stable:
         texels4 = (o.margin_x, o.margin_y, o.texels_x, o.texels_y)
-        half_x, half_y, cx, cy, ok_sil = stable_sides(sphere[3], c, a, texels4, reach, eps)
+        half_x, half_y, cx, cy, ok_sil = stable_sides((c, sphere[3]), a, texels4, reach, eps)
     else:
-        half_x, half_y, cx, cy, ok_sil = box_sides(hx, lx, hy, ly, reach, eps)
+        half_x, half_y, cx, cy, ok_sil = box_sides((hx, lx, hy, ly), reach, eps)
     st = st | flags((ok_sil,), 4)
     z_hi, bits, link = receivers_far(R, (c, a), (half_x, half_y, cx, cy), zb_max, o)
     st = st | bits
-    ox, oy, oz, shift = directional_origin(zb_min, z_hi, half_x, half_y, c, a)
+    ox, oy, oz, shift = directional_origin((zb_min, z_hi), (half_x, half_y), c, a)
     z = (zb_min - shift, z_hi - shift, zb_min - shift, zb_max - shift)
     return st, (ox, oy, oz), a, (half_x, half_y, cx + link, cy), z
 

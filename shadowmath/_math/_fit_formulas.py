@@ -86,7 +86,7 @@ def fit_axes(
     """
     if has_up:
         one = d[0] * 0.0 + 1.0
-        r = rolled_axes(d[0], d[1], d[2], up[0], up[1], up[2], one, one - 1.0)
+        r = rolled_axes(d, up, one, one - 1.0)
         axes = (r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8])
         length = r[9]
         up_len = where(fabs(up[0]) >= fabs(up[1]), fabs(up[0]), fabs(up[1]))
@@ -140,15 +140,17 @@ def fov_ok(sides: tuple[Any, Any, Any, Any], margins: tuple[float, float]) -> tu
 
 
 def point_sides(
-    hi_x: Any, lo_x: Any, hi_y: Any, lo_y: Any, z_min: Any, reach: Any, eps: float
+    bounds: tuple[Any, Any, Any, Any], z_min: Any, reach: Any, eps: float
 ) -> tuple[Any, Any, Any, Any]:
     """The article's symmetric frustum: half-widths ``max(hi, -lo)`` of the ratios, two checks.
 
+    ``bounds = (hi_x, lo_x, hi_y, lo_y)`` of ``x / z``, ``y / z`` (as :func:`spot_sides`).
     Thresholds relative to the blocker's reach from the light (``noise = 32 eps
     reach``): a vertex is in front only when its ``z`` clears the rounding noise
     of light coordinates, and a silhouette has width only when its ratios clear
     ``2 noise / z_min``, in any units.
     """
+    hi_x, lo_x, hi_y, lo_y = bounds
     noise = 32.0 * eps * reach
     half_x = where(hi_x >= -lo_x, hi_x, -lo_x)
     half_y = where(hi_y >= -lo_y, hi_y, -lo_y)
@@ -186,9 +188,13 @@ def spot_angle_ok(angle: Any) -> Any:
 
 
 def box_sides(
-    hi_x: Any, lo_x: Any, hi_y: Any, lo_y: Any, reach: Any, eps: float
+    bounds: tuple[Any, Any, Any, Any], reach: Any, eps: float
 ) -> tuple[Any, Any, Any, Any, Any]:
-    """A directional light's box: half-widths and centre of the light-space bounds, a check."""
+    """A directional light's box: half-widths and centre of the light-space bounds, a check.
+
+    ``bounds = (hi_x, lo_x, hi_y, lo_y)`` of ``x`` and ``y`` in light coordinates.
+    """
+    hi_x, lo_x, hi_y, lo_y = bounds
     half_x, half_y = 0.5 * (hi_x - lo_x), 0.5 * (hi_y - lo_y)
     noise = 64.0 * eps * reach  # twice the coordinates' noise, as for the ratios
     ok_sil = (half_x > noise) & (half_y > noise)
@@ -196,8 +202,7 @@ def box_sides(
 
 
 def stable_sides(
-    r2_max: Any,
-    c: tuple[Any, Any, Any],
+    sphere: tuple[tuple[Any, Any, Any], Any],
     a: tuple[Any, ...],
     texels: tuple[Any, Any, Any, Any],
     reach: Any,
@@ -205,13 +210,14 @@ def stable_sides(
 ) -> tuple[Any, Any, Any, Any, Any]:
     """A stable map's box: the bounding sphere enlarged by half a texel, centre snapped.
 
-    ``texels = (m_x, m_y, width, height)``. The half-width ``h`` holds the sphere
-    of radius ``r`` after the centre moved by up to half a texel:
+    ``sphere = (c, r^2)``, ``texels = (m_x, m_y, width, height)``. The half-width
+    ``h`` holds the sphere of radius ``r`` after the centre moved by up to half a texel:
     ``h (1 - 1 / (m W)) = r``, one texel being ``2 h / (m W)``. The centre's
     coordinates along ``X`` and ``Y`` from the world origin, ``c . X``, are
     rounded to whole texels, so the texel grid is anchored in world space.
     Returns the half-widths, the centre's offsets from ``c`` and a check.
     """
+    c, r2_max = sphere
     mx, my, width, height = texels
     radius = sqrt(r2_max)
     half_x = radius / (1.0 - 1.0 / (mx * width))
@@ -325,8 +331,13 @@ def _lerp4(a: tuple[Any, ...], b: tuple[Any, ...], t: Any) -> tuple[Any, Any, An
     )
 
 
-def _edge_far(gi: Any, gj: Any, zi: Any, zj: Any, best: Any, tau: Any) -> Any:
-    """``best`` raised to ``z`` where the edge ``i -> j`` crosses a side plane inside the others."""
+def _edge_far(g: tuple[Any, Any], z: tuple[Any, Any], best: Any, tau: Any) -> Any:
+    """``best`` raised to ``z`` where the edge ``i -> j`` crosses a side plane inside the others.
+
+    ``g = (g_i, g_j)``: the ends' side values; ``z = (z_i, z_j)``: their light ``z``.
+    """
+    gi, gj = g
+    zi, zj = z
     for k in range(4):
         den = gi[k] - gj[k]
         t = gi[k] / where(den != 0, den, 1.0)
@@ -337,14 +348,17 @@ def _edge_far(gi: Any, gj: Any, zi: Any, zj: Any, best: Any, tau: Any) -> Any:
     return best
 
 
-def _corner_far(g: Any, z: tuple[Any, Any, Any], k: int, m: int, best: Any, tau: Any) -> Any:
-    """``best`` raised to ``z`` where the map's edge (planes ``k`` and ``m``) pierces the triangle.
+def _corner_far(
+    g: Any, z: tuple[Any, Any, Any], planes: tuple[int, int], best: Any, tau: Any
+) -> Any:
+    """``best`` raised to ``z`` where the map's edge (``planes = (k, m)``) pierces the triangle.
 
     Barycentric ``b_i = n_i / det`` (Cramer's rule on ``sum b = 1``,
     ``sum b g_k = sum b g_m = 0``); inside the triangle when every ``n_i`` has the
     sign of ``det``.
     """
     g0, g1, g2 = g
+    k, m = planes
     n0 = g1[k] * g2[m] - g2[k] * g1[m]
     n1 = g2[k] * g0[m] - g0[k] * g2[m]
     n2 = g0[k] * g1[m] - g1[k] * g0[m]
@@ -388,23 +402,26 @@ def triangle_far(
     best = _corner_in(g0, z[0], best, tau, directional)
     best = _corner_in(g1, z[1], best, tau, directional)
     best = _corner_in(g2, z[2], best, tau, directional)
-    best = _edge_far(g0, g1, z[0], z[1], best, tau)
-    best = _edge_far(g1, g2, z[1], z[2], best, tau)
-    best = _edge_far(g2, g0, z[2], z[0], best, tau)
+    best = _edge_far((g0, g1), (z[0], z[1]), best, tau)
+    best = _edge_far((g1, g2), (z[1], z[2]), best, tau)
+    best = _edge_far((g2, g0), (z[2], z[0]), best, tau)
     for k in range(4):  # the adjacent pairs (0, 2), (0, 3), (1, 2), (1, 3)
-        best = _corner_far((g0, g1, g2), z, k // 2, 2 + k % 2, best, tau)
+        best = _corner_far((g0, g1, g2), z, (k // 2, 2 + k % 2), best, tau)
     return best
 
 
 def directional_origin(
-    z_lo: Any, z_hi: Any, half_x: Any, half_y: Any, c: tuple[Any, Any, Any], a: tuple[Any, ...]
+    z: tuple[Any, Any], half: tuple[Any, Any], c: tuple[Any, Any, Any], a: tuple[Any, ...]
 ) -> tuple[Any, Any, Any, Any]:
     """The directional frame's origin, behind everything counted, and the shift along ``Z``.
+
+    ``z = (z_lo, z_hi)``: the counted depth range; ``half = (h_x, h_y)``: the box's half-widths.
 
     ``origin = c + Z (z_lo - pad)``, ``pad = (z_hi - z_lo) + max(h_x, h_y)``: the
     depth range plus the box's size, so that ``near > 0`` with room to spare even
     for a flat blocker seen face-on (``z_hi = z_lo``).
     """
+    (z_lo, z_hi), (half_x, half_y) = z, half
     pad = (z_hi - z_lo) + where(half_x >= half_y, half_x, half_y)
     shift = z_lo - pad
     return c[0] + shift * a[6], c[1] + shift * a[7], c[2] + shift * a[8], shift
@@ -438,14 +455,18 @@ def depth_range(
     return near, far, (ok_nf, ok_ff, ok_pos, near < far, ok_nclip, ok_fclip)
 
 
-def ortho_rows(sx: Any, sxc: Any, sy: Any, syc: Any, near: Any, far: Any) -> tuple[Any, ...]:
+def ortho_rows(
+    scale: tuple[Any, Any], centre: tuple[Any, Any], near: Any, far: Any
+) -> tuple[Any, ...]:
     """The nonzero entries of an orthographic box's projection (light to OpenGL clip).
 
     ``P = [[sx, 0, 0, -sx cx], [0, sy, 0, -sy cy], [0, 0, a, b], [0, 0, 0, 1]]``,
     ``a = 2 / (f - n)``, ``b = -(f + n) / (f - n)``: depth ``-1`` at near, ``+1`` at far.
+    ``scale = (sx, sy)``, ``centre = (cx, cy)``. Returns ``(sx, -sx cx, sy, -sy cy, a, b)``.
     """
+    (sx, sy), (cx, cy) = scale, centre
     inv = 1.0 / (far - near)
-    return sx, sxc, sy, syc, 2.0 * inv, -(far + near) * inv
+    return sx, -sx * cx, sy, -sy * cy, 2.0 * inv, -(far + near) * inv
 
 
 def ortho_clip_rows(w: tuple[Any, ...], p: tuple[Any, ...]) -> tuple[Any, ...]:
@@ -497,8 +518,7 @@ IDENTITY16 = (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0
 
 
 def fit_rows(
-    origin: tuple[Any, Any, Any],
-    a: tuple[Any, ...],
+    frame: tuple[tuple[Any, Any, Any], tuple[Any, ...]],
     box: tuple[Any, Any, Any, Any, Any, Any],
     margins: tuple[float, float],
     directional: bool,
@@ -506,25 +526,26 @@ def fit_rows(
 ) -> tuple[tuple[Any, ...], tuple[Any, ...], tuple[Any, ...]]:
     """``world_to_light`` (12), ``blocker_to_clip`` without placement (16), ``world_to_texture``.
 
+    ``frame = (origin, axes)``: the light frame's origin (3) and axes ``X, Y, Z`` (9).
     ``box = (h_x, h_y, c_x, c_y, near, far)``, already safe (``h > 0``, ``far > near``).
     ``api = (C, T C)``: OpenGL clip to the API's clip, and to its texture coordinates.
     """
     hx, hy, cx, cy, near, far = box
-    w = light_rows(
-        origin[0], origin[1], origin[2], a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8]
-    )
-    sx, sy = margins[0] / hx, margins[1] / hy
+    w = light_rows(frame[0], frame[1])
+    scale = (margins[0] / hx, margins[1] / hy)
     if directional:
-        gl = ortho_clip_rows(w, ortho_rows(sx, -sx * cx, sy, -sy * cy, near, far))
+        gl = ortho_clip_rows(w, ortho_rows(scale, (cx, cy), near, far))
     else:
-        gl = clip_rows(w, projection_rows(sx, sy, cx, cy, near, far))
+        gl = clip_rows(w, projection_rows(scale, (cx, cy), near, far))
     return w, const_times(api[0], gl), const_times(api[1], gl)
 
 
-def safe_box(
-    half_x: Any, half_y: Any, cx: Any, cy: Any, near: Any, far: Any
-) -> tuple[Any, Any, Any, Any, Any, Any]:
-    """The box with safe divisors (``h > 0``, ``far > near``); invalid entries are poisoned."""
+def safe_box(box: tuple[Any, Any, Any, Any, Any, Any]) -> tuple[Any, Any, Any, Any, Any, Any]:
+    """The box ``(h_x, h_y, c_x, c_y, near, far)`` with safe divisors (``h > 0``, ``far > near``).
+
+    Invalid entries are poisoned.
+    """
+    half_x, half_y, cx, cy, near, far = box
     return (
         where(half_x > 0, half_x, 1.0),
         where(half_y > 0, half_y, 1.0),

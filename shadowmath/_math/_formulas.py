@@ -81,7 +81,7 @@ def axes_from_z(zx: Any, zy: Any, zz: Any) -> tuple[Any, Any, Any, Any, Any, Any
 
 
 def rolled_axes(
-    dx: Any, dy: Any, dz: Any, ux: Any, uy: Any, uz: Any, c: Any, s: Any
+    d: tuple[Any, Any, Any], u: tuple[Any, Any, Any], c: Any, s: Any
 ) -> tuple[Any, ...]:
     """The frame of ``Z = d / |d|`` with reference axis ``U``, turned by the angle (``c, s``).
 
@@ -90,8 +90,8 @@ def rolled_axes(
     (9 components), ``|d|`` and ``|Z x U|^2`` (the squared sine of the angle
     between ``d`` and ``U``; zero when they are parallel).
     """
-    zx, zy, zz, length = normalize3(dx, dy, dz)
-    vx, vy, vz, _ = normalize3(ux, uy, uz)
+    zx, zy, zz, length = normalize3(d[0], d[1], d[2])
+    vx, vy, vz, _ = normalize3(u[0], u[1], u[2])
     cx, cy, cz = zy * vz - zz * vy, zz * vx - zx * vz, zx * vy - zy * vx
     sin_sq = cx * cx + cy * cy + cz * cz
     ax, ay, az, _ = normalize3(cx, cy, cz)
@@ -174,24 +174,28 @@ def planar_entries(pi: tuple[Any, ...], L: tuple[Any, ...], splitter: float) -> 
 
 
 def projection_rows(
-    sx: Any, sy: Any, cx: Any, cy: Any, near: Any, far: Any
+    scale: tuple[Any, Any], centre: tuple[Any, Any], near: Any, far: Any
 ) -> tuple[Any, Any, Any, Any, Any, Any]:
     """The nonzero entries of the blocker projection ``P`` (light to OpenGL clip).
 
     ``P = [[sx, 0, -sx cx, 0], [0, sy, -sy cy, 0], [0, 0, a, b], [0, 0, 1, 0]]``
     with ``a = (f + n) / (f - n)`` and ``b = -2 n (f / (f - n))`` (the product
-    ``f n`` is never formed, so it cannot overflow). Returns
-    ``(sx, -sx cx, sy, -sy cy, a, b)``.
+    ``f n`` is never formed, so it cannot overflow). ``scale = (sx, sy)``,
+    ``centre = (cx, cy)``. Returns ``(sx, -sx cx, sy, -sy cy, a, b)``.
     """
+    (sx, sy), (cx, cy) = scale, centre
     ratio = far / (far - near)
     return sx, -sx * cx, sy, -sy * cy, (far + near) / (far - near), -2.0 * near * ratio
 
 
-def light_rows(
-    ox: Any, oy: Any, oz: Any, xx: Any, xy: Any, xz: Any, yx: Any, yy: Any, yz: Any,
-    zx: Any, zy: Any, zz: Any,
-) -> tuple[Any, ...]:  # fmt: skip
-    """``world_to_light = [[R, -R o], [0, 1]]`` as 12 entries (its first three rows)."""
+def light_rows(origin: tuple[Any, Any, Any], axes: tuple[Any, ...]) -> tuple[Any, ...]:
+    """``world_to_light = [[R, -R o], [0, 1]]`` as 12 entries (its first three rows).
+
+    ``origin = o`` (3), ``axes``: the rows ``X, Y, Z`` of ``R`` (their first 9 entries).
+    """
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    xx, xy, xz, yx, yy, yz = axes[0], axes[1], axes[2], axes[3], axes[4], axes[5]
+    zx, zy, zz = axes[6], axes[7], axes[8]
     tx = -(xx * ox + xy * oy + xz * oz)
     ty = -(yx * ox + yy * oy + yz * oz)
     tz = -(zx * ox + zy * oy + zz * oz)

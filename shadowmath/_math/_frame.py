@@ -57,8 +57,12 @@ def light_entries(xp: ModuleType, frame: LightFrame) -> tuple[Array, ...]:
     """The 12 entries of ``world_to_light``'s first three rows, from a trusted frame."""
     o, x, y, z = frame
     entries: tuple[Array, ...] = formulas(xp).light_rows(
-        o[..., 0], o[..., 1], o[..., 2], x[..., 0], x[..., 1], x[..., 2],
-        y[..., 0], y[..., 1], y[..., 2], z[..., 0], z[..., 1], z[..., 2],
+        (o[..., 0], o[..., 1], o[..., 2]),
+        (
+            x[..., 0], x[..., 1], x[..., 2],
+            y[..., 0], y[..., 1], y[..., 2],
+            z[..., 0], z[..., 1], z[..., 2],
+        ),
     )  # fmt: skip
     return entries
 

@@ -76,7 +76,7 @@ def projection_terms(xp: ModuleType, fr: Frustum) -> tuple[Array, ...]:
     """``(sx, -sx cx, sy, -sy cy, a, b)``: the nonzero entries of the blocker projection."""
     sx, sy = fr.margin_x / fr.rx_max, fr.margin_y / fr.ry_max
     terms: tuple[Array, ...] = formulas(xp).projection_rows(
-        sx, sy, fr.x_offset, fr.y_offset, fr.near, fr.far
+        (sx, sy), (fr.x_offset, fr.y_offset), fr.near, fr.far
     )
     return terms
 

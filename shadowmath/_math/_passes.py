@@ -51,10 +51,11 @@ def spread(xp: ModuleType, light: Array, verts: Array, *, aim: str) -> Spread:
     return Spread(direction, coords, reach)
 
 
-def extent(
-    xp: ModuleType, light: Array, verts: Array, x_axis: Array, y_axis: Array, z_axis: Array
-) -> Extent:
-    """Pass 2: light coordinates and projection ratios of every vertex."""
+def extent(xp: ModuleType, light: Array, verts: Array, axes: tuple[Array, Array, Array]) -> Extent:
+    """Pass 2: light coordinates and projection ratios of every vertex.
+
+    ``axes = (X, Y, Z)``: the light frame's ``(*batch, 3)`` axes.
+    """
     # Written per component (three products and two sums), not as a reduction over
     # the last axis of length 3: XLA fuses the whole pass into one loop this way,
     # while a size-3 reduction per vertex ran 60x slower than a read on the CPU.
@@ -63,7 +64,7 @@ def extent(
     def along(axis: Array) -> Array:
         return ox * axis[..., None, 0] + oy * axis[..., None, 1] + oz * axis[..., None, 2]
 
-    x, y, z = along(x_axis), along(y_axis), along(z_axis)
+    x, y, z = along(axes[0]), along(axes[1]), along(axes[2])
     # Divide by a safe z so that invalid entries (z <= 0) never produce inf/NaN
     # derivatives that leak into valid ones; the checks mark them invalid.
     inv_z = 1 / xp.where(z > 0, z, xp.ones_like(z))

@@ -56,6 +56,7 @@ def pcf(
     depth_map: Array,
     coords: Array,
     depths: Array,
+    *,
     radius: int,
     filter: PcfFilter,
     reversed_z: bool,

@@ -57,8 +57,9 @@ def grid(count: int) -> tuple[int, int]:
 
 
 def area_light_samples(
-    xp: ModuleType, corner: Array, eu: Array, ev: Array, jitter: Array, rows: int, cols: int
+    xp: ModuleType, corner: Array, eu: Array, ev: Array, jitter: Array, *, grid: tuple[int, int]
 ) -> Array:
+    rows, cols = grid
     k = xp.arange(rows * cols)
     col = xp.astype(k % cols, jitter.dtype)
     row = xp.astype(k // cols, jitter.dtype)

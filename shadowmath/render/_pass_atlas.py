@@ -179,10 +179,10 @@ def render_atlas(
     atlas, fit, cast = scene.atlas, scene.fit, scene.cast
     gl = resolve_context(ctx)
     clip = scene.projection @ scene.view
-    with GpuScene(gl, scene.bodies, (), [], clip, size, fit.texture_size) as gpu:
+    with GpuScene(gl, scene.bodies, (), [], clip, size=size, map_size=fit.texture_size) as gpu:
         depths = draw_atlas(gpu, fit, cast, scene.bias)
         options = _Options(cast, scene.pcf_radius, scene.normal_offset, scene.ambient, background)
-        return _shade_all(gpu, scene.lights, atlas, fit, depths, options)
+        return _shade_all(gpu, scene.lights, atlas, fit, depths=depths, options=options)
 
 
 class AtlasScene(NamedTuple):
@@ -348,6 +348,7 @@ def _shade_all(
     table: LightTable,
     atlas: sm.ShadowAtlas,
     fit: sm.AtlasFit,
+    *,
     depths: moderngl.Texture,
     options: _Options,
 ) -> AtlasFrame:
@@ -391,7 +392,7 @@ def _shade_all(
         color = read_texture(scene.color_tex, 4)[..., :3]
     finally:
         finish(scene)
-    return _frame(scene, color, np.stack(shadow), atlas, fit, depths)
+    return _frame(scene, color, np.stack(shadow), atlas, fit, depths=depths)
 
 
 def _draw_bodies(
@@ -413,6 +414,7 @@ def _frame(
     shadow: NDArray[np.float32],
     atlas: sm.ShadowAtlas,
     fit: sm.AtlasFit,
+    *,
     depths: moderngl.Texture,
 ) -> AtlasFrame:
     position, normal, body = scene.read_record()

@@ -210,12 +210,14 @@ def render_cascades(
         "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
         "stable": stable,
     }  # fmt: skip
-    scene = prepare_cascades(bodies, light, view, projection, options, fit_options)
+    scene = prepare_cascades(
+        bodies, light, view, projection, options=options, fit_options=fit_options
+    )
     size = _image_size("image_size", image_size)
     texels = _image_size("map_size", map_size)
     gl = resolve_context(ctx)
     v, p = scene.view, scene.projection
-    with GpuScene(gl, scene.bodies, (), [scene.sun], p @ v, size, texels) as gpu:
+    with GpuScene(gl, scene.bodies, (), [scene.sun], p @ v, size=size, map_size=texels) as gpu:
         return _draw(gpu, v, scene.fit, options)
 
 
@@ -258,9 +260,9 @@ def prepare_cascades(
     light: Light,
     view: Any,
     projection: Any,
+    *,
     options: CascadeOptions,
     fit_options: dict[str, Any],
-    *,
     api: Literal["opengl", "webgpu"] = "opengl",
 ) -> CascadeScene:
     """Check the bodies, the sun and the camera (OpenGL conventions); fit the cascades with
@@ -395,6 +397,7 @@ def _shade(
     fit: sm.Cascades,
     maps: moderngl.TextureArray,
     options: CascadeOptions,
+    *,
     mode: int,
 ) -> None:
     """Every body through ``cascades.frag`` in ``mode`` (0 the mask, 1 the cascade tint),

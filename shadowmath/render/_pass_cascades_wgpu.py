@@ -144,12 +144,14 @@ def render_cascades_wgpu(
         "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
         "stable": stable,
     }  # fmt: skip
-    scene = prepare_cascades(bodies, light, view, projection, options, fit_options, api="webgpu")
+    scene = prepare_cascades(
+        bodies, light, view, projection, options=options, fit_options=fit_options, api="webgpu"
+    )
     size = _image_size("image_size", image_size)
     device = wgpu_device()
     buffers = vertex_buffers(device, scene.bodies)
     maps, depths = _draw_maps(device, scene, buffers, atlas=options.layout == "atlas")
-    targets = _draw_camera(device, scene, options, buffers, maps, size)
+    targets = _draw_camera(device, scene, options, buffers, maps, size=size)
     shadow, position, normal, body = read_record(device, targets, size)
     return WgpuCascadeFrame(
         shadow=shadow,
@@ -228,6 +230,7 @@ def _draw_camera(
     options: CascadeOptions,
     buffers: Sequence[tuple[Any, int]],
     maps: Any,
+    *,
     size: tuple[int, int],
 ) -> list[Any]:
     """Every body from the camera through cascades.wgsl (:func:`draw_camera`)."""

@@ -124,6 +124,7 @@ def _scene_uniforms(
     body_to_world: NDArray[np.float64],
     body_to_texture: NDArray[np.float64],
     light: NDArray[np.float64],
+    *,
     body_id: int,
     pcf_radius: int,
 ) -> bytes:
@@ -395,8 +396,9 @@ def render_depth_wgpu(
     draws = []
     for i, (b, vbo, count) in enumerate(zip(bodies, vbos, counts, strict=True)):
         data = _scene_uniforms(
-            camera_clip, b.to_world, world_to_texture @ b.to_world, lit.position, i, k
-        )
+            camera_clip, b.to_world, world_to_texture @ b.to_world, lit.position,
+            body_id=i, pcf_radius=k,
+        )  # fmt: skip
         entries = [
             {"binding": 0, "resource": {"buffer": uniform_buffer(device, data)}},
             {"binding": 1, "resource": depth_view},

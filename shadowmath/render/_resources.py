@@ -246,6 +246,7 @@ class GpuScene:
         blockers: Sequence[Prepared],
         lights: Sequence[PreparedLight],
         world_to_clip: NDArray[np.float64],
+        *,
         size: tuple[int, int],
         map_size: tuple[int, int],
     ) -> None:

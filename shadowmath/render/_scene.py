@@ -243,7 +243,7 @@ def render_scene(
             )
 
     gl = resolve_context(ctx)
-    with GpuScene(gl, recv, block, light_data, camera, size, map_texels) as scene:
+    with GpuScene(gl, recv, block, light_data, camera, size=size, map_size=map_texels) as scene:
         return _draw(scene, shadow_pass, all_setups, ambient, background)
 
 
