@@ -174,6 +174,7 @@ def test_the_batched_support_finds_each_entrys_minimal_sphere(
     from shadowmath._math._specialize import formulas
 
     monkeypatch.setattr(_ball_support, "scalar_formulas", None)
+    monkeypatch.setattr(_ball_support, "LOOPED", 1)
     rng = np.random.default_rng(11)
     on_sphere = rng.normal(size=(6, 20, 3))
     batches = [

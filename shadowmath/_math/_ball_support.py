@@ -13,7 +13,8 @@ candidates) that holds ``S + p``; among candidates of equal radius (to rounding)
 one of fewest points. The radius grows every round, so no set repeats; when no point
 is outside, ``B`` holds every point and is the sphere of a subset: the minimal one.
 Entries still going after :data:`ROUNDS` rounds, or left without a candidate by
-rounding (neither seen in practice), run Welzl's loop instead.
+rounding (neither seen in practice), run Welzl's loop instead, as do batches of fewer
+than :data:`LOOPED` entries.
 
 The supports may differ from Welzl's where the minimal sphere has more than four
 points on it (a box's corners); the sphere itself is unique, so its centre and radius
@@ -42,6 +43,10 @@ _SIZES = np.array([1 + len(s) for s in _SUBSETS])  # points on each candidate sp
 #: Rounds before the remaining entries go to Welzl's loop (each round the radius grows).
 ROUNDS = 64
 
+#: Fewer entries than this run Welzl's loop: a round here is some 40 NumPy calls, while
+#: the loop takes 50 to 300 µs per entry of 8 or 9 points (crossing near 32 entries).
+LOOPED = 32
+
 #: Relative slack in ``r^2`` within which a candidate of fewer points is preferred.
 _TIE = 1e-12
 
@@ -52,12 +57,14 @@ def support_arrays(points: np.ndarray) -> np.ndarray:
     :func:`._loops.support_loop` writes them (``k`` points, the last index repeated).
 
     >>> box = np.array([[x, y, z] for x in (0, 2) for y in (0, 1) for z in (0, 1)], float)
-    >>> row = support_arrays(box[None])[0]
+    >>> row = support_arrays(np.repeat(box[None], LOOPED, axis=0))[0]
     >>> sphere = formulas(np).sphere_through(tuple(box[row[:4]].ravel()), row[4])
     >>> [round(float(v), 12) for v in sphere]
     [1.0, 0.5, 0.5, 1.5]
     """
     count = len(points)
+    if count < LOOPED:
+        return _welzl(points)
     xyz = np.ascontiguousarray(np.moveaxis(points, -1, 0))  # (3, count, N)
     out = np.zeros((count, 5), dtype=np.int32)
     out[:, 4] = 1
@@ -77,9 +84,14 @@ def support_arrays(points: np.ndarray) -> np.ndarray:
         todo = np.setdiff1d(todo, np.concatenate(stuck[-4:]), assume_unique=True)
     rest = np.concatenate([todo, *stuck])
     if len(rest):
-        support = np.zeros((len(rest), 5), dtype=np.int32)
-        scalar_formulas().support_loop(points[rest].tolist(), support)
-        out[rest] = support
+        out[rest] = _welzl(points[rest])
+    return out
+
+
+def _welzl(points: np.ndarray) -> np.ndarray:
+    """Welzl's loop (:func:`._loops.support_loop`) on Python floats, entry by entry."""
+    out = np.zeros((len(points), 5), dtype=np.int32)
+    scalar_formulas().support_loop(points.tolist(), out)
     return out
 
 
