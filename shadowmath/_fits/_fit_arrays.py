@@ -235,11 +235,8 @@ class ArrayPasses:
                 _kernels.sphere_support, shape, jax.lax.stop_gradient(points),
                 vmap_method="expand_dims",
             )  # fmt: skip
-        q = tuple(
-            xp.take_along_axis(w, support[..., j : j + 1], axis=-1)[..., 0]
-            for j in range(4)
-            for w in world
-        )
+        on = [xp.take_along_axis(w, support[..., :4], axis=-1) for w in world]  # (*batch, 4)
+        q = tuple(on[c][..., j] for j in range(4) for c in range(3))
         k = support[..., 4]
         if self.scalar:
             q, k = tuple(float(v) for v in q), int(k)
