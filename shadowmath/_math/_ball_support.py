@@ -1,17 +1,18 @@
 """The minimal enclosing sphere's support points of many point sets at once, in NumPy.
 
 Without the compiled loops, Welzl's algorithm (:func:`._vertex_passes.enclosing_support`)
-runs in Python, about 50 µs per 8-point set. :func:`support_arrays` finds the same
+runs in Python, 15 to 100 µs per 8-point set. :func:`support_arrays` finds the same
 spheres for a whole batch with a few dozen NumPy calls per round, by *support-set
 iteration*: every entry holds a support set ``S`` (1 to 4 of its points) and the
-sphere through them, ``B = MB(S)``; each round, every entry with a point ``p`` outside
-``B`` (the farthest such, by :func:`._vertex_passes._outside`) replaces ``S`` by the
-support of ``MB(S + p)``. Since ``p`` is outside ``MB(S)``, it lies on the boundary of
-``MB(S + p)`` (Welzl's lemma), so that sphere is the smallest of the spheres through
-``p`` and 1 to 3 points of ``S`` (:func:`._fit_formulas.sphere_through`, at most 14
-candidates) that holds ``S + p``; among candidates of equal radius (to rounding) the
-one of fewest points. The radius grows every round, so no set repeats; when no point
-is outside, ``B`` holds every point and is the sphere of a subset: the minimal one.
+sphere through them, ``B = MB(S)`` (first a long chord, :func:`_chords`); each round,
+every entry with a point ``p`` outside ``B`` (the farthest such, by
+:func:`._vertex_passes._outside`) replaces ``S`` by the support of ``MB(S + p)``.
+Since ``p`` is outside ``MB(S)``, it lies on the boundary of ``MB(S + p)`` (Welzl's
+lemma), so that sphere is the smallest of the spheres through ``p`` and 1 to 3 points
+of ``S`` (:func:`._fit_formulas.sphere_through`, at most 14 candidates) that holds
+``S + p``; among candidates of equal radius (to rounding) the one of fewest points.
+The radius grows every round, so no set repeats; when no point is outside, ``B``
+holds every point and is the sphere of a subset: the minimal one.
 Entries still going after :data:`ROUNDS` rounds, or left without a candidate by
 rounding (neither seen in practice), run Welzl's loop instead, as do batches of fewer
 than :data:`LOOPED` entries.
@@ -66,10 +67,7 @@ def support_arrays(points: np.ndarray) -> np.ndarray:
     if count < LOOPED:
         return _welzl(points)
     xyz = np.ascontiguousarray(np.moveaxis(points, -1, 0))  # (3, count, N)
-    out = np.zeros((count, 5), dtype=np.int32)
-    out[:, 4] = 1
-    ball = np.zeros((4, count))
-    ball[:3] = xyz[:, :, 0]
+    out, ball = _chords(xyz)
     todo, stuck = np.arange(count), []
     for _ in range(ROUNDS):
         todo, far = _farthest_outside(xyz, ball, todo)
@@ -93,6 +91,27 @@ def _welzl(points: np.ndarray) -> np.ndarray:
     out = np.zeros((len(points), 5), dtype=np.int32)
     scalar_formulas().support_loop(points.tolist(), out)
     return out
+
+
+def _chords(xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The first support and sphere of each entry: ``q``, the point farthest from point 0,
+    and ``r``, the one farthest from ``q`` (``S = {q, r}``, ``B`` their diameter sphere).
+
+    ``B = MB(S)`` as the iteration needs, and often the answer (a box's diagonal).
+    """
+    n = np.arange(xyz.shape[1])
+    q = _farthest(xyz, xyz[:, :, 0])
+    r = _farthest(xyz, xyz[:, n, q])
+    out = np.c_[q, r, r, r, np.where(q == r, 1, 2)].astype(np.int32)
+    ends = tuple(xyz[c, n, e] for e in (q, r, r, r) for c in range(3))
+    return out, np.stack(formulas(np).sphere_through(ends, out[:, 4]))
+
+
+def _farthest(xyz: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Each entry's point farthest from its point ``p`` ``(3, count)`` (the first of ties)."""
+    d2 = (xyz[0] - p[0, :, None]) ** 2 + (xyz[1] - p[1, :, None]) ** 2
+    far: np.ndarray = np.argmax(d2 + (xyz[2] - p[2, :, None]) ** 2, axis=-1)
+    return far
 
 
 def _farthest_outside(xyz: np.ndarray, ball: np.ndarray, todo: np.ndarray) -> Any:
