@@ -12,8 +12,9 @@ Sections (``--only NAME``, repeatable or comma-separated):
   ``reversed_z``), with the ``fast`` extra against PyGLM (``perspective`` or ``ortho``) and
   with NumPy alone (compiled loop disabled) against a hand-written NumPy fit.
 * ``batch``: 100,000 point fits of 8-vertex blockers, NumPy and jitted JAX, float32 and
-  float64, and 1,000 directional fits with receivers and ``stable=True``, against a Python
-  loop of PyGLM.
+  float64, against a Python loop of PyGLM.
+* ``suns``: 1,000 directional fits with receivers and ``stable=True`` in one call, with the
+  ``fast`` extra and with NumPy alone, against a Python loop of PyGLM's ``lookAt`` + ``ortho``.
 * ``large``: one 4M-vertex float32 blocker against one flat ``sum`` of the array.
 * ``derivatives``: the jitted gradient of the fitting objective against its forward pass;
   ``optimize_frustum`` on 1,000 and 500,000 vertices and on a batch of 100 blockers.

@@ -22,6 +22,7 @@ EXPECTED = [
     "single",
     "options",
     "batch",
+    "suns",
     "large",
     "derivatives",
     "gpu",

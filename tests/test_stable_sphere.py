@@ -160,3 +160,41 @@ def test_a_repeated_vertex_far_from_the_origin_changes_nothing(path: str, offset
         for v in (DUPLICATE, DUPLICATE[::-1], DUPLICATE[rng.permutation(6)]):
             s = sm.fit_shadow(light, v + [0.0, offset, 0.0], W, stable=True)
             np.testing.assert_allclose(_radius(s), radius, rtol=1e-6)
+
+
+def test_the_batched_support_finds_each_entrys_minimal_sphere(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Without Numba a batch's supports come from the support-set iteration over every
+    # entry at once (_math/_ball_support.py): the sphere through them is, per entry, the
+    # brute force's (random clouds, coplanar and cospherical sets, a box's 8 corners on
+    # one sphere, repeated points, 20 points on a sphere: supports of 4 that grow), and
+    # it holds every point. Welzl's loop, its fallback, must not be needed.
+    from shadowmath._math import _ball_support
+    from shadowmath._math._specialize import formulas
+
+    monkeypatch.setattr(_ball_support, "scalar_formulas", None)
+    monkeypatch.setattr(_ball_support, "LOOPED", 1)
+    rng = np.random.default_rng(11)
+    on_sphere = rng.normal(size=(6, 20, 3))
+    batches = [
+        rng.normal(size=(12, 7, 3)) * rng.uniform(0.5, 3, (12, 1, 3)) + rng.normal(size=(12, 1, 3)),
+        np.concatenate([rng.normal(size=(6, 7, 2)), np.full((6, 7, 1), 3.0)], axis=-1),
+        np.repeat(_box_surface(np.array([2.0, 1.0, 0.5]), 2)[None, ::-1], 3, axis=0),
+        np.repeat(rng.normal(size=(6, 3, 3)), 3, axis=1) + 1e4,
+        on_sphere / np.linalg.norm(on_sphere, axis=-1, keepdims=True),
+    ]  # fmt: skip
+    sizes = set()
+    for sets in batches:
+        rows = _ball_support.support_arrays(sets)
+        q = sets[np.arange(len(sets))[:, None], rows[:, :4]]
+        cx, cy, cz, r2 = formulas(np).sphere_through(
+            tuple(q[:, j // 3, j % 3] for j in range(12)), rows[:, 4]
+        )
+        expected = [_brute_force(np.unique(s, axis=0)) for s in sets]
+        np.testing.assert_allclose(np.sqrt(r2), expected, rtol=1e-9)
+        centres = np.stack([cx, cy, cz], axis=-1)[:, None]
+        far = np.linalg.norm(sets - centres, axis=-1).max(axis=1)
+        np.testing.assert_allclose(far, np.sqrt(r2), rtol=1e-9)
+        sizes |= set(rows[:, 4].tolist())
+    assert sizes == {2, 3, 4}

@@ -99,6 +99,14 @@ MUTATIONS: tuple[Mutation, ...] = (
         ("tests/test_stable_sphere.py",),
     ),
     Mutation(
+        "ball-support-unchecked",
+        "shadowmath/_math/_ball_support.py",
+        "r2 = np.where(outside.any(axis=0), np.inf, cand[3])",
+        "r2 = np.where(False, np.inf, cand[3])",
+        "the batched support takes the smallest candidate sphere, whether it holds S + p or not",
+        ("tests/test_stable_sphere.py",),
+    ),
+    Mutation(
         "receivers-outside-counted",
         "shadowmath/_math/_fit_formulas.py",
         "return inside & ((z > 0) | directional)",

@@ -1,7 +1,6 @@
 """2. Batch: ``fit_shadow`` over 100,000 light/blocker pairs of 8 box corners (``aim="bbox"``,
 the article's Optimization Tip #2), NumPy and jitted JAX, float32 and float64, against a Python
-loop of the PyGLM fit; and 1,000 directional fits with receivers and ``stable=True`` against a
-Python loop of PyGLM's ``lookAt`` + ``ortho``."""
+loop of the PyGLM fit (1,000 directional fits with receivers and ``stable=True``: :mod:`.suns`)."""
 
 from __future__ import annotations
 
@@ -12,22 +11,20 @@ import numpy as np
 
 import shadowmath as sm
 
-from ._scenes import MAP_SIZE, boxes, floor, glm_fit, glm_ortho_fit, suns, to_glm
+from ._scenes import MAP_SIZE, boxes, glm_fit, to_glm
 from ._timing import (
     Config,
     Row,
     Section,
     Timing,
-    fast_extra,
     measure,
-    numpy_alone,
     once,
     run_python,
     synced,
 )
 
 NAME = "batch"
-TITLE = "2. Batch: 100,000 point fits and 1,000 directional fits of 8-vertex blockers"
+TITLE = "2. Batch: 100,000 point fits of 8-vertex blockers"
 
 _X64_CHILD = """
 import json
@@ -103,36 +100,6 @@ def batch_row(
     )
 
 
-def directional_rows(cfg: Config) -> list[Row]:
-    """1,000 directional fits with receivers and ``stable=True`` in one call, against PyGLM.
-
-    Lights ``(n, 4)``, blockers ``(n, 8, 3)``, one floor of receivers broadcast over the
-    batch; the baseline loops PyGLM's ``lookAt`` + ``ortho`` fit over all ``n`` pairs. With
-    the fast extra as installed (target ≥ 20×), and NumPy alone (for reference).
-    """
-    n = cfg.size(1_000, 16)
-    _, corners = boxes(n, cfg.seed + 1)
-    lights, receivers = suns(n, cfg.seed + 1), floor(8)[:64]
-    scene = [to_glm(lights[i, :3], corners[i]) for i in range(n)]
-
-    def loop() -> list[Any]:
-        return [glm_ortho_fit(d, verts) for d, verts in scene]
-
-    reps = cfg.repeats(7)
-    base = measure(loop, repeats=reps, min_time=cfg.min_time)
-    fit = partial(sm.fit_shadow, lights, corners, MAP_SIZE, receivers=receivers, stable=True)
-    label = f"fit_shadow, {n:,} directional fits + {len(receivers)} shared receivers, stable=True"
-    baseline = "Python loop of the PyGLM lookAt + ortho fit"
-    rows = []
-    if fast_extra():
-        t = measure(fit, repeats=reps, min_time=cfg.min_time)
-        rows.append(batch_row(f"{label}, fast extra", t, base, n, 0.05, baseline=baseline))
-    with numpy_alone():
-        t = measure(fit, repeats=reps, min_time=cfg.min_time)
-    rows.append(batch_row(f"{label}, NumPy alone", t, base, n, None, baseline=baseline))
-    return rows
-
-
 def run(cfg: Config) -> Section:
     import jax
 
@@ -170,17 +137,10 @@ def run(cfg: Config) -> Section:
             f"first call {float(child['first']):.2f} s; result {child['dtype']}",
         )
     )
-    section.rows.extend(directional_rows(cfg))
     section.notes.append(
         f"Each point-light row fits all {n:,} pairs in one call (leading batch dimension). The "
         f"PyGLM loop was timed over {subset:,} pairs (glm.vec3 lists made before timing) and "
         f"scaled ×{n / subset:g} to {n:,}."
-    )
-    section.notes.append(
-        f"The directional rows fit {cfg.size(1_000, 16):,} pairs in one call (float64, one floor "
-        "of receivers broadcast over the batch) against a loop of PyGLM's lookAt + ortho over "
-        "all of them (target ≥ 20× with the fast extra); NumPy alone: the compiled loop "
-        "disabled (as without Numba), for reference."
     )
     section.notes.append(
         "Targets: ≥ 20× the loop's rate in the faster backend (≤ 0.05 on the JAX rows), ≥ 10× "

@@ -158,15 +158,16 @@ def _select(c: Any, a: Any, b: Any) -> Any:
 
 def sphere_support(points: Any) -> Any:
     """The minimal enclosing sphere's support of ``(*batch, N, 3)`` points: ``(*batch, 5)``
-    int32 rows ``(i_0, i_1, i_2, i_3, k)`` (Welzl's algorithm, :mod:`._loops`), compiled
-    when Numba is available, else the same loop in Python."""
+    int32 rows ``(i_0, i_1, i_2, i_3, k)``: Welzl's algorithm compiled (:mod:`._loops`)
+    when Numba is available, else every entry at once in NumPy
+    (:func:`shadowmath._math._ball_support.support_arrays`)."""
     p = np.asarray(points, dtype=np.float64)
     flat = np.ascontiguousarray(p.reshape(-1, *p.shape[-2:]))
-    out = np.zeros((len(flat), 5), dtype=np.int32)
     if available():
+        out = np.zeros((len(flat), 5), dtype=np.int32)
         loops().support_loop(flat, out)
     else:
-        from shadowmath._math._specialize import scalar_formulas
+        from shadowmath._math._ball_support import support_arrays
 
-        scalar_formulas().support_loop(flat.tolist(), out)
+        out = support_arrays(flat)
     return out.reshape(*p.shape[:-2], 5)

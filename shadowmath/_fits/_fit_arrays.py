@@ -181,6 +181,20 @@ class ArrayPasses:
     def receiver_far(
         self, R: Array, o: tuple[Array, ...], a: tuple[Array, ...], sides: Any, opts: Any
     ) -> tuple[Array, Array, Array]:
+        xp, count = self.xp, R.shape[-2]
+        # NumPy: blocks of receivers whose (batch, block) temporaries hold at most _BLOCK
+        # numbers (a larger one alive beside another is a fresh mapping of the allocator
+        # each time: its page faults cost ten times the arithmetic). JAX: one block.
+        step = count if xp is not np else max(1, _BLOCK // max(1, np.size(a[0])))
+        far = self._receivers_z(R[..., :step, :], o, a, sides, opts)
+        for m in range(step, count, step):
+            far = xp.maximum(far, self._receivers_z(R[..., m : m + step, :], o, a, sides, opts))
+        return self._e(far), self._e(all_finite(xp, R, 2)), self._link(R)
+
+    def _receivers_z(
+        self, R: Array, o: tuple[Array, ...], a: tuple[Array, ...], sides: Any, opts: Any
+    ) -> Array:
+        """The farthest depth of the receivers ``R`` inside the sides (``-inf`` if none)."""
         xp, F = self.xp, self.Fv
         s, org, ax = self._x(sides), self._x(o), self._x(a)
         corners = []
@@ -191,7 +205,7 @@ class ArrayPasses:
             z = F.triangle_far(tuple(corners), s, opts.directional, opts.eps)
         else:
             z = F.where(F.receiver_counted(*corners, s, opts.directional), corners[2], -math.inf)
-        return self._e(xp.max(z, axis=-1)), self._e(all_finite(xp, R, 2)), self._link(R)
+        return xp.max(z, axis=-1)
 
     def _link(self, R: Array) -> Array:
         """0, or under JAX 0 times the receivers' non-finite entries (NaN exactly there):
@@ -221,11 +235,8 @@ class ArrayPasses:
                 _kernels.sphere_support, shape, jax.lax.stop_gradient(points),
                 vmap_method="expand_dims",
             )  # fmt: skip
-        q = tuple(
-            xp.take_along_axis(w, support[..., j : j + 1], axis=-1)[..., 0]
-            for j in range(4)
-            for w in world
-        )
+        on = [xp.take_along_axis(w, support[..., :4], axis=-1) for w in world]  # (*batch, 4)
+        q = tuple(on[c][..., j] for j in range(4) for c in range(3))
         k = support[..., 4]
         if self.scalar:
             q, k = tuple(float(v) for v in q), int(k)
@@ -233,6 +244,10 @@ class ArrayPasses:
         cx, cy, cz, r2 = F.sphere_through(q, k)
         return cx, cy, cz, r2
 
+
+#: The most numbers in one NumPy temporary of the receivers' pass (64 kB of float64: fastest
+#: of 4,096 to 32,768 on the 2-core benchmark machine, 25 % faster than unblocked).
+_BLOCK = 8192
 
 _IDENTITY = tuple(float(i % 5 == 0) for i in range(16))
 

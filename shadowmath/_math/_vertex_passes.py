@@ -19,6 +19,7 @@ from typing import Any
 from shadowmath._boundary._status import OVERFLOW, PROJECTIVE, VERTICES
 
 from ._fit_formulas import place, receiver_counted, sphere_through, to_light, triangle_far
+from ._formulas import fabs, sqrt  # primitives, rebound by specialize()
 
 
 def _vertex(V: Any, k: int, b: Any, has_b: bool) -> Any:
@@ -127,16 +128,17 @@ def _ball(V: Any, b: Any, has_b: bool, sup: Any, k: int) -> Any:
     return sphere_through(q, k)
 
 
-def _outside(p: Any, ball: Any) -> bool:
+def _outside(p: Any, ball: Any) -> Any:
     """``p`` outside the ball by more than the rounding of its coordinates (float64).
 
     (A point within rounding of the sphere, such as a repeated vertex far from the
     origin, must not become a support point: two equal support points make the
-    sphere through them ill-posed.)
+    sphere through them ill-posed.) On scalars or, specialized to arrays, elementwise
+    (:mod:`._ball_support`).
     """
     dx, dy, dz = p[0] - ball[0], p[1] - ball[1], p[2] - ball[2]
-    tau = 64.0 * 2.220446049250313e-16 * (abs(p[0]) + abs(p[1]) + abs(p[2]))
-    return bool(math.sqrt(dx * dx + dy * dy + dz * dz) > math.sqrt(ball[3]) * (1.0 + 1e-14) + tau)
+    tau = 64.0 * 2.220446049250313e-16 * (fabs(p[0]) + fabs(p[1]) + fabs(p[2]))
+    return sqrt(dx * dx + dy * dy + dz * dz) > sqrt(ball[3]) * (1.0 + 1e-14) + tau
 
 
 def enclosing_ball(vs: Any) -> Any:
