@@ -16,17 +16,6 @@ PACKAGE = Path(__file__).resolve().parents[1] / "shadowmath"
 MAX_LINES = 60
 MAX_POSITIONAL = 5
 
-#: Functions with more positional parameters than the rule allows, from before the rule:
-#: the three that ``_fits/_setup.py`` calls positionally, left for its rewrite. The list
-#: may only shrink: a new function keeps the rule.
-POSITIONAL_DEBT = frozenset(
-    {
-        "_fits/_fitting.py:optimized_setup",
-        "_fits/_setup.py:assemble",
-        "_fits/_spot_select.py:spot_selection",
-    }
-)
-
 
 def _functions() -> Iterator[tuple[str, ast.FunctionDef | ast.AsyncFunctionDef]]:
     for path in sorted(PACKAGE.rglob("*.py")):
@@ -58,10 +47,9 @@ def test_no_function_is_longer_than_a_screen() -> None:
     assert long == {}
 
 
-def test_no_new_function_takes_more_than_five_positional_arguments() -> None:
+def test_no_function_takes_more_than_five_positional_arguments() -> None:
     many = {name for name, node in _functions() if _positional(node) > MAX_POSITIONAL}
-    assert many - POSITIONAL_DEBT == set()
-    assert POSITIONAL_DEBT - many == set(), "paid off: remove it from POSITIONAL_DEBT"
+    assert many == set()
 
 
 @pytest.mark.parametrize(

@@ -69,7 +69,9 @@ def fit_2d(
         group = verts if per_light is None else per_light[part]
         if kind == SPOT:
             casters = group if tris is None else tris if tris.ndim == 3 else tris[lights[part]]
-            selected = spot_selection(ctx, light_rows[part], None, None, casters, tris is not None)
+            selected = spot_selection(
+                ctx, light_rows[part], None, None, casters, triangles=tris is not None
+            )
             group = selected.points
         a = Inputs(
             light_rows[part] if kind == SPOT else positions[part], group, None, R, None,

@@ -42,7 +42,7 @@ _NO_VECTOR = np.zeros((1, 3))
 
 #: The most vertices plus receiver points of one fit that the Python loop runs
 #: (without Numba; beyond it the array path is faster).
-PYTHON_LOOP_POINTS = 64
+PYTHON_LOOP_POINTS = 128
 
 
 class Buffers(NamedTuple):

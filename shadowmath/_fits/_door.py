@@ -106,7 +106,7 @@ def select_casters(door: Door) -> tuple[Inputs, Array]:
     ctx, a, shape = door.ctx, door.a, door.shape
     xp = ctx.xp
     if door.key.spot:
-        selection = spot_selection(ctx, a.light, a.U, a.B, door.casters, door.triangles)
+        selection = spot_selection(ctx, a.light, a.U, a.B, door.casters, triangles=door.triangles)
         used = selection.kept
         if tuple(used.shape) != shape:
             used = xp.broadcast_to(used, shape)

@@ -378,6 +378,7 @@ def optimized_setup(
     light: Array,
     world: Array,
     B: Array | None,
+    *,
     m: tuple[float, float],
     near: Array | None,
     far: Array | None,

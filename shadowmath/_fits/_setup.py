@@ -260,13 +260,13 @@ def _fit_arrays(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey) ->
     checks = Checks(ctx)
     if ctx.is_jax:
         entries = fit_arrays(ctx, checks, key, a, driver(ctx, scalar=False))
-        return assemble(ctx, checks, key, shape, a.B, entries)
+        return assemble(ctx, checks, key, shape, entries, B=a.B)
     scalar = not shape
     with np.errstate(all="ignore"):  # invalid entries are reported by the checks, in order
         entries = fit_arrays(ctx, checks, key, a, driver(ctx, scalar))
     if scalar:
         return assemble_one(ctx, key, a.B, entries)
-    return assemble(ctx, checks, key, shape, a.B, entries)
+    return assemble(ctx, checks, key, shape, entries, B=a.B)
 
 
 def _points(a: Inputs) -> int:
@@ -289,7 +289,7 @@ def _optimized(ctx: Context, a: Inputs, m: tuple[float, float]) -> ShadowSetup:
         *p, w = F.place(b, a.verts[..., 0], a.verts[..., 1], a.verts[..., 2])
         checks.require(xp.all(w > 0, axis=-1), msg.PROJECTIVE_PLACEMENT)
         world = xp.stack(p, axis=-1)
-    return optimized_setup(ctx, checks, a.light, world, a.B, m, a.near, a.far)
+    return optimized_setup(ctx, checks, a.light, world, a.B, m=m, near=a.near, far=a.far)
 
 
 def assemble(
@@ -297,8 +297,9 @@ def assemble(
     checks: Checks,
     key: FitKey,
     shape: tuple[int, ...],
-    B: Array | None,
     e: FitEntries,
+    *,
+    B: Array | None,
 ) -> ShadowSetup:
     """The :class:`ShadowSetup` of a fit's per-entry results (invalid entries poisoned)."""
     xp = ctx.xp
@@ -364,7 +365,7 @@ def _jitted_fit(key: FitKey) -> tuple[Any, list[str]]:
         a = Inputs(*arrays)
         shape = _check_shapes(a)
         entries = fit_arrays(ctx, checks, key, a, driver(ctx, scalar=False))
-        return assemble(ctx, checks, key, shape, a.B, entries)
+        return assemble(ctx, checks, key, shape, entries, B=a.B)
 
     return recorded_jit(core, _batch_of)
 

@@ -15,7 +15,13 @@ from shadowmath._math._specialize import formulas
 
 
 def spot_selection(
-    ctx: Context, light: Array, up: Array | None, B: Array | None, casters: Array, triangles: bool
+    ctx: Context,
+    light: Array,
+    up: Array | None,
+    B: Array | None,
+    casters: Array,
+    *,
+    triangles: bool,
 ) -> sc.Selection:
     """The casters of spot lights ``light`` ``(*batch, 8)`` (position, axis, ``tan``, angle)
     that the map can use: ``casters`` ``(*batch, M, 3, 3)`` triangles clipped to the cone's

@@ -100,7 +100,7 @@ def losing_box(real: Any) -> Any:
     casters (its triangles moved behind the light), for one light row ``(8,)`` (fit_shadow)
     or a batch ``(n, 8)`` (fit_atlas); world triangles (no placement)."""
 
-    def losing(ctx: Any, light: Any, up: Any, B: Any, casters: Any, triangles: bool) -> Any:
+    def losing(ctx: Any, light: Any, up: Any, B: Any, casters: Any, *, triangles: bool) -> Any:
         mine = np.all(np.isclose(light[..., :3], ALL[16].position), axis=-1)
         if triangles and mine.any():
             shape = np.broadcast_shapes(light.shape[:-1], casters.shape[:-3])
@@ -109,7 +109,7 @@ def losing_box(real: Any) -> Any:
             box = np.linalg.norm(centre[..., :2] - [2.0, -2.0], axis=-1) < 1.3
             behind = (light[..., :3] - light[..., 3:6])[..., None, None, :]
             casters = np.where((box & mine[..., None])[..., None, None], behind, casters)
-        return real(ctx, light, up, B, casters, triangles)
+        return real(ctx, light, up, B, casters, triangles=triangles)
 
     return losing
 
