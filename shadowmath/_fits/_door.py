@@ -305,8 +305,12 @@ def signature(g: Operands) -> tuple[Any, ...] | None:
     if kind is SpotLight:
         sig += [_fixed(light[1], dtype), _angle(light[2], dtype)]
     if B is not None or R is not None or U is not None or n is not None or f is not None:
-        sig += [_counted(R, dtype), *(_fixed(v, dtype) for v in (B, U, n, f))]
-    return None if any(v is _OTHER for v in sig) else tuple(sig)
+        sig += [_counted(R, dtype), _fixed(B, dtype), _fixed(U, dtype), _fixed(n, dtype),
+                _fixed(f, dtype)]  # fmt: skip
+    for v in sig:
+        if v is _OTHER:
+            return None
+    return tuple(sig)
 
 
 #: A signature's entry for an operand the fast door does not take (a list, a Mesh,
