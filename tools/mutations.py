@@ -433,8 +433,8 @@ MODULES: tuple[Mutation, ...] = (
     Mutation(
         "camera-margin-y",
         CAMERA_F,
-        "hx, hy = fr.rx_max / fr.margin_x, fr.ry_max / fr.margin_y",
-        "hx, hy = fr.rx_max / fr.margin_x, fr.ry_max / fr.margin_x",
+        "hx, hy = half_x / margin_x, half_y / margin_y",
+        "hx, hy = half_x / margin_x, half_y / margin_x",
         "shadow_camera: the window's height divided by the x margin",
         CAMERA,
     ),

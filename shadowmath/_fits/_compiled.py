@@ -21,7 +21,7 @@ from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import Array, Context, flat_batch, raise_status
 from shadowmath._math._fit_entry import FitOptions
 from shadowmath._math._frame import LightFrame
-from shadowmath._math._frustum import Frustum
+from shadowmath._math._frustum import Frustum, OrthographicBox, volume
 from shadowmath._math._specialize import scalar_formulas
 
 from ._fit_arrays import Inputs
@@ -131,8 +131,8 @@ def _views(key: FitKey, shape: tuple[int, ...], out: Array, mats: Array) -> Shad
     return ShadowSetup(frame, frustum, M[0], M[3], M[1], M[2])
 
 
-def _frustum(v: tuple[Array, ...], directional: bool) -> Frustum:
-    return Frustum(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], directional)
+def _frustum(v: tuple[Array, ...], directional: bool) -> Frustum | OrthographicBox:
+    return volume(v, directional)
 
 
 #: The compiled loop's options record: :class:`FitOptions`' fields by name, then the
