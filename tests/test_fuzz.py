@@ -300,9 +300,13 @@ def test_fuzz_projections_of_any_frustum(data: st.DataObject) -> None:
     CASES["blocker/receiver_projection"] += 1
     values = st.one_of(st.floats(-1, 0), st.floats(1e-30, 1e4), st.just(1e-310))
     rx, ry, near, far = (data.draw(values) for _ in range(4))
-    fr = sm.Frustum(rx, ry, near, far, 0.98, 0.96)
+    kind = data.draw(st.sampled_from([sm.Frustum, sm.OrthographicBox]))
+    box = kind is sm.OrthographicBox
+    fr = kind(rx, ry, near, far, 0.98, 0.96)
     tiny = np.finfo(np.float64).tiny  # subnormal ratios are refused: m / r would overflow
-    if not (rx >= tiny and ry >= tiny and 0 < near < far):
+    # A box needs no eye (any near), but a depth range of at least a normal float.
+    depth_ok = far - near >= tiny if box else 0 < near < far
+    if not (rx >= tiny and ry >= tiny and depth_ok):
         with pytest.raises(ValueError, match="frustum"):
             sm.blocker_projection(fr)
         with pytest.raises(ValueError, match="frustum"):
@@ -312,12 +316,13 @@ def test_fuzz_projections_of_any_frustum(data: st.DataObject) -> None:
     T = sm.receiver_projection(fr)
     assert np.all(np.isfinite(P))
     assert np.all(np.isfinite(T))
-    if near < 1e-290:  # subnormal corners: the check below would measure its own underflow
+    if abs(near) < 1e-290 and not box:  # subnormal corners: the check would measure underflow
         return
-    # Depth loses (f + n) / (f - n) ulps to cancellation, whatever the formula.
-    tol = 1e-13 * (far + near) / (far - near)
+    # Depth loses |f + n| / (f - n) ulps to cancellation, whatever the formula.
+    tol = 1e-13 * (abs(far) + abs(near)) / (far - near)
     for z, depth in ((near, -1.0), (far, 1.0)):
-        corner = np.array([rx * z, -ry * z, z, 1.0])
+        scale = 1.0 if box else z  # x_ndc = m (x - c) / R for a box, m (x / z - c) / R else
+        corner = np.array([rx * scale, -ry * scale, z, 1.0])
         clip = P @ corner
         np.testing.assert_allclose(clip[:2] / clip[3], [0.98, -0.96], rtol=1e-12)
         assert clip[2] / clip[3] == pytest.approx(depth, abs=tol)
@@ -2545,6 +2550,7 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "DirectionalLight": ("test_fuzz_fit_shadow_scene_options",
                          "test_fuzz_fit_shadow_jax_eager_jit_vmap"),
     "Frustum": ("test_fuzz_projections_of_any_frustum", "test_fuzz_cross_section_area"),
+    "OrthographicBox": ("test_fuzz_projections_of_any_frustum", "test_fuzz_fit_shadow"),
     "FrustumFit": ("test_fuzz_optimize_frustum",),
     "LightFrame": ("test_fuzz_light_frame", "test_fuzz_rolled_light_frame"),
     "Mesh": ("test_fuzz_fit_shadow_scene_options", "test_fuzz_fit_shadow_invalid_options"),

@@ -326,7 +326,9 @@ def frustum_arrays(frustum: Any) -> tuple[Context, Checks, Frustum | Orthographi
     )
     if isinstance(fr, Frustum):
         checks.require(fr.near > 0, "frustum.near: must be > 0")
-    checks.require(fr.near < fr.far, "frustum: near must be < far")
+        checks.require(fr.near < fr.far, "frustum: near must be < far")
+    else:  # a box's depth scale 2 / (far - near) must not overflow
+        checks.require(fr.far - fr.near >= tiny, "frustum: near must be < far (by a normal float)")
     if checks.invalid is not None:
         checks.invalid = xp.broadcast_to(checks.invalid, shape)
     return ctx, checks, fr

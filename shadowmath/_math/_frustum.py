@@ -1,10 +1,11 @@
-"""The adaptive perspective frustum of the shadow map, and its two projections.
+"""The shadow map's volume: a perspective frustum or an orthographic box, and its projections.
 
 Light coordinates (see :mod:`shadowmath._frame`) have the light at the origin
 and ``+Z`` toward the blocker. A light-space point ``(x, y, z)`` with ``z > 0``
 projects to the ratios ``x / z`` and ``y / z``; the frustum scales the largest
 of them to the border margin, so the blocker's silhouette fills the map up to a
-border of untouched texels.
+border of untouched texels. A directional light's map is an orthographic box
+instead (:class:`OrthographicBox`): two types, so that no field changes meaning.
 
 Trusted cores only: the public functions, which check their arguments and
 call these, are in :mod:`shadowmath._api._adaptive_frustum`.
