@@ -108,6 +108,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._math._frame import LightFrame as LightFrame
     from ._math._frustum import NEAR_FAR_SLACK as NEAR_FAR_SLACK
     from ._math._frustum import Frustum as Frustum
+    from ._math._frustum import OrthographicBox as OrthographicBox
     from .gather import gather_meshes as gather_meshes
     from .lights import DirectionalLight as DirectionalLight
     from .lights import PointLight as PointLight
@@ -217,6 +218,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "._math._frustum": (
         "NEAR_FAR_SLACK",
         "Frustum",
+        "OrthographicBox",
     ),
     ".gather": ("gather_meshes",),
     ".lights": (
@@ -271,6 +273,7 @@ __all__ = [
     "FrustumFit",
     "LightFrame",
     "Mesh",
+    "OrthographicBox",
     "PointLight",
     "PreparedFit",
     "ShadowAtlas",

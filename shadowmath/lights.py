@@ -32,6 +32,8 @@ class PointLight(NamedTuple):
 class DirectionalLight(NamedTuple):
     """A directional light (parallel rays, like the sun): an orthographic shadow map.
 
+    Its fits' ``frustum`` is an :class:`OrthographicBox`.
+
     Attributes:
         direction: ``(*batch, 3)`` a vector pointing from the scene *toward* the
             light (any nonzero length): the homogeneous light ``(x, y, z, 0)``.

@@ -237,13 +237,13 @@ def test_stable_cascades_keep_their_size_and_move_by_whole_texels() -> None:
         view = look_at(eye, eye + [np.sin(yaw), -0.1, np.cos(yaw)])
         c = sm.fit_cascades(sun, view, proj, box, 512, stable=True)
         if sizes is None:
-            sizes, first = (c.frustum.rx_max, c.frustum.ry_max), c
-        np.testing.assert_array_equal(c.frustum.rx_max, sizes[0])  # exactly
-        np.testing.assert_array_equal(c.frustum.ry_max, sizes[1])
+            sizes, first = (c.frustum.half_width, c.frustum.half_height), c
+        np.testing.assert_array_equal(c.frustum.half_width, sizes[0])  # exactly
+        np.testing.assert_array_equal(c.frustum.half_height, sizes[1])
         # The frame's rotation is the light's alone.
         np.testing.assert_array_equal(c.world_to_light[:, :3, :3], first.world_to_light[:, :3, :3])
         texel = c.texel_size
-        for axis, offset in ((0, c.frustum.x_offset), (1, c.frustum.y_offset)):
+        for axis, offset in ((0, c.frustum.center_x), (1, c.frustum.center_y)):
             steps = offset / texel[:, axis]
             np.testing.assert_allclose(steps, np.round(steps), atol=1e-6)
 
@@ -276,7 +276,7 @@ def test_stable_size_is_the_slice_sphere() -> None:
         r = np.min([np.max(np.linalg.norm(pts - [0, 0, z], axis=1)) for z in zs])
         m, w = c.frustum.margin_x[i], 512
         half = r / (1 - 1 / (m * w))
-        assert c.frustum.rx_max[i] == pytest.approx(half, rel=1e-6)
+        assert c.frustum.half_width[i] == pytest.approx(half, rel=1e-6)
 
 
 # --- batches and JAX ------------------------------------------------------------------------
@@ -302,7 +302,7 @@ def test_jax_values_jit_and_gradients() -> None:
 
     def area(d: Any, lam: Any) -> Any:
         c = sm.fit_cascades(d, view, proj, box, 256, lam=lam)
-        return jnp.sum(c.frustum.rx_max * c.frustum.ry_max)
+        return jnp.sum(c.frustum.half_width * c.frustum.half_height)
 
     g = jax.jit(jax.grad(area, argnums=(0, 1)))(jnp.asarray(sun), 0.5)
     h = 1e-6
@@ -444,7 +444,7 @@ def test_jax_gradients_in_the_camera_and_the_split_positions() -> None:
     def area(shift: Any, s: Any) -> Any:
         v = jnp.asarray(view).at[:3, 3].add(shift)  # the camera moved
         c = sm.fit_cascades(jnp.asarray(sun), v, proj, box, 256, splits=s)
-        return jnp.sum(c.frustum.rx_max * c.frustum.ry_max)
+        return jnp.sum(c.frustum.half_width * c.frustum.half_height)
 
     shift = jnp.asarray([0.3, -0.2, 0.1])
     g_shift, g_splits = jax.grad(area, argnums=(0, 1))(shift, jnp.asarray(splits))

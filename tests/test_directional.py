@@ -1,4 +1,4 @@
-"""Homogeneous and directional lights in ``fit_shadow``, and the orthographic Frustum."""
+"""Homogeneous and directional lights in ``fit_shadow``, and the :class:`OrthographicBox`."""
 
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ def test_directional_fit_is_orthographic_and_touches_the_margins(
     verts = rng.normal(size=(20, 3)) * rng.uniform(0.1, 10, 3) + rng.normal(size=3) * 50
     toward = _direction(seed) * rng.uniform(0.01, 100)
     s = sm.fit_shadow(np.r_[toward, 0.0], verts, size)
-    assert bool(s.frustum.orthographic)
+    assert isinstance(s.frustum, sm.OrthographicBox)
     np.testing.assert_array_equal(s.blocker_to_clip[3], [0, 0, 0, 1])  # affine
     np.testing.assert_allclose(s.frame.z_axis, -toward / np.linalg.norm(toward), atol=1e-15)
     ndc = _ndc(s.blocker_to_clip, verts)
@@ -60,7 +60,7 @@ def test_homogeneous_point_light_is_the_point_light() -> None:
     b = sm.fit_shadow(np.array([1.0, -0.4, 0.2, 2.0]), BOX, 128)
     np.testing.assert_allclose(b.blocker_to_clip, a.blocker_to_clip, rtol=1e-13, atol=1e-13)
     np.testing.assert_allclose(b.world_to_texture, a.world_to_texture, rtol=1e-13, atol=1e-13)
-    assert not bool(b.frustum.orthographic)
+    assert type(b.frustum) is sm.Frustum
 
 
 def test_mixed_batch_is_refused_and_typed_lights_fit_each_kind() -> None:
@@ -72,13 +72,13 @@ def test_mixed_batch_is_refused_and_typed_lights_fit_each_kind() -> None:
     for typed, light in ((point, lights[0]), (sun, lights[1])):
         one = sm.fit_shadow(light, BOX, 64)
         np.testing.assert_array_equal(typed.blocker_to_clip, one.blocker_to_clip)
-    assert not point.frustum.orthographic and sun.frustum.orthographic
+    assert type(point.frustum) is sm.Frustum and type(sun.frustum) is sm.OrthographicBox
     np.testing.assert_array_equal(point.blocker_to_clip[3, :3], point.frame.z_axis)
     np.testing.assert_array_equal(sun.blocker_to_clip[3], [0, 0, 0, 1])
 
 
 def test_orthographic_frustum_projection() -> None:
-    fr = sm.Frustum(2.0, 1.0, 1.0, 5.0, 0.98, 0.96, 0.5, -0.25, True)  # positional, as before
+    fr = sm.OrthographicBox(2.0, 1.0, 1.0, 5.0, 0.98, 0.96, 0.5, -0.25)
     sx, sy, n, f = 0.98 / 2.0, 0.96 / 1.0, 1.0, 5.0
     expected = np.array(
         [
@@ -91,13 +91,19 @@ def test_orthographic_frustum_projection() -> None:
     np.testing.assert_allclose(sm.blocker_projection(fr), expected, rtol=1e-15)
     T = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1]])
     np.testing.assert_allclose(sm.receiver_projection(fr), T @ expected, rtol=1e-15)
-    # The perspective default is unchanged, and a boolean array selects per entry.
-    persp = sm.Frustum(2.0, 1.0, 1.0, 5.0, 0.98, 0.96)
-    both = sm.blocker_projection(persp._replace(orthographic=np.array([False, True])))
-    np.testing.assert_allclose(both[0], sm.blocker_projection(persp), rtol=1e-15)
-    np.testing.assert_allclose(
-        both[1], sm.blocker_projection(fr._replace(x_offset=0.0, y_offset=0.0))
-    )
+    # The same numbers as a perspective Frustum give the perspective matrix (by type).
+    persp = sm.Frustum(*fr)
+    np.testing.assert_array_equal(sm.blocker_projection(persp)[3], [0, 0, 1, 0])
+    # A batch of boxes, centred by default: each entry's own matrix.
+    boxes = sm.OrthographicBox(np.array([2.0, 3.0]), 1.0, 1.0, 5.0, 0.98, 0.96)
+    for i, half in enumerate((2.0, 3.0)):
+        one = sm.OrthographicBox(half, 1.0, 1.0, 5.0, 0.98, 0.96, 0.0, 0.0)
+        np.testing.assert_allclose(
+            sm.blocker_projection(boxes)[i], sm.blocker_projection(one), rtol=1e-15
+        )
+    # A box's near plane may lie behind its origin (it has no eye).
+    behind = sm.blocker_projection(fr._replace(near=-3.0)) @ np.array([0.0, 0.0, -3.0, 1.0])
+    np.testing.assert_allclose(behind[2] / behind[3], -1.0, rtol=1e-15)
 
 
 def test_zero_directional_light_raises_and_poisons() -> None:

@@ -334,7 +334,7 @@ def test_grad_sees_nan_values_and_keeps_valid_gradients_finite(case: Case) -> No
     def raw(*args: Any) -> Any:
         return sum(jnp.sum(x) for x in _matrix_leaves(case.fn(*args)))
 
-    # allow_int: Frustum.orthographic is a boolean leaf (its cotangent is float0).
+    # allow_int: an integer leaf (casters_used) has a float0 cotangent.
     assert bool(jnp.isnan(jax.value_and_grad(raw, allow_int=True)(*_jax(case.bad))[0]))
     stacked = _good_then_bad(case)
     argnums = tuple(range(len(case.bad)))

@@ -124,7 +124,7 @@ def test_flat_blocker_facing_the_sun_lies_inside_the_depth_range(
     # the fit must still succeed, put the origin behind the caster (the docstring:
     # "behind every vertex ... so every z > 0") and give it a depth range it lies in.
     s = sm.fit_shadow([*toward, 0.0], quad, 64, stable=stable)
-    assert bool(s.frustum.orthographic)
+    assert isinstance(s.frustum, sm.OrthographicBox)
     near, far = float(s.frustum.near), float(s.frustum.far)
     assert 0 < near < far
     z = (quad - s.frame.origin) @ s.frame.z_axis

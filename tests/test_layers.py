@@ -31,7 +31,9 @@ LAYERS: tuple[tuple[str, ...], ...] = (
 )
 CLIENTS = ("render", "integrations", "cli", "__main__")
 #: What a core may take from the boundary besides UPPER_CASE constants: types.
-BOUNDARY_TYPES = {"Array", "Context"}
+#: What a core may take from the boundary: types, and the warning of a renamed field of a
+#: public type that a core defines (``Frustum``'s and ``OrthographicBox``'s old names).
+BOUNDARY_TYPES = {"Array", "Context", "warn_renamed"}
 
 
 class Import(NamedTuple):

@@ -93,7 +93,7 @@ def leaves(c: sm.Cascades) -> list[np.ndarray]:
     """Every array of a fit, the frustum's fields included, as NumPy."""
     out = []
     for v in c:
-        fields = v[:8] if isinstance(v, sm.Frustum) else (v,)
+        fields = v[:8] if isinstance(v, sm.OrthographicBox) else (v,)
         out += [np.asarray(f) for f in fields]
     return out
 

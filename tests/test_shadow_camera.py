@@ -36,9 +36,7 @@ def engine_clip(cam: ShadowCamera, i: Any = ()) -> np.ndarray:
     eye, f, up = (glm.dvec3(*np.asarray(v)[i]) for v in (cam.eye, cam.forward, cam.up))
     view = glm.lookAt(eye, eye + f, up)
     lo, r, b, t, n, far = (float(np.asarray(v)[i]) for v in cam[3:9])
-    flags = np.asarray(cam.orthographic)
-    is_ortho = bool(flags[i] if flags.ndim else flags)
-    if is_ortho:
+    if cam.orthographic:
         return ortho(lo, r, b, t, n, far) @ _mat(view)
     return frustum(lo * n, r * n, b * n, t * n, n, far) @ _mat(view)
 
@@ -67,7 +65,7 @@ def assert_rebuilds(setup: sm.ShadowSetup, api: str, reversed_z: bool) -> None:
         sm.DirectionalLight([0.3, 1.0, -0.4]),
         sm.SpotLight([4.0, 9.0, 3.0], [-0.4, -1.0, -0.3], np.radians(35.0)),
         np.array([[4.0, 9.0, 3.0, 1.0], [-2.0, 8.0, 1.0, 1.0]]),
-        np.array([[0.3, 1.0, -0.4, 0.0], [-0.5, 1.0, 0.2, 0.0]]),  # orthographic as an array
+        np.array([[0.3, 1.0, -0.4, 0.0], [-0.5, 1.0, 0.2, 0.0]]),  # a batch of boxes
     ],
     ids=["point", "directional", "spot", "points", "suns"],
 )
@@ -122,19 +120,21 @@ def test_an_orthographic_camera_is_centred_on_its_box() -> None:
     setup = sm.fit_shadow(sm.DirectionalLight([0.3, 1.0, -0.4]), BOX, 256)
     cam = shadow_camera(setup)
     fr, frame = setup.frustum, setup.frame
+    assert isinstance(fr, sm.OrthographicBox) and cam.orthographic is True
     assert cam.left == -cam.right and cam.bottom == -cam.top
     np.testing.assert_array_equal(cam.offset, [0.0, 0.0])
     assert np.isnan(cam.fov_y)
     # The eye is the old origin moved across to the box's centre line, not along it.
     moved = cam.eye - frame.origin
-    np.testing.assert_allclose(moved, fr.x_offset * frame.x_axis + fr.y_offset * frame.y_axis)
+    np.testing.assert_allclose(moved, fr.center_x * frame.x_axis + fr.center_y * frame.y_axis)
     # Every caster lies inside the window and the depth range, measured from the eye.
     rel = BOX - cam.eye
     right = np.cross(cam.forward, cam.up)
     x, y, z = rel @ right, rel @ cam.up, rel @ cam.forward
     assert np.all(np.abs(x) <= cam.right) and np.all(np.abs(y) <= cam.top)
     assert np.all((cam.near <= z) & (z <= cam.far))
-    assert np.isclose(np.abs(x).max(), fr.rx_max) and np.isclose(np.abs(y).max(), fr.ry_max)
+    assert np.isclose(np.abs(x).max(), fr.half_width)
+    assert np.isclose(np.abs(y).max(), fr.half_height)
 
 
 def test_perspective_window_holds_the_casters_with_the_margin() -> None:

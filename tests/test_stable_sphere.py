@@ -32,7 +32,7 @@ SUN = sm.DirectionalLight(np.array([0.3, 1.0, -0.2]))
 def _radius(s: sm.ShadowSetup) -> float:
     """The sphere's radius from the stable map's half-width ``h (1 - 1 / (m W)) = r``."""
     m = float(s.frustum.margin_x)
-    return float(s.frustum.rx_max) * (1 - 1 / (m * W))
+    return float(s.frustum.half_width) * (1 - 1 / (m * W))
 
 
 def _sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
@@ -83,11 +83,11 @@ def test_the_size_depends_on_the_shape_only(path: str) -> None:
     sizes = []
     with PATHS[path]():
         for v in (corners, fine, inner, shuffled, corners @ q.T + 5.0, fine @ q.T - 3.0):
-            sizes.append(float(sm.fit_shadow(SUN, v, W, stable=True).frustum.rx_max))
+            sizes.append(float(sm.fit_shadow(SUN, v, W, stable=True).frustum.half_width))
     np.testing.assert_allclose(sizes, sizes[0], rtol=1e-12)
     np.testing.assert_allclose(_radius_of(sizes[0]), np.linalg.norm(half), rtol=1e-12)
     tight = sm.fit_shadow(SUN, corners, W)
-    assert sizes[0] > float(tight.frustum.rx_max)  # the price of stability
+    assert sizes[0] > float(tight.frustum.half_width)  # the price of stability
 
 
 def _radius_of(half_width: float) -> float:
@@ -101,11 +101,11 @@ def test_jax_value_and_gradient_follow_the_support_points() -> None:
     def half(v: Any) -> Any:
         return sm.fit_shadow(
             sm.DirectionalLight(jnp.asarray(SUN.direction)), v, W, stable=True
-        ).frustum.rx_max
+        ).frustum.half_width
 
     value = jax.jit(half)(jnp.asarray(points))
     np.testing.assert_allclose(
-        value, sm.fit_shadow(SUN, points, W, stable=True).frustum.rx_max, rtol=1e-12
+        value, sm.fit_shadow(SUN, points, W, stable=True).frustum.half_width, rtol=1e-12
     )
     g = np.asarray(jax.grad(half)(jnp.asarray(points)))
     h = 1e-6

@@ -441,8 +441,8 @@ MODULES: tuple[Mutation, ...] = (
     Mutation(
         "camera-margin-y",
         CAMERA_F,
-        "hx, hy = fr.rx_max / fr.margin_x, fr.ry_max / fr.margin_y",
-        "hx, hy = fr.rx_max / fr.margin_x, fr.ry_max / fr.margin_x",
+        "hx, hy = half_x / margin_x, half_y / margin_y",
+        "hx, hy = half_x / margin_x, half_y / margin_x",
         "shadow_camera: the window's height divided by the x margin",
         CAMERA,
     ),
@@ -461,6 +461,23 @@ MODULES: tuple[Mutation, ...] = (
         "origin = -xp.sum(R * t[..., :, None], axis=-1)",
         "shadow_camera of cascades: the eye -R t instead of -R^T t",
         CAMERA,
+    ),
+    # the map's volume: a perspective Frustum or an OrthographicBox, by type
+    Mutation(
+        "volume-always-frustum",
+        "shadowmath/_math/_frustum.py",
+        "return OrthographicBox._make(fields) if directional else Frustum._make(fields)",
+        "return Frustum._make(fields)",
+        "a directional light's fit returns a perspective Frustum instead of its box",
+        ("tests/test_orthographic_box.py::test_each_fit_returns_the_type_of_its_light",),
+    ),
+    Mutation(
+        "projection-ignores-box",
+        "shadowmath/_math/_frustum.py",
+        "    if not isinstance(fr, OrthographicBox):",
+        "    if isinstance(fr, Frustum | OrthographicBox):",
+        "blocker_projection of an OrthographicBox gives the perspective matrix",
+        ("tests/test_orthographic_box.py::test_the_projection_follows_the_type",),
     ),
     # cube depth ranges
     Mutation(

@@ -20,7 +20,6 @@ from shadowmath._boundary._validate import (
     all_finite,
     batch_shape,
     convert,
-    flags,
     integer,
     non_finite,
     require_vertices,
@@ -29,6 +28,7 @@ from shadowmath._math._frame import LightFrame, stack_matrix
 from shadowmath._math._frustum import (
     NEAR_FAR_SLACK,
     Frustum,
+    OrthographicBox,
     blocker_reach,
     projection_entries,
 )
@@ -291,54 +291,53 @@ def assemble(
     )
 
 
-def frustum_arrays(frustum: Frustum) -> tuple[Context, Checks, Frustum]:
-    """A user-given frustum converted and checked (the boundary of the frustum-taking functions).
+def frustum_arrays(frustum: Any) -> tuple[Context, Checks, Frustum | OrthographicBox]:
+    """A user-given frustum or box converted and checked (the frustum-taking functions' door).
 
     Eagerly a bad field raises here, before a division by ``rx_max = 0`` or
     ``far - near = 0`` could emit a NumPy warning; lazily the returned checks
-    poison the results. ``orthographic`` stays a Python bool when given as one
-    (the common, static case), else it becomes a boolean array of the batch shape.
+    poison the results. The result has the type of ``frustum``: an
+    :class:`OrthographicBox`, or a :class:`Frustum` (also for a plain tuple of its
+    6 or 8 fields; 9 with the deprecated ``orthographic`` flag).
     """
     if not isinstance(frustum, tuple) or len(frustum) not in (6, 8, 9):
-        raise ValueError("frustum: expected a Frustum (rx_max, ry_max, near, far, margin_x, ...)")
-    padded = (*frustum, *(0.0, 0.0, False)[len(frustum) - 6 :])
-    numeric = Frustum._fields[:8]
-    given = dict(zip(numeric, padded[:8], strict=True))
-    ortho = padded[8]
-    static_ortho = isinstance(ortho, bool | np.bool_)
-    # A default (Python number) offset must not promote a float32 frustum to float64.
-    defaults = {n: given.pop(n) for n in numeric[6:] if isinstance(given[n], int | float)}
-    extra = {} if static_ortho else {"orthographic": flags(ortho)}
-    ctx, arrays = convert(**given, **extra)
+        raise ValueError(
+            "frustum: expected a Frustum (rx_max, ry_max, near, far, margin_x, ...) "
+            "or an OrthographicBox (half_width, half_height, near, far, margin_x, ...)"
+        )
+    if not isinstance(frustum, Frustum | OrthographicBox):
+        frustum = Frustum(*frustum)
+    names = type(frustum)._fields
+    given = frustum._asdict()
+    # A default (Python number) centre must not promote a float32 frustum to float64.
+    defaults = {n: given.pop(n) for n in names[6:] if isinstance(given[n], int | float)}
+    ctx, arrays = convert(**given)
     xp = ctx.xp
-    converted = dict(zip([*given, *extra], arrays, strict=True))
+    converted = dict(zip(given, arrays, strict=True))
     converted.update({n: ctx.constant(float(v)) for n, v in defaults.items()})
-    fields = [converted[n] for n in numeric]
-    shapes = [tuple(a.shape) for a in fields]
-    if not static_ortho:
-        shapes.append(tuple(converted["orthographic"].shape))
-    shape = batch_shape(*shapes, names=Frustum._fields[: len(shapes)])
+    fields = [converted[n] for n in names]
+    shape = batch_shape(*(tuple(a.shape) for a in fields), names=names)
     checks = Checks(ctx)
-    for name, v in zip(numeric, fields, strict=True):
+    for name, v in zip(names, fields, strict=True):
         checks.require(xp.isfinite(v), f"frustum.{name}: must be finite")
-    o: Array | bool = (
-        bool(ortho) if static_ortho else xp.broadcast_to(converted["orthographic"] != 0, shape)
-    )
-    fr = Frustum._make([*(xp.broadcast_to(v, shape) for v in fields), o])
-    # At least the smallest normal float, so that margin / rx_max cannot overflow.
+    fr = type(frustum)._make([xp.broadcast_to(v, shape) for v in fields])
+    # At least the smallest normal float, so that margin / half-extent cannot overflow.
     tiny = float(np.finfo(ctx.dtype).tiny)
     checks.require(
-        (fr.rx_max >= tiny) & (fr.ry_max >= tiny),
-        "frustum: rx_max and ry_max must be > 0 (and normal floats)",
+        (fr[0] >= tiny) & (fr[1] >= tiny),
+        f"frustum: {names[0]} and {names[1]} must be > 0 (and normal floats)",
     )
-    checks.require(fr.near > 0, "frustum.near: must be > 0")
-    checks.require(fr.near < fr.far, "frustum: near must be < far")
+    if isinstance(fr, Frustum):
+        checks.require(fr.near > 0, "frustum.near: must be > 0")
+        checks.require(fr.near < fr.far, "frustum: near must be < far")
+    else:  # a box's depth scale 2 / (far - near) must not overflow
+        checks.require(fr.far - fr.near >= tiny, "frustum: near must be < far (by a normal float)")
     if checks.invalid is not None:
         checks.invalid = xp.broadcast_to(checks.invalid, shape)
     return ctx, checks, fr
 
 
-def blocker_projection(frustum: Frustum) -> Array:
+def blocker_projection(frustum: Frustum | OrthographicBox) -> Array:
     r"""Light coordinates to OpenGL clip space, for drawing the shadow map.
 
     .. math::
@@ -361,15 +360,23 @@ def blocker_projection(frustum: Frustum) -> Array:
     its ``* SMapWidth`` factor is spurious in OpenGL, where the viewport
     transform maps NDC to texels (it would blow the image up ``width`` times).
 
+    An :class:`OrthographicBox` (a directional light's) gives the orthographic
+    matrix instead: rows ``(s_x, 0, 0, -s_x c_x)``, ``(0, s_y, 0, -s_y c_y)``,
+    ``(0, 0, 2 / (f - n), -(f + n) / (f - n))``, ``(0, 0, 0, 1)`` with
+    ``s_x = m_x / R_x``: ``x_ndc = m_x (x - c_x) / R_x``.
+
     Arguments:
-        frustum: a :class:`Frustum` with ``(*batch,)`` fields.
+        frustum: a :class:`Frustum` or an :class:`OrthographicBox` with ``(*batch,)``
+            fields (the matrix follows its type).
 
     Returns:
         ``(*batch, 4, 4)`` column-vector matrix.
 
     Raises:
         ValueError: non-finite fields, ``rx_max``/``ry_max <= 0``, ``near <= 0`` or
-            ``near >= far`` (NaN under JAX transformations).
+            ``near >= far`` (a box: ``half_width``/``half_height <= 0`` or ``near >=
+            far``; its near plane may be behind the origin) (NaN under JAX
+            transformations).
 
     Example:
         >>> import numpy as np
@@ -382,7 +389,7 @@ def blocker_projection(frustum: Frustum) -> Array:
     return checks.poison(stack_matrix(ctx.xp, projection_entries(ctx.xp, fr)), 2)
 
 
-def receiver_projection(frustum: Frustum) -> Array:
+def receiver_projection(frustum: Frustum | OrthographicBox) -> Array:
     r"""Light coordinates to homogeneous shadow-map texture coordinates.
 
     The blocker projection followed by the scale-and-bias from NDC ``[-1, 1]``
@@ -404,7 +411,8 @@ def receiver_projection(frustum: Frustum) -> Array:
     is behind the light: it must get no shadow (the division flips signs).
 
     Arguments:
-        frustum: a :class:`Frustum` with ``(*batch,)`` fields.
+        frustum: a :class:`Frustum` or an :class:`OrthographicBox` with ``(*batch,)``
+            fields (an orthographic box gives ``q = 1``).
 
     Returns:
         ``(*batch, 4, 4)`` column-vector matrix.

@@ -26,13 +26,13 @@ from shadowmath._boundary._validate import (
     require_matrix,
 )
 from shadowmath._math import _bias
-from shadowmath._math._frustum import Frustum
+from shadowmath._math._frustum import Frustum, OrthographicBox
 from shadowmath._math._vector import dot
 
 from ._adaptive_frustum import frustum_arrays, texel_counts
 
 
-def cross_section_area(frustum: Frustum) -> Array:
+def cross_section_area(frustum: Frustum | OrthographicBox) -> Array:
     r"""The usable cross-section of the frustum at unit distance from the light.
 
     .. math:: A = (2 R_x)(2 R_y)
@@ -43,7 +43,9 @@ def cross_section_area(frustum: Frustum) -> Array:
     proportionally larger coverage: the differentiable proxy the fitter minimises.
 
     Arguments:
-        frustum: a :class:`Frustum` with ``(*batch,)`` fields.
+        frustum: a :class:`Frustum` with ``(*batch,)`` fields, or an
+            :class:`OrthographicBox` (its cross-section ``(2 R_x)(2 R_y)`` in world
+            units squared, the same at every depth).
 
     Returns:
         ``(*batch,)``.
@@ -53,7 +55,8 @@ def cross_section_area(frustum: Frustum) -> Array:
         0.5
     """
     _, checks, fr = frustum_arrays(frustum)
-    return checks.poison(4 * fr.rx_max * fr.ry_max, 0)
+    half_x, half_y = fr[0], fr[1]  # rx_max, ry_max or half_width, half_height
+    return checks.poison(4 * half_x * half_y, 0)
 
 
 def silhouette_coverage(mask: Any, *, border_texels: int = 1) -> Array:

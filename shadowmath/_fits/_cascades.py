@@ -44,7 +44,7 @@ from shadowmath._math._bias import PcfFilter
 from shadowmath._math._cascade_steps import ROW, CascadeOptions, options_record
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._conventions import clip_from_gl as _clip_from_gl
-from shadowmath._math._frustum import NEAR_FAR_SLACK, Frustum
+from shadowmath._math._frustum import NEAR_FAR_SLACK, OrthographicBox
 from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath.lights import DirectionalLight
 
@@ -69,7 +69,7 @@ class Cascades(NamedTuple):
     Attributes:
         world_to_light: ``(*batch, n, 4, 4)`` world to each cascade's light
             coordinates (one rotation for all; origins differ along ``Z`` only).
-        frustum: the orthographic :class:`Frustum` of each cascade, fields ``(*batch, n)``.
+        frustum: the :class:`OrthographicBox` of each cascade, fields ``(*batch, n)``.
         world_to_clip: ``(*batch, n, 4, 4)`` world to the cascade's clip coordinates:
             draw the casters into cascade ``i`` with ``world_to_clip[i] @ model``.
         world_to_texture: ``(*batch, n, 4, 4)`` world to ``(s, t, r, 1)``: texture
@@ -96,7 +96,7 @@ class Cascades(NamedTuple):
     """
 
     world_to_light: Float[Array, "*batch n 4 4"]
-    frustum: Frustum
+    frustum: OrthographicBox
     world_to_clip: Float[Array, "*batch n 4 4"]
     world_to_texture: Float[Array, "*batch n 4 4"]
     splits: Float[Array, "*batch n+1"]
@@ -442,7 +442,7 @@ def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
     texture = _texture(n, spec.size, call.layout)
     return Cascades(
         world_to_light=m[..., 0, :, :],
-        frustum=Frustum(rx, ry, near, far, m_x, m_y, cx, cy, orthographic=True),
+        frustum=OrthographicBox(rx, ry, near, far, m_x, m_y, cx, cy),
         world_to_clip=m[..., 1, :, :],
         world_to_texture=m[..., 2, :, :],
         splits=splits,

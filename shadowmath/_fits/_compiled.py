@@ -21,7 +21,7 @@ from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import Array, Context, flat_batch, raise_status
 from shadowmath._math._fit_entry import FitOptions
 from shadowmath._math._frame import LightFrame
-from shadowmath._math._frustum import Frustum
+from shadowmath._math._frustum import volume
 from shadowmath._math._specialize import scalar_formulas
 
 from ._fit_arrays import Inputs
@@ -133,7 +133,7 @@ def views(key: FitKey, shape: tuple[int, ...], out: Buffers, used: Array) -> Sha
         v, M = rows[0], mats[0]
         frame = LightFrame._make((v[0:3], v[3:6], v[6:9], v[9:12]))
         fields = v[12:20]
-    frustum = Frustum._make((*fields, key.directional))
+    frustum = volume(fields, key.directional)
     return ShadowSetup._make((frame, frustum, M[0], M[3], M[1], M[2], used))
 
 

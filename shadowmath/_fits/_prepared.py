@@ -172,7 +172,6 @@ def _copy(setup: Any, out: Buffers, count: int) -> None:
     out.mats[:, 3] = np.reshape(setup.blocker_to_world, (count, 4, 4))
     f, fr = setup.frame, setup.frustum
     rows = [f.origin, f.x_axis, f.y_axis, f.z_axis]
-    fields = (fr.rx_max, fr.ry_max, fr.near, fr.far, fr.margin_x, fr.margin_y)
-    rows += [np.asarray(v)[..., None] for v in (*fields, fr.x_offset, fr.y_offset)]
+    rows += [np.asarray(v)[..., None] for v in fr]  # a Frustum's or a box's 8 fields
     out.rows[:] = np.concatenate([np.reshape(r, (count, -1)) for r in rows], axis=-1)
     out.status[:] = 0

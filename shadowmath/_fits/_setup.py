@@ -38,7 +38,7 @@ from shadowmath._boundary._validate import (
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._frame import LightFrame, stack_matrix
-from shadowmath._math._frustum import Frustum
+from shadowmath._math._frustum import volume
 from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath.lights import Light
 from shadowmath.receivers import Mesh, Triangles
@@ -154,7 +154,7 @@ def fit_shadow(
     (centre ``c_x = (hi_x + lo_x) / 2``, half-width ``R_x = (hi_x - lo_x) / 2``),
     and the frame's origin is ``c + Z (z_lo - pad)``, ``pad = (z_hi - z_lo) +
     max(R_x, R_y)``, behind every vertex, so every ``z > 0``.
-    The projection is orthographic (``frustum.orthographic``):
+    The projection is orthographic (``frustum`` is an :class:`OrthographicBox`):
 
     .. math::
 
@@ -217,8 +217,8 @@ def fit_shadow(
         0.98
         >>> spec = ShadowMapSpec(100, api="vulkan")
         >>> sun = fit_shadow(DirectionalLight(np.array([0.3, 1.0, -0.2])), box, spec)
-        >>> sun.frustum.orthographic, sun.blocker_to_clip[3].tolist()
-        (True, [0.0, 0.0, 0.0, 1.0])
+        >>> type(sun.frustum).__name__, sun.blocker_to_clip[3].tolist()
+        ('OrthographicBox', [0.0, 0.0, 0.0, 1.0])
     """
     check_aim(aim)
     if method not in ("mdv", "optimized"):
@@ -318,10 +318,10 @@ def assemble(
 
     half_x, half_y, near, far, cx, cy = e.box
     mx, my = (xp.broadcast_to(ctx.constant(m), shape) for m in key.margins)
-    frustum = Frustum(
-        field(half_x), field(half_y), field(near), field(far), mx, my, field(cx), field(cy),
+    frustum = volume(
+        (field(half_x), field(half_y), field(near), field(far), mx, my, field(cx), field(cy)),
         key.directional,
-    )  # fmt: skip
+    )
     clip = e.clip
     if B is not None:
         clip = formulas(xp).compose_rows(clip, tuple(B[..., i // 4, i % 4] for i in range(16)))
@@ -349,7 +349,7 @@ def assemble_one(ctx: Context, key: FitKey, B: Array | None, e: FitEntries) -> S
     frame = np.array((*e.origin, *e.axes), dtype=dtype).reshape(4, 3)
     return ShadowSetup(
         frame=LightFrame(*frame),
-        frustum=Frustum(*(fields[..., i] for i in range(8)), key.directional),  # type: ignore[call-arg]
+        frustum=volume(tuple(fields[..., i] for i in range(8)), key.directional),
         world_to_light=mats[0],
         blocker_to_world=np.eye(4, dtype=dtype) if B is None else B,
         blocker_to_clip=mats[1],

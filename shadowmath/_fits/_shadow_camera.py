@@ -22,7 +22,7 @@ from typing import Any, Literal, NamedTuple, TypeAlias
 
 import numpy as np
 
-from shadowmath._boundary._shapes import Bool, Float
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -36,7 +36,7 @@ from shadowmath._boundary._validate import (
     require_matrix,
 )
 from shadowmath._math._frame import LightFrame
-from shadowmath._math._frustum import Frustum
+from shadowmath._math._frustum import Frustum, OrthographicBox
 from shadowmath._math._vector import cross
 
 from ._cascades import Cascades
@@ -73,8 +73,8 @@ class ShadowCamera(NamedTuple):
             units from the eye for an orthographic one.
         near, far: ``(*batch,)`` the depth range, distances from the eye along
             ``forward`` (an orthographic box's ``near`` may be negative).
-        orthographic: ``bool``, or a ``(*batch,)`` boolean array for a batch mixing
-            point and directional lights.
+        orthographic: ``True`` for a directional light's fit (an
+            :class:`OrthographicBox`), ``False`` for a perspective :class:`Frustum`.
     """
 
     eye: Float[Array, "*camera 3"]
@@ -86,7 +86,7 @@ class ShadowCamera(NamedTuple):
     top: Float[Array, "*camera"]
     near: Float[Array, "*camera"]
     far: Float[Array, "*camera"]
-    orthographic: Bool[Array, "*#camera"] | bool
+    orthographic: bool
 
     @property
     def width(self) -> Array:
@@ -139,7 +139,8 @@ def shadow_camera(fit: ShadowSetup | Cascades) -> ShadowCamera:
     r"""The engine-neutral camera of a fit: eye, forward, up, window and depth range.
 
     With the frustum's half-extents :math:`R_x, R_y` at its margins :math:`m_x, m_y`
-    and its centre :math:`(c_x, c_y)` (:class:`Frustum`), the window is
+    and its centre :math:`(c_x, c_y)` (:class:`Frustum` or :class:`OrthographicBox`),
+    the window is
 
     .. math::
 
@@ -180,15 +181,15 @@ def shadow_camera(fit: ShadowSetup | Cascades) -> ShadowCamera:
         12.937
     """
     if isinstance(fit, ShadowSetup):
-        ctx, checks, frame, frustum = _setup_arrays(fit)
+        _, checks, frame, frustum = _setup_arrays(fit)
     elif isinstance(fit, Cascades):
-        ctx, checks, frame, frustum = _cascade_arrays(fit)
+        _, checks, frame, frustum = _cascade_arrays(fit)
     else:
         raise ValueError(
             "fit: expected a ShadowSetup (from fit_shadow) or Cascades (from fit_cascades), "
             f"got {type(fit).__name__}"
         )
-    camera = _camera_from_frustum(ctx, frame, frustum)
+    camera = _camera_from_frustum(frame, frustum)
     poisoned = {
         name: checks.poison(getattr(camera, name), 1 if name in _VECTORS else 0)
         for name in ShadowCamera._fields[:-1]
@@ -199,12 +200,15 @@ def shadow_camera(fit: ShadowSetup | Cascades) -> ShadowCamera:
 _VECTORS = ("eye", "forward", "up")
 
 
-def _setup_arrays(fit: ShadowSetup) -> tuple[Context, Checks, LightFrame, Frustum]:
+Volume = Frustum | OrthographicBox
+
+
+def _setup_arrays(fit: ShadowSetup) -> tuple[Context, Checks, LightFrame, Volume]:
     ctx, checks, arrays = _converted(tuple(fit.frame), fit.frustum)
-    return ctx, checks, LightFrame(*arrays[:4]), _frustum(ctx, arrays[4:], fit.frustum)
+    return ctx, checks, LightFrame(*arrays[:4]), _frustum(arrays[4:], fit.frustum)
 
 
-def _cascade_arrays(fit: Cascades) -> tuple[Context, Checks, LightFrame, Frustum]:
+def _cascade_arrays(fit: Cascades) -> tuple[Context, Checks, LightFrame, Volume]:
     """The frame of each cascade from its rigid ``world_to_light`` ``[[R, t], [0, 1]]``."""
     ctx, checks, (W, clip, *fields) = _converted(
         (fit.world_to_light, fit.world_to_clip), fit.frustum, names=_MATRICES, trailing=2
@@ -217,7 +221,7 @@ def _cascade_arrays(fit: Cascades) -> tuple[Context, Checks, LightFrame, Frustum
     R, t = W[..., :3, :3], W[..., :3, 3]
     origin = -xp.sum(R * t[..., :, None], axis=-2)  # -R^T t of a rigid [[R, t], [0, 1]]
     frame = LightFrame(origin, R[..., 0, :], R[..., 1, :], R[..., 2, :])
-    return ctx, checks, frame, _frustum(ctx, fields, fit.frustum)
+    return ctx, checks, frame, _frustum(fields, fit.frustum)
 
 
 _MATRICES = ("world_to_light", "world_to_clip")
@@ -225,20 +229,18 @@ _WARPED = (
     "fit: these cascades are warped by LiSPSM (warp='lispsm'), a perspective warp that no "
     "orthographic camera draws; use their world_to_clip and world_to_texture"
 )
-_SCALARS = ("rx_max", "ry_max", "near", "far", "margin_x", "margin_y", "x_offset", "y_offset")
 
 
 def _converted(
     arrays: tuple[Any, ...],
-    fr: Frustum,
+    fr: Volume,
     *,
     names: tuple[str, ...] = LightFrame._fields,
     trailing: int = 1,
 ) -> tuple[Context, Checks, tuple[Array, ...]]:
     """One conversion and the shape and finite checks of a fit's arrays and frustum fields."""
-    ctx, out = convert(
-        **dict(zip(names, arrays, strict=True)), **{n: getattr(fr, n) for n in _SCALARS}
-    )
+    scalars = type(fr)._fields
+    ctx, out = convert(**dict(zip(names, arrays, strict=True)), **fr._asdict())
     checks = Checks(ctx)
     xp = ctx.xp
     for name, value in zip(names, out[: len(names)], strict=True):
@@ -247,35 +249,29 @@ def _converted(
         else:
             require_matrix(f"fit.{name}", value)
         checks.require(all_finite(xp, value, trailing), non_finite(f"fit.{name}"))
-    for name, value in zip(_SCALARS, out[len(names) :], strict=True):
+    for name, value in zip(scalars, out[len(names) :], strict=True):
         checks.require(all_finite(xp, value, 0), non_finite(f"fit.frustum.{name}"))
     batch_shape(
         *(a.shape[: a.ndim - trailing] for a in out[: len(names)]),
         *(a.shape for a in out[len(names) :]),
-        names=(*names, *_SCALARS),
+        names=(*names, *scalars),
     )
     return ctx, checks, out
 
 
-def _frustum(ctx: Context, fields: Any, fr: Frustum) -> Frustum:
-    """A frustum of converted fields; ``orthographic`` stays a bool or becomes an array."""
-    ortho = fr.orthographic
-    if not isinstance(ortho, bool):
-        ortho = ctx.xp.asarray(ortho)
-    return Frustum._make((*fields, ortho))
+def _frustum(fields: Any, fr: Volume) -> Volume:
+    """The frustum or box of converted fields (the same type as ``fr``)."""
+    return type(fr)._make(fields)
 
 
-def _camera_from_frustum(ctx: Context, frame: LightFrame, fr: Frustum) -> ShadowCamera:
+def _camera_from_frustum(frame: LightFrame, fr: Volume) -> ShadowCamera:
     """The camera of a trusted frame and frustum (the formula of :func:`shadow_camera`)."""
-    xp = ctx.xp
     o, X, Y, Z = frame
-    hx, hy = fr.rx_max / fr.margin_x, fr.ry_max / fr.margin_y
-    cx, cy = fr.x_offset + 0.0 * hx, fr.y_offset + 0.0 * hy  # broadcast to the batch
-    ortho = fr.orthographic
-    if isinstance(ortho, bool):
-        shift_x, shift_y = (cx, cy) if ortho else (0.0 * cx, 0.0 * cy)
-    else:
-        shift_x, shift_y = xp.where(ortho, cx, 0.0), xp.where(ortho, cy, 0.0)
+    half_x, half_y, near, far, margin_x, margin_y, center_x, center_y = fr
+    hx, hy = half_x / margin_x, half_y / margin_y
+    cx, cy = center_x + 0.0 * hx, center_y + 0.0 * hy  # broadcast to the batch
+    ortho = isinstance(fr, OrthographicBox)
+    shift_x, shift_y = (cx, cy) if ortho else (0.0 * cx, 0.0 * cy)
     eye = o + shift_x[..., None] * X + shift_y[..., None] * Y
     cx, cy = cx - shift_x, cy - shift_y
     return ShadowCamera(
@@ -286,8 +282,8 @@ def _camera_from_frustum(ctx: Context, frame: LightFrame, fr: Frustum) -> Shadow
         right=cx + hx,
         bottom=cy - hy,
         top=cy + hy,
-        near=fr.near + 0.0 * hx,
-        far=fr.far + 0.0 * hx,
+        near=near + 0.0 * hx,
+        far=far + 0.0 * hx,
         orthographic=ortho,
     )
 

@@ -7,7 +7,7 @@ from typing import NamedTuple
 from shadowmath._boundary._shapes import Float, Int
 from shadowmath._boundary._validate import Array, Checks, Context
 from shadowmath._math._frame import LightFrame, light_entries, stack_matrix
-from shadowmath._math._frustum import Frustum, projection_terms
+from shadowmath._math._frustum import Frustum, OrthographicBox, projection_terms
 from shadowmath._math._specialize import formulas
 
 
@@ -16,8 +16,8 @@ class ShadowSetup(NamedTuple):
 
     Attributes:
         frame: the :class:`LightFrame`.
-        frustum: the fitted :class:`Frustum` (``orthographic=True`` for a
-            directional light: a box, see :class:`Frustum`).
+        frustum: the fitted :class:`Frustum` of a point or spot light, or the
+            :class:`OrthographicBox` of a directional light.
         world_to_light: ``(*batch, 4, 4)`` world to light coordinates.
         blocker_to_world: ``(*batch, 4, 4)`` the blocker's placement (identity if none).
         blocker_to_clip: ``(*batch, 4, 4)`` the article's ``M_BlockerLocalToShadowMap``:
@@ -34,7 +34,7 @@ class ShadowSetup(NamedTuple):
     """
 
     frame: LightFrame
-    frustum: Frustum
+    frustum: Frustum | OrthographicBox
     world_to_light: Float[Array, "*batch 4 4"]
     blocker_to_world: Float[Array, "*batch 4 4"]
     blocker_to_clip: Float[Array, "*batch 4 4"]
