@@ -31,7 +31,9 @@ LAYERS: tuple[tuple[str, ...], ...] = (
 )
 CLIENTS = ("render", "integrations", "cli", "__main__")
 #: What a core may take from the boundary besides UPPER_CASE constants: types.
-BOUNDARY_TYPES = {"Array", "Context"}
+# The boundary's types, and the annotation types of _boundary/_shapes.py (shapes in signatures).
+BOUNDARY_TYPES = {"Array", "Context", "ArrayLike", "Bool", "Float", "Int", "IntLike", "Integer"}
+BOUNDARY_TYPES |= {"MapSize", "Real"}
 
 
 class Import(NamedTuple):

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, MapSize, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -50,9 +51,7 @@ def texel_counts(name: str, value: Any) -> tuple[int, int]:
     return w, h
 
 
-def border_margin(
-    map_size: int | tuple[int, int], *, border_texels: int = 1
-) -> tuple[float, float]:
+def border_margin(map_size: MapSize, *, border_texels: IntLike = 1) -> tuple[float, float]:
     r"""The fraction of a shadow map's half-extent left inside its border.
 
     .. math:: m = \frac{\mathrm{size} - 2\,b}{\mathrm{size}}
@@ -129,13 +128,13 @@ def derived_margins(map_size: Any, border_texels: int, margin: Any) -> tuple[flo
 
 def adaptive_frustum(
     frame: LightFrame,
-    vertices: Any,
-    map_size: int | tuple[int, int],
+    vertices: Real[ArrayLike, "*#batch N 3"],
+    map_size: MapSize,
     *,
-    border_texels: int = 1,
+    border_texels: IntLike = 1,
     margin: float | tuple[float, float] | None = None,
-    near: Any = None,
-    far: Any = None,
+    near: Real[ArrayLike, "*#batch"] | None = None,
+    far: Real[ArrayLike, "*#batch"] | None = None,
 ) -> Frustum:
     r"""The article's adaptive frustum: the largest projection ratios of the blocker.
 
@@ -288,7 +287,7 @@ def assemble(
     )
 
 
-def frustum_arrays(frustum: Frustum) -> tuple[Context, Checks, Frustum]:
+def frustum_arrays(frustum: Frustum | tuple[Any, ...]) -> tuple[Context, Checks, Frustum]:
     """A user-given frustum converted and checked (the boundary of the frustum-taking functions).
 
     Eagerly a bad field raises here, before a division by ``rx_max = 0`` or
@@ -335,7 +334,7 @@ def frustum_arrays(frustum: Frustum) -> tuple[Context, Checks, Frustum]:
     return ctx, checks, fr
 
 
-def blocker_projection(frustum: Frustum) -> Array:
+def blocker_projection(frustum: Frustum | tuple[Any, ...]) -> Float[Array, "*batch 4 4"]:
     r"""Light coordinates to OpenGL clip space, for drawing the shadow map.
 
     .. math::
@@ -359,7 +358,7 @@ def blocker_projection(frustum: Frustum) -> Array:
     transform maps NDC to texels (it would blow the image up ``width`` times).
 
     Arguments:
-        frustum: a :class:`Frustum` with ``(*batch,)`` fields.
+        frustum: a :class:`Frustum` (or a tuple of its fields) with ``(*batch,)`` fields.
 
     Returns:
         ``(*batch, 4, 4)`` column-vector matrix.
@@ -379,7 +378,7 @@ def blocker_projection(frustum: Frustum) -> Array:
     return checks.poison(stack_matrix(ctx.xp, projection_entries(ctx.xp, fr)), 2)
 
 
-def receiver_projection(frustum: Frustum) -> Array:
+def receiver_projection(frustum: Frustum | tuple[Any, ...]) -> Float[Array, "*batch 4 4"]:
     r"""Light coordinates to homogeneous shadow-map texture coordinates.
 
     The blocker projection followed by the scale-and-bias from NDC ``[-1, 1]``
@@ -401,7 +400,7 @@ def receiver_projection(frustum: Frustum) -> Array:
     is behind the light: it must get no shadow (the division flips signs).
 
     Arguments:
-        frustum: a :class:`Frustum` with ``(*batch,)`` fields.
+        frustum: a :class:`Frustum` (or a tuple of its fields) with ``(*batch,)`` fields.
 
     Returns:
         ``(*batch, 4, 4)`` column-vector matrix.
