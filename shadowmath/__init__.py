@@ -244,10 +244,8 @@ def __getattr__(name: str) -> Any:
     from ._boundary._shapes import shapes_checked
 
     value = getattr(importlib.import_module(module, __name__), name)
-    if isinstance(value, types.FunctionType) and not module.startswith(("._math.", "._api.")):
-        # Itself, but in the test suite (see its docstring). The functions of _api are not
-        # annotated yet: checked, their `Any` would pass and their `int` options would
-        # refuse the NumPy integers that their doors accept.
+    if isinstance(value, types.FunctionType):
+        # Itself, but in the test suite (see its docstring): every public function is checked.
         value = shapes_checked(value)
     globals()[name] = value  # later look-ups are plain module attributes
     return value

@@ -31,9 +31,11 @@ LAYERS: tuple[tuple[str, ...], ...] = (
 )
 CLIENTS = ("render", "integrations", "cli", "__main__")
 #: What a core may take from the boundary besides UPPER_CASE constants: types.
-#: What a core may take from the boundary: types, and the warning of a renamed field of a
-#: public type that a core defines (``Frustum``'s and ``OrthographicBox``'s old names).
-BOUNDARY_TYPES = {"Array", "Context", "warn_renamed"}
+#: What a core may take from the boundary: types (the annotation types of
+#: _boundary/_shapes.py included: shapes in signatures), and the warning of a renamed
+#: field of a public type that a core defines (``Frustum``'s and ``OrthographicBox``'s).
+BOUNDARY_TYPES = {"Array", "Context", "ArrayLike", "Bool", "Float", "Int", "IntLike", "Integer"}
+BOUNDARY_TYPES |= {"MapSize", "Real", "warn_renamed"}
 
 
 class Import(NamedTuple):

@@ -21,8 +21,10 @@ import pytest
 from jaxtyping import TypeCheckError
 
 import shadowmath as sm
-from shadowmath._boundary._shapes import Array, ArrayLike, Float, Real, shapes_checked
+from shadowmath._api import _light_frame
+from shadowmath._boundary._shapes import Array, ArrayLike, Float, MapSize, Real, shapes_checked
 from shadowmath._fits import _setup
+from shadowmath._math import _cube, _pcf
 
 BOX = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], np.float64)
 
@@ -126,3 +128,86 @@ def test_no_checker_and_no_jaxtyping_outside_the_test_suite():
         cwd=pathlib.Path(sm.__file__).parent.parent,
     ).stdout
     assert json.loads(out.strip().splitlines()[-1]) == [True, False, []]
+
+
+# The functions of shadowmath._api: checked as the fits are. Each test replaces a core with
+# one that returns a wrong shape or dtype; with the checking off, the call would return it.
+
+
+def test_a_wrong_result_of_cube_face_views_is_caught(monkeypatch):
+    views = _cube.cube_face_views
+    monkeypatch.setattr(_cube, "cube_face_views", lambda xp, p: views(xp, p)[..., :5, :, :])
+    with pytest.raises(TypeCheckError, match=r"cube_face_views: result"):
+        sm.cube_face_views([0.0, 1.0, 2.0])
+
+
+def test_a_float_face_of_cube_face_is_caught(monkeypatch):
+    face = _cube.cube_face
+
+    def float_face(xp, d):
+        f, s, t = face(xp, d)
+        return f.astype(np.float64), s, t
+
+    monkeypatch.setattr(_cube, "cube_face", float_face)
+    with pytest.raises(TypeCheckError, match=r"cube_face: result\.face"):
+        sm.cube_face([[1.0, 0.5, -0.25]])
+
+
+def test_a_wrong_field_of_light_frame_is_caught(monkeypatch):
+    frame_along = _light_frame.frame_along
+
+    def flat_z(*args, **kwargs):
+        frame = frame_along(*args, **kwargs)
+        return frame._replace(z_axis=frame.z_axis[..., :2])
+
+    monkeypatch.setattr(_light_frame, "frame_along", flat_z)
+    with pytest.raises(TypeCheckError, match=r"light_frame: result\.z_axis"):
+        sm.light_frame([0.0, 0.0, 0.0], BOX)
+
+
+def test_a_result_of_pcf_outside_its_batch_is_caught(monkeypatch):
+    lookup = _pcf.pcf
+    monkeypatch.setattr(_pcf, "pcf", lambda *args: lookup(*args)[..., None])
+    depth_map = np.full((8, 8), 0.5)
+    with pytest.raises(TypeCheckError, match=r"pcf: result"):
+        sm.pcf(depth_map, np.full((3, 2), 0.5), np.full(3, 0.25), pcf_radius=0)
+
+
+def test_numpy_integers_are_counts_and_sizes():
+    """``IntLike``, ``MapSize``: what the doors take as integers, the annotations take too."""
+    assert sm.border_margin(np.int64(100), border_texels=np.int32(1)) == (0.98, 0.98)
+    assert sm.border_margin(np.array([100, 50])) == sm.border_margin([100, 50]) == (0.98, 0.96)
+    samples = sm.area_light_samples(np.zeros(3), np.eye(3)[0], np.eye(3)[1], np.int64(4), seed=0)
+    assert samples.shape == (4, 3)  # "*batch {count} 3" with a NumPy count
+
+
+# Parameters that take anything by design: a value or a NamedTuple of them, a PRNG key.
+_UNTYPED = {("check_finite", "value"), ("check_finite", "return"), ("area_light_samples", "key")}
+_FUNCTIONS = sorted(n for n in sm._WHERE if isinstance(getattr(sm, n), types.FunctionType))
+
+
+@pytest.mark.parametrize("name", _FUNCTIONS)
+def test_every_public_function_is_annotated_and_checked(name):
+    value = getattr(sm, name)
+    assert value.__wrapped__.__name__ == name  # shapes_checked's wrapper
+    hints = typing.get_type_hints(value.__wrapped__)
+    untyped = {k for k, v in hints.items() if v is typing.Any} - {
+        k for n, k in _UNTYPED if n == name
+    }
+    if name == "area_light_samples_jax":  # deprecated: the key comes first
+        untyped -= {"key"}
+    assert not untyped, f"{name}: {sorted(untyped)} typed Any (annotate the shape)"
+
+
+def _texels(map_size: MapSize) -> int:
+    """A door that lets any map size through."""
+    return 0
+
+
+def test_a_map_size_is_an_integer_or_two():
+    texels = shapes_checked(_texels)
+    for ok in (64, np.int32(64), (64, np.int64(32)), [64, 32], np.array([64, 32])):
+        texels(ok)
+    for bad in (64.0, (64.0, 32), (64, 32, 16), np.array([64.0, 32.0]), np.ones((2, 2), int)):
+        with pytest.raises(TypeCheckError, match="argument map_size"):
+            texels(bad)

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, MapSize, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -50,9 +51,7 @@ def texel_counts(name: str, value: Any) -> tuple[int, int]:
     return w, h
 
 
-def border_margin(
-    map_size: int | tuple[int, int], *, border_texels: int = 1
-) -> tuple[float, float]:
+def border_margin(map_size: MapSize, *, border_texels: IntLike = 1) -> tuple[float, float]:
     r"""The fraction of a shadow map's half-extent left inside its border.
 
     .. math:: m = \frac{\mathrm{size} - 2\,b}{\mathrm{size}}
@@ -129,13 +128,13 @@ def derived_margins(map_size: Any, border_texels: int, margin: Any) -> tuple[flo
 
 def adaptive_frustum(
     frame: LightFrame,
-    vertices: Any,
-    map_size: int | tuple[int, int],
+    vertices: Real[ArrayLike, "*#batch N 3"],
+    map_size: MapSize,
     *,
-    border_texels: int = 1,
+    border_texels: IntLike = 1,
     margin: float | tuple[float, float] | None = None,
-    near: Any = None,
-    far: Any = None,
+    near: Real[ArrayLike, "*#batch"] | None = None,
+    far: Real[ArrayLike, "*#batch"] | None = None,
 ) -> Frustum:
     r"""The article's adaptive frustum: the largest projection ratios of the blocker.
 
@@ -337,7 +336,9 @@ def frustum_arrays(frustum: Any) -> tuple[Context, Checks, Frustum | Orthographi
     return ctx, checks, fr
 
 
-def blocker_projection(frustum: Frustum | OrthographicBox) -> Array:
+def blocker_projection(
+    frustum: Frustum | OrthographicBox | tuple[Any, ...],
+) -> Float[Array, "*batch 4 4"]:
     r"""Light coordinates to OpenGL clip space, for drawing the shadow map.
 
     .. math::
@@ -366,8 +367,8 @@ def blocker_projection(frustum: Frustum | OrthographicBox) -> Array:
     ``s_x = m_x / R_x``: ``x_ndc = m_x (x - c_x) / R_x``.
 
     Arguments:
-        frustum: a :class:`Frustum` or an :class:`OrthographicBox` with ``(*batch,)``
-            fields (the matrix follows its type).
+        frustum: a :class:`Frustum` or an :class:`OrthographicBox` (or a tuple of a
+            frustum's fields) with ``(*batch,)`` fields (the matrix follows its type).
 
     Returns:
         ``(*batch, 4, 4)`` column-vector matrix.
@@ -389,7 +390,9 @@ def blocker_projection(frustum: Frustum | OrthographicBox) -> Array:
     return checks.poison(stack_matrix(ctx.xp, projection_entries(ctx.xp, fr)), 2)
 
 
-def receiver_projection(frustum: Frustum | OrthographicBox) -> Array:
+def receiver_projection(
+    frustum: Frustum | OrthographicBox | tuple[Any, ...],
+) -> Float[Array, "*batch 4 4"]:
     r"""Light coordinates to homogeneous shadow-map texture coordinates.
 
     The blocker projection followed by the scale-and-bias from NDC ``[-1, 1]``
@@ -411,8 +414,8 @@ def receiver_projection(frustum: Frustum | OrthographicBox) -> Array:
     is behind the light: it must get no shadow (the division flips signs).
 
     Arguments:
-        frustum: a :class:`Frustum` or an :class:`OrthographicBox` with ``(*batch,)``
-            fields (an orthographic box gives ``q = 1``).
+        frustum: a :class:`Frustum` or an :class:`OrthographicBox` (or a tuple of a
+            frustum's fields) with ``(*batch,)`` fields (an orthographic box gives ``q = 1``).
 
     Returns:
         ``(*batch, 4, 4)`` column-vector matrix.

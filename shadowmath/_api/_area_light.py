@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from shadowmath._boundary._renamed import warn_renamed
+from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -23,7 +24,12 @@ from shadowmath._math import _soft
 from shadowmath._math._vector import cross, dot, norm
 
 
-def pyramid_to_unit_cube(apex: Any, corner: Any, edge_u: Any, edge_v: Any) -> Array:
+def pyramid_to_unit_cube(
+    apex: Real[ArrayLike, "*#batch 3"],
+    corner: Real[ArrayLike, "*#batch 3"],
+    edge_u: Real[ArrayLike, "*#batch 3"],
+    edge_v: Real[ArrayLike, "*#batch 3"],
+) -> Float[Array, "*batch 4 4"]:
     r"""Heckbert and Herf's matrix: the pyramid from a light sample onto the unit box.
 
     The pyramid has its apex ``a`` at a light sample and, as its base, the
@@ -140,14 +146,14 @@ def _checked_light(
 
 
 def area_light_samples(
-    corner: Any,
-    edge_u: Any,
-    edge_v: Any,
-    count: int,
+    corner: Real[ArrayLike, "*#batch 3"],
+    edge_u: Real[ArrayLike, "*#batch 3"],
+    edge_v: Real[ArrayLike, "*#batch 3"],
+    count: IntLike,
     *,
     seed: int | np.random.Generator | None = None,
     key: Any = None,
-) -> Array:
+) -> Float[Array, "*batch {count} 3"]:
     r"""Stratified, jittered samples of a parallelogram area light.
 
     The light ``corner + u edge_u + v edge_v`` (``0 <= u, v <= 1``) is cut into
@@ -214,7 +220,13 @@ def area_light_samples(
     return checks.poison(_soft.area_light_samples(ctx.xp, c, eu, ev, jitter, grid=(rows, cols)), 2)
 
 
-def area_light_samples_jax(key: Any, corner: Any, edge_u: Any, edge_v: Any, count: int) -> Array:
+def area_light_samples_jax(
+    key: Any,
+    corner: Real[ArrayLike, "*#batch 3"],
+    edge_u: Real[ArrayLike, "*#batch 3"],
+    edge_v: Real[ArrayLike, "*#batch 3"],
+    count: IntLike,
+) -> Float[Array, "*batch {count} 3"]:
     """Deprecated: ``area_light_samples(corner, edge_u, edge_v, count, key=key)``."""
     warn_renamed("area_light_samples_jax(key, ...)", "area_light_samples(..., key=key)")
     return area_light_samples(corner, edge_u, edge_v, count, key=key)

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from shadowmath._boundary import _projection
+from shadowmath._boundary._shapes import ArrayLike, Float, Real
 from shadowmath._boundary._validate import Array, Checks, convert, is_jax, is_tracer
 
 
@@ -98,7 +99,7 @@ def check_finite(value: Any, *, name: str = "value") -> Any:
     return value
 
 
-def check_projection(projection: Any) -> Array:
+def check_projection(projection: Real[ArrayLike, "*batch 4 4"]) -> Float[Array, "*batch 4 4"]:
     """A camera's projection, refused unless it is one; the check :func:`fit_cascades` makes.
 
     A projection maps view to clip coordinates with ``w`` the view depth

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
+from shadowmath._boundary._shapes import ArrayLike, Real
 from shadowmath._boundary._validate import require_matrix
 
 
-def column_major_bytes(matrix: Any) -> bytes:
+def column_major_bytes(matrix: Real[ArrayLike, "*batch 4 4"]) -> bytes:
     """The float32 bytes an OpenGL / moderngl ``mat4`` uniform expects.
 
     shadowmath's matrices are column-vector matrices indexed ``M[row, col]``

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -65,7 +66,7 @@ def _check_near_far(checks: Checks, xp: ModuleType, near: Array, far: Array) -> 
     checks.require(far > near, "far: must be greater than near (near < far)")
 
 
-def cube_face_views(light_position: Any) -> Array:
+def cube_face_views(light_position: Real[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 6 4 4"]:
     r"""World-to-view matrices of the six faces of a point light's cube shadow map.
 
     Face ``i`` (``+X, -X, +Y, -Y, +Z, -Z``, i.e. ``GL_TEXTURE_CUBE_MAP_POSITIVE_X + i``)
@@ -114,14 +115,14 @@ def cube_face_views(light_position: Any) -> Array:
 
 
 def cube_face_projection(
-    near: Any,
-    far: Any,
+    near: Real[ArrayLike, "*#batch"],
+    far: Real[ArrayLike, "*#batch"],
     *,
-    map_size: int,
-    border_texels: int = 0,
+    map_size: IntLike,
+    border_texels: IntLike = 0,
     api: GraphicsApi = "opengl",
     reversed_z: bool = False,
-) -> Array:
+) -> Float[Array, "*batch 4 4"]:
     r"""The 90-degree projection of a cube shadow map's faces, with an optional border ring.
 
     With ``N = map_size`` texels per face side and ``b = border_texels``, the
@@ -211,7 +212,7 @@ def face_scale(map_size: object, border_texels: object) -> float:
     return (size - 2 * border) / size
 
 
-def cube_face(directions: Any) -> CubeFaceCoords:
+def cube_face(directions: Real[ArrayLike, "*batch 3"]) -> CubeFaceCoords:
     r"""The cube-map face a direction samples, and where: the specification's selection.
 
     The face is that of the component ``m_a`` of largest magnitude, ``+`` or
@@ -277,7 +278,9 @@ def cube_face(directions: Any) -> CubeFaceCoords:
     return CubeFaceCoords(face, checks.poison(s, 0), checks.poison(t, 0))
 
 
-def cube_face_direction(face: Any, s: Any, t: Any) -> Array:
+def cube_face_direction(
+    face: Real[ArrayLike, "*#batch"], s: Real[ArrayLike, "*#batch"], t: Real[ArrayLike, "*#batch"]
+) -> Float[Array, "*batch 3"]:
     r"""The inverse of :func:`cube_face`: the direction that samples ``(face, s, t)``.
 
     With ``s_c = 2 s - 1`` and ``t_c = 2 t - 1`` the face's view coordinates are
@@ -318,10 +321,10 @@ def cube_face_direction(face: Any, s: Any, t: Any) -> Array:
 
 
 def cube_face_depth(
-    light_position: Any,
-    points: Any,
-    near: Any,
-    far: Any,
+    light_position: Real[ArrayLike, "*#batch 3"],
+    points: Real[ArrayLike, "*#batch 3"],
+    near: Real[ArrayLike, "*#batch"],
+    far: Real[ArrayLike, "*#batch"],
     *,
     reversed_z: bool = False,
 ) -> CubeFaceDepth:

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from shadowmath._boundary._renamed import renamed_keywords
+from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, MapSize, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -88,8 +89,12 @@ def _prepare(
 
 
 def texel_world_size(
-    world_to_texture: Any, points: Any, *, map_size: int | tuple[int, int], normals: Any = None
-) -> Array:
+    world_to_texture: Real[ArrayLike, "*#batch 4 4"],
+    points: Real[ArrayLike, "*#batch 3"],
+    *,
+    map_size: MapSize,
+    normals: Real[ArrayLike, "*#batch 3"] | None = None,
+) -> Float[Array, "*batch"]:
     r"""The world-space size of one shadow-map texel at receiver points.
 
     Without ``normals``: the texel's width **across the light ray**, the side of
@@ -141,17 +146,17 @@ def texel_world_size(
 
 @renamed_keywords(radius="pcf_radius", filter="pcf_filter")
 def slope_scaled_bias(
-    world_to_texture: Any,
-    points: Any,
-    normals: Any,
+    world_to_texture: Real[ArrayLike, "*#batch 4 4"],
+    points: Real[ArrayLike, "*#batch 3"],
+    normals: Real[ArrayLike, "*#batch 3"],
     *,
-    map_size: int | tuple[int, int],
-    pcf_radius: int = 0,
+    map_size: MapSize,
+    pcf_radius: IntLike = 0,
     pcf_filter: PcfFilter = "box",
     slope_factor: float | None = None,
     constant: float = DEFAULT_CONSTANT_BIAS,
-    depth_bits: int | None = 24,
-) -> Array:
+    depth_bits: IntLike | None = 24,
+) -> Float[Array, "*batch"]:
     r"""The polygon-offset depth bias: ``constant * r_min + slope_factor * m``, in depth units.
 
     ``m = max(|dr/dx|, |dr/dy|)`` is the receiver's depth slope per texel (``r``
@@ -246,15 +251,15 @@ def slope_scaled_bias(
 
 @renamed_keywords(radius="pcf_radius", filter="pcf_filter")
 def normal_offset(
-    world_to_texture: Any,
-    points: Any,
-    normals: Any,
+    world_to_texture: Real[ArrayLike, "*#batch 4 4"],
+    points: Real[ArrayLike, "*#batch 3"],
+    normals: Real[ArrayLike, "*#batch 3"],
     *,
-    map_size: int | tuple[int, int],
-    pcf_radius: int = 0,
+    map_size: MapSize,
+    pcf_radius: IntLike = 0,
     pcf_filter: PcfFilter = "box",
     scale: float = 1.0,
-) -> Array:
+) -> Float[Array, "*batch 3"]:
     r"""The world-space normal offset: look the map up at ``points + normal_offset(...)``.
 
     .. math::

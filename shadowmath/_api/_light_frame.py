@@ -7,6 +7,7 @@ from __future__ import annotations
 from typing import Any, Literal
 
 from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._shapes import ArrayLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -32,7 +33,9 @@ def _check_points(checks: Checks, light: Array, vertices: Array) -> None:
     checks.require(all_finite(xp, vertices, 2), non_finite("vertices"))
 
 
-def mean_direction_vector(light_position: Any, vertices: Any) -> Array:
+def mean_direction_vector(
+    light_position: Real[ArrayLike, "*#batch 3"], vertices: Real[ArrayLike, "*#batch N 3"]
+) -> Float[Array, "*batch 3"]:
     r"""The mean direction vector (MDV) from the light to the blocker's vertices.
 
     .. math:: \mathrm{MDV} = \frac{1}{N_v} \sum_{i=1}^{N_v} (V_i - P_\mathrm{light})
@@ -64,7 +67,7 @@ def mean_direction_vector(light_position: Any, vertices: Any) -> Array:
     return checks.poison(mdv, 1)
 
 
-def helper_axis(z_axis: Any) -> Array:
+def helper_axis(z_axis: Real[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
     r"""The world axis the light frame crosses with ``Z_light`` to get ``X_light``.
 
     The unit vector along the world axis at the component of ``z_axis`` with
@@ -123,7 +126,10 @@ def check_aim(aim: str) -> None:
 
 
 def light_frame(
-    light_position: Any, vertices: Any, *, aim: Literal["mean", "bbox"] = "mean"
+    light_position: Real[ArrayLike, "*#batch 3"],
+    vertices: Real[ArrayLike, "*#batch N 3"],
+    *,
+    aim: Literal["mean", "bbox"] = "mean",
 ) -> LightFrame:
     r"""The article's light coordinate system for a point light and a blocker.
 
@@ -167,7 +173,9 @@ def light_frame(
     return frame_along(ctx, checks, light, s.direction, zero_direction_noise(ctx, s.coords))
 
 
-def light_frame_from_direction(light_position: Any, direction: Any) -> LightFrame:
+def light_frame_from_direction(
+    light_position: Real[ArrayLike, "*#batch 3"], direction: Real[ArrayLike, "*#batch 3"]
+) -> LightFrame:
     """The light frame for a given viewing direction instead of a vertex set.
 
     Same construction as :func:`light_frame` with ``Z = normalize(direction)``:
@@ -221,7 +229,7 @@ def frame_arrays(
     return ctx, checks, LightFrame(*fields), arrays[4:]
 
 
-def world_to_light(frame: LightFrame) -> Array:
+def world_to_light(frame: LightFrame) -> Float[Array, "*batch 4 4"]:
     r"""The rigid transform from world coordinates to light coordinates.
 
     .. math::
@@ -253,7 +261,7 @@ def world_to_light(frame: LightFrame) -> Array:
     return checks.poison(stack_matrix(ctx.xp, light_entries(ctx.xp, f)), 2)
 
 
-def light_to_world(frame: LightFrame) -> Array:
+def light_to_world(frame: LightFrame) -> Float[Array, "*batch 4 4"]:
     """The inverse of :func:`world_to_light`: ``[[R^T, P_light], [0, 1]]``.
 
     Arguments:

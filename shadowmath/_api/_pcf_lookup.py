@@ -4,11 +4,11 @@ comparisons are :mod:`shadowmath._math._pcf`'s)."""
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
 from shadowmath._boundary._renamed import renamed_keywords
+from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -26,7 +26,7 @@ from ._depth_bias import check_kernel
 
 
 @renamed_keywords(radius="pcf_radius", filter="pcf_filter")
-def pcf_border_texels(pcf_radius: int, pcf_filter: PcfFilter = "box") -> int:
+def pcf_border_texels(pcf_radius: IntLike, pcf_filter: PcfFilter = "box") -> int:
     r"""The empty border a shadow map needs around the silhouette for a PCF kernel.
 
     A lookup compares texel centres up to ``c`` texels away from ``(s, t)`` along
@@ -64,15 +64,15 @@ def pcf_border_texels(pcf_radius: int, pcf_filter: PcfFilter = "box") -> int:
 
 @renamed_keywords(radius="pcf_radius", filter="pcf_filter")
 def pcf(
-    depth_map: Any,
-    coords: Any,
-    depths: Any,
+    depth_map: Float[ArrayLike, "*#batch H W"],
+    coords: Real[ArrayLike, "*#batch 2"],
+    depths: Real[ArrayLike, "*#batch"],
     *,
-    pcf_radius: int = 1,
+    pcf_radius: IntLike = 1,
     pcf_filter: PcfFilter = "box",
     reversed_z: bool = False,
     softness: float = 0.0,
-) -> Array:
+) -> Float[Array, "*batch"]:
     r"""Percentage-closer filtering: the lit fraction of receiver points in ``[0, 1]``.
 
     .. math::

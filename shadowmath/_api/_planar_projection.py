@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _status
+from shadowmath._boundary._shapes import ArrayLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -25,7 +25,9 @@ from shadowmath._math._frame import stack_matrix
 from shadowmath._math._specialize import formulas
 
 
-def planar_projection(plane: Any, light: Any) -> Array:
+def planar_projection(
+    plane: Real[ArrayLike, "*#batch 4"], light: Real[ArrayLike, "*#batch 4"]
+) -> Float[Array, "*batch 4 4"]:
     r"""The matrix that flattens geometry onto ``plane`` as seen from ``light``.
 
     .. math::

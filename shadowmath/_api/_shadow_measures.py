@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from shadowmath._boundary._shapes import ArrayLike, Bool, Float, IntLike, MapSize, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -32,7 +33,9 @@ from shadowmath._math._vector import dot
 from ._adaptive_frustum import frustum_arrays, texel_counts
 
 
-def cross_section_area(frustum: Frustum | OrthographicBox) -> Array:
+def cross_section_area(
+    frustum: Frustum | OrthographicBox | tuple[Any, ...],
+) -> Float[Array, "*batch"]:
     r"""The usable cross-section of the frustum at unit distance from the light.
 
     .. math:: A = (2 R_x)(2 R_y)
@@ -59,7 +62,11 @@ def cross_section_area(frustum: Frustum | OrthographicBox) -> Array:
     return checks.poison(4 * half_x * half_y, 0)
 
 
-def silhouette_coverage(mask: Any, *, border_texels: int = 1) -> Array:
+def silhouette_coverage(
+    mask: Real[ArrayLike, "*batch H W"] | Bool[ArrayLike, "*batch H W"],
+    *,
+    border_texels: IntLike = 1,
+) -> Float[Array, "*batch"]:
     """The fraction of the usable shadow map that the silhouette covers.
 
     The mean of ``mask`` over the texels inside the border (the border itself
@@ -93,8 +100,11 @@ def silhouette_coverage(mask: Any, *, border_texels: int = 1) -> Array:
 
 
 def receiver_texel_size(
-    world_to_texture: Any, points: Any, normals: Any, map_size: int | tuple[int, int]
-) -> Array:
+    world_to_texture: Real[ArrayLike, "*#batch 4 4"],
+    points: Real[ArrayLike, "*#batch 3"],
+    normals: Real[ArrayLike, "*#batch 3"],
+    map_size: MapSize,
+) -> Float[Array, "*batch"]:
     r"""The world-space edge length of one shadow-map texel on a receiver surface.
 
     With ``(s q, t q, r q, q) = M p``, the texture coordinates ``s``, ``t``

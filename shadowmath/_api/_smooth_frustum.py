@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, MapSize, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -27,7 +28,9 @@ from ._adaptive_frustum import bounded_frustum, check_blocker, margins
 from ._light_frame import frame_arrays
 
 
-def smooth_max(values: Any, temperature: Any) -> Array:
+def smooth_max(
+    values: Real[ArrayLike, "*#batch N"], temperature: Real[ArrayLike, "*#batch"]
+) -> Float[Array, "*batch"]:
     r"""A soft maximum over the last axis that never underestimates the maximum.
 
     .. math::
@@ -100,15 +103,15 @@ def _ratio_frustum(
 
 def smooth_frustum(
     frame: LightFrame,
-    vertices: Any,
-    map_size: int | tuple[int, int],
+    vertices: Real[ArrayLike, "*#batch N 3"],
+    map_size: MapSize,
     *,
-    temperature: Any,
+    temperature: Real[ArrayLike, "*#batch"],
     symmetric: bool = True,
-    border_texels: int = 1,
+    border_texels: IntLike = 1,
     margin: float | tuple[float, float] | None = None,
-    near: Any = None,
-    far: Any = None,
+    near: Real[ArrayLike, "*#batch"] | None = None,
+    far: Real[ArrayLike, "*#batch"] | None = None,
 ) -> Frustum:
     r"""A frustum from soft maxima of the projection ratios: smooth and conservative.
 
@@ -161,13 +164,13 @@ def smooth_frustum(
 
 def offcenter_frustum(
     frame: LightFrame,
-    vertices: Any,
-    map_size: int | tuple[int, int],
+    vertices: Real[ArrayLike, "*#batch N 3"],
+    map_size: MapSize,
     *,
-    border_texels: int = 1,
+    border_texels: IntLike = 1,
     margin: float | tuple[float, float] | None = None,
-    near: Any = None,
-    far: Any = None,
+    near: Real[ArrayLike, "*#batch"] | None = None,
+    far: Real[ArrayLike, "*#batch"] | None = None,
 ) -> Frustum:
     r"""The off-centre adaptive frustum: the silhouette touches all four margins.
 
@@ -215,7 +218,11 @@ def offcenter_frustum(
 
 
 def rolled_light_frame(
-    light_position: Any, direction: Any, roll: Any, *, up: Any = None
+    light_position: Real[ArrayLike, "*#batch 3"],
+    direction: Real[ArrayLike, "*#batch 3"],
+    roll: Real[ArrayLike, "*#batch"],
+    *,
+    up: Real[ArrayLike, "*#batch 3"] | None = None,
 ) -> LightFrame:
     r"""A light frame from a direction and a roll angle, continuous in both.
 

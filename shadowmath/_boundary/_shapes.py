@@ -12,6 +12,12 @@ types:
   scalars;
 * :data:`Array` for results: NumPy in gives NumPy out, JAX in gives JAX out.
 
+and two option types: :data:`IntLike`, a count or a size that the door takes as an
+integer, and :data:`MapSize`, a map's texels (``size`` or ``(width, height)``). For mypy
+they are ``int`` and ``int | tuple[int, int]``; at run time they accept what the doors
+accept: NumPy's integers too (``map_size=np.int64(64)``), and a map size as a list or a
+NumPy array of two.
+
 For mypy both are ``Any`` (``Float[Array, "4 4"]`` is ``Annotated[Any, ...]``): mypy checks
 the rest of each signature (options, light and mesh types, results' NamedTuples) and that
 the annotations are well formed; the shapes and dtypes are checked at run time, in the
@@ -45,7 +51,18 @@ import os
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar
 
-__all__ = ["Array", "ArrayLike", "Bool", "Float", "Int", "Integer", "Real", "shapes_checked"]
+__all__ = [
+    "Array",
+    "ArrayLike",
+    "Bool",
+    "Float",
+    "Int",
+    "IntLike",
+    "Integer",
+    "MapSize",
+    "Real",
+    "shapes_checked",
+]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -54,7 +71,21 @@ if TYPE_CHECKING:
 
     ArrayLike: TypeAlias = Any
     Array: TypeAlias = Any
+    IntLike: TypeAlias = int
+    MapSize: TypeAlias = int | tuple[int, int]
 else:
+    from numbers import Integral as IntLike
+
+    class _MapSizeType(type):
+        def __instancecheck__(cls, value: object) -> bool:
+            if hasattr(value, "shape") and hasattr(value, "dtype"):  # a NumPy array of two
+                return tuple(value.shape) in ((), (2,)) and value.dtype.kind in "iu"
+            if isinstance(value, tuple | list):
+                return len(value) == 2 and all(isinstance(v, IntLike) for v in value)
+            return isinstance(value, IntLike)
+
+    class MapSize(metaclass=_MapSizeType):
+        """Run-time marker of a map size: an integer or two (see the module's docstring)."""
 
     class ArrayLike:
         """Run-time marker of an input array type (see the module's docstring)."""

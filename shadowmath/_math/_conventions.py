@@ -51,6 +51,7 @@ from typing import Literal, NamedTuple, TypeAlias
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import Array
 
 GraphicsApi: TypeAlias = Literal["opengl", "vulkan", "direct3d", "metal", "webgpu"]
@@ -79,9 +80,9 @@ class ApiConvention(NamedTuple):
             (``LESS``), the larger one otherwise (``GREATER``).
     """
 
-    gl_clip_to_clip: Array
-    clip_to_texture: Array
-    gl_clip_to_texture: Array
+    gl_clip_to_clip: Float[Array, "4 4"]
+    clip_to_texture: Float[Array, "4 4"]
+    gl_clip_to_texture: Float[Array, "4 4"]
     near_depth: float
     far_depth: float
 

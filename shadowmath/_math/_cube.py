@@ -39,6 +39,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Float, Int
 from shadowmath._boundary._validate import Array
 
 # api -> (clip depth 0..1 instead of -1..1, NDC +y is the image's first row).
@@ -77,9 +78,9 @@ class CubeFaceCoords(NamedTuple):
         t: ``(*batch,)`` texture coordinate in ``[0, 1]``; ``t = 0`` is the face's first row.
     """
 
-    face: Array
-    s: Array
-    t: Array
+    face: Int[Array, "*batch"]
+    s: Float[Array, "*batch"]
+    t: Float[Array, "*batch"]
 
 
 class CubeFaceDepth(NamedTuple):
@@ -95,9 +96,9 @@ class CubeFaceDepth(NamedTuple):
             cube map that stores distances (seed 002's "linear distance").
     """
 
-    face: Array
-    depth: Array
-    distance: Array
+    face: Int[Array, "*batch"]
+    depth: Float[Array, "*batch"]
+    distance: Float[Array, "*batch"]
 
 
 # ------------------------------------------------------------------ helpers

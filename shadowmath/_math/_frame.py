@@ -17,6 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import Array, Context
 
 from ._specialize import formulas
@@ -35,10 +36,10 @@ class LightFrame(NamedTuple):
     (``x_axis x y_axis = -z_axis``).
     """
 
-    origin: Array
-    x_axis: Array
-    y_axis: Array
-    z_axis: Array
+    origin: Float[Array, "*batch 3"]
+    x_axis: Float[Array, "*batch 3"]
+    y_axis: Float[Array, "*batch 3"]
+    z_axis: Float[Array, "*batch 3"]
 
 
 def zero_direction_noise(ctx: Context, coords: Array) -> Array:
