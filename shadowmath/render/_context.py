@@ -72,7 +72,8 @@ def resolve_context(ctx: moderngl.Context | None) -> moderngl.Context:
 def shader_source(name: str) -> str:
     """A shader file shipped in ``shadowmath/render/shaders``, each line ``#include "x"``
     replaced by the source of file ``x`` there (GLSL and WGSL have no includes of their
-    own: the snippets that several shaders share are files included at load time).
+    own: the snippets that several shaders share are files included at load time;
+    moderngl would expand such a line itself from ``ctx.includes``, but finds none left).
 
     Example:
         >>> source = shader_source("depth_scene.wgsl")
