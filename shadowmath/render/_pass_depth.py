@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from shadowmath import ShadowSetup, Triangles, fit_shadow
 
 from ._context import program, set_matrix, set_uniform
-from ._resources import GpuScene, Prepared, PreparedLight, ShadowPass
+from ._resources import Bodies, GpuScene, Prepared, PreparedLight, ShadowPass
 
 #: Default ``glPolygonOffset(factor, units)`` of the depth map without PCF: ``factor``
 #: times the depth slope of each caster triangle plus ``units`` times the smallest
@@ -182,7 +182,7 @@ class DepthPass(ShadowPass):
         self.pcf_radius = pcf_radius_option(pcf_radius)
         self.bias = depth_bias_option(bias, self.pcf_radius)
 
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+    def setup_count(self, blockers: Bodies) -> int:
         return 1
 
     def light_points(self, light: PreparedLight) -> NDArray[np.float64]:
@@ -191,11 +191,7 @@ class DepthPass(ShadowPass):
         return (light.homogeneous if light.directional else light.position)[None]
 
     def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
+        self, receivers: Bodies, blockers: Bodies, light: PreparedLight, map_size: tuple[int, int]
     ) -> tuple[ShadowSetup, ...]:
         """One :func:`fit_depth` from each of :meth:`light_points`."""
         points = self.light_points(light)

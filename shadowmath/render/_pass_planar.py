@@ -4,8 +4,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -13,7 +11,7 @@ from shadowmath import ShadowSetup, planar_projection
 
 from ._context import program, set_matrix
 from ._pass_texture import TexturePass, blocker_maps
-from ._resources import GpuScene, Prepared, PreparedLight
+from ._resources import Bodies, GpuScene, PreparedLight
 
 #: Polygon offset ``(factor, units)`` pulling Blinn's flattened blocker toward the
 #: camera, so that it wins the LEQUAL depth test against its coplanar receiver.
@@ -31,7 +29,7 @@ class PlanarPass(TexturePass):
     method holds them. The setups are :class:`TexturePass`'s, one per blocker.
     """
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
+    def check(self, receivers: Bodies) -> None:
         for i, r in enumerate(receivers):
             if r.plane is None:
                 raise ValueError(

@@ -29,6 +29,7 @@ from ._pass_depth import (
     world_to_light_clip,
 )
 from ._resources import (
+    Bodies,
     Body,
     GpuMesh,
     GpuScene,
@@ -293,7 +294,7 @@ class SoftPass(DepthPass):
         self.seed = seed
         super().__init__(pcf_radius, bias)
 
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+    def setup_count(self, blockers: Bodies) -> int:
         return self.samples
 
     def light_points(self, light: PreparedLight) -> NDArray[np.float64]:
@@ -344,7 +345,7 @@ class RadiancePass(ShadowPass):
         self.samples = check_samples(samples)
         self.seed = seed
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
+    def check(self, receivers: Bodies) -> None:
         for i, r in enumerate(receivers):
             receiver_parallelogram(f"receivers[{i}]", r)
 

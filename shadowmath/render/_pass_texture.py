@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from shadowmath import ShadowSetup, fit_shadow, receiver_texture_matrix
 
 from ._context import program, set_matrix, set_uniform
-from ._resources import GpuMesh, GpuScene, Prepared, PreparedLight, ShadowPass
+from ._resources import Bodies, GpuMesh, GpuScene, Prepared, PreparedLight, ShadowPass
 
 
 def draw_shadow_map(
@@ -83,15 +83,11 @@ class TexturePass(ShadowPass):
     ``q <= 0`` (behind the light) or on faces with ``N . (L - P) <= 0``.
     """
 
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+    def setup_count(self, blockers: Bodies) -> int:
         return len(blockers)
 
     def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
+        self, receivers: Bodies, blockers: Bodies, light: PreparedLight, map_size: tuple[int, int]
     ) -> tuple[ShadowSetup, ...]:
         return fit_per_blocker(blockers, light, map_size)
 

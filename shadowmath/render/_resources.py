@@ -342,6 +342,10 @@ class PassOptions(NamedTuple):
     seed: int | None = 0
 
 
+#: A shadow pass's checked receivers or blockers.
+Bodies = Sequence[Prepared]
+
+
 class ShadowPass:
     """One shadow system: its setups per light, and the light's shadow mask.
 
@@ -351,19 +355,15 @@ class ShadowPass:
     a subclass overrides what differs, and always :meth:`draw_mask`.
     """
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
+    def check(self, receivers: Bodies) -> None:
         """Raise ``ValueError`` for receivers this system cannot shadow (default: none)."""
 
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+    def setup_count(self, blockers: Bodies) -> int:
         """How many ShadowSetups this system draws one light with (default 0)."""
         return 0
 
     def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
+        self, receivers: Bodies, blockers: Bodies, light: PreparedLight, map_size: tuple[int, int]
     ) -> tuple[ShadowSetup, ...]:
         """The ShadowSetups this system draws one light with (default: none, after
         :meth:`check_light`)."""
