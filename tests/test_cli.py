@@ -797,7 +797,10 @@ def test_a_wide_fit_is_a_note_naming_the_light(capsys, tmp_path, gl):
         (["--method", "cascades", "--api", "webgpu"], "--api webgpu"),
         (["--method", "cascades", "--shadow-map-output", "m.png"], "--method cascades draws"),
         (["--method", "cascades", "--samples", "4"], "--samples 4: --method cascades"),
-        (["--method", "cascades", "--directional", "1", "-1", "1"], "y = -1 puts it"),
+        (
+            ["--method", "cascades", "--directional", "1", "-1", "1"],
+            "y = -1 puts the light on or below the ground",
+        ),
     ],
 )
 def test_cascades_options_that_do_not_apply_are_refused(capsys, tmp_path, args, message):

@@ -29,6 +29,7 @@ from shadowmath._boundary._status import (
     fit_messages,
 )
 from shadowmath._boundary._validate import Array, Checks, Context, all_finite, raise_status
+from shadowmath._math._fit_entry import Entry
 from shadowmath._math._specialize import (
     array_primitives,
     formulas,
@@ -42,15 +43,9 @@ from ._spec import FitKey, fit_options
 Components = tuple[Array, Array, Array]
 
 
-class FitEntries(NamedTuple):
-    """A fit's per-entry results, as component arrays of the batch shape (or scalars)."""
-
-    origin: tuple[Array, ...]  # 3
-    axes: tuple[Array, ...]  # X, Y, Z: 9
-    box: tuple[Array, ...]  # half_x, half_y, near, far, x_offset, y_offset
-    W: tuple[Array, ...]  # 12
-    clip: tuple[Array, ...]  # 16 (placement not applied)
-    tex: tuple[Array, ...]  # 16
+#: A fit's per-entry results (the status, then component arrays of the batch shape, or
+#: scalars): the :class:`Entry` of the per-entry code, which every driver reads.
+FitEntries = Entry
 
 
 class Inputs(NamedTuple):
@@ -262,7 +257,8 @@ def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs, d: Driver) 
     o = fit_options(key, d.eps)
     e = d.F.fit_entry((L, S, U, b, nf), _vertex_source(d, a.verts, a.B), a.R, o, key.api)
     _report(ctx, checks, e.status)
-    return FitEntries(e.origin, e.axes, e.box, e.W, e.clip, e.tex)
+    entries: FitEntries = e
+    return entries
 
 
 #: The checks' bits and messages in report order (the vertices' check is exact here).

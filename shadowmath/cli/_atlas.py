@@ -21,9 +21,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 import shadowmath as sm
-from shadowmath import meshes
 
-from ._build import blocker_mesh, placement, rotation
+from ._build import ground_and_boxes, tilted_blocker
 from ._options import OptionError, Options
 from ._run import (
     AMBIENT,
@@ -62,17 +61,8 @@ GOLDEN = math.pi * (3.0 - math.sqrt(5.0))
 
 def atlas_bodies(options: Options) -> tuple[list[Body], list[bool]]:
     """The ground, the blocks and the ``--mesh`` blocker; which of them cast (not the ground)."""
-    from shadowmath.render import Body
-
-    flat = placement(rotation((1.0, 0.0, 0.0), -90.0), (0.0, 0.0, 0.0))
-    bodies = [Body(*meshes.grid((GROUND_SIZE, GROUND_SIZE), segments=(1, 1)), flat,
-                   (0.78, 0.78, 0.76))]  # fmt: skip
-    for x, z, w, d, h, turn in BLOCKS:
-        turned = placement(rotation((0.0, 1.0, 0.0), turn), (x, 0.5 * h, z))
-        bodies.append(Body(*meshes.box((w, h, d)), turned, (0.8, 0.8, 0.8)))
-    tilt = rotation((0.0, 1.0, 0.0), -35.0) @ rotation((1.0, 0.0, 0.0), -25.0)
-    bodies.append(Body(*blocker_mesh(options.mesh), placement(tilt, BLOCKER_AT, 1.4),
-                       (0.85, 0.85, 0.85)))  # fmt: skip
+    bodies = ground_and_boxes(GROUND_SIZE, (0.78, 0.78, 0.76), BLOCKS, (0.8, 0.8, 0.8))
+    bodies.append(tilted_blocker(options.mesh, BLOCKER_AT, 1.4, (0.85, 0.85, 0.85)))
     return bodies, [False] + [True] * (len(bodies) - 1)
 
 

@@ -107,6 +107,36 @@ def placement(
     return m
 
 
+def ground_and_boxes(
+    size: float,
+    color: tuple[float, float, float],
+    boxes: Sequence[tuple[float, float, float, float, float, float]],
+    box_color: tuple[float, float, float],
+) -> list[Body]:
+    """A ``size`` x ``size`` ground in the plane ``y = 0`` (two triangles, facing ``+y``) and
+    a box standing on it per ``(x, z, width, depth, height, turn in degrees about y)``: the
+    large scenes of ``--method cascades`` and ``atlas`` (needs :mod:`shadowmath.render`)."""
+    from shadowmath.render import Body
+
+    flat = placement(rotation((1.0, 0.0, 0.0), -90.0), (0.0, 0.0, 0.0))
+    bodies = [Body(*meshes.grid((size, size), segments=(1, 1)), flat, color)]
+    for x, z, w, d, h, turn in boxes:
+        turned = placement(rotation((0.0, 1.0, 0.0), turn), (x, 0.5 * h, z))
+        bodies.append(Body(*meshes.box((w, h, d)), turned, box_color))
+    return bodies
+
+
+def tilted_blocker(
+    name: str, at: Sequence[float], scale: float, color: tuple[float, float, float]
+) -> Body:
+    """The ``--mesh`` blocker ``name`` turned -25 degrees about ``x`` then -35 about ``y``,
+    scaled by ``scale`` and centred at ``at`` (needs :mod:`shadowmath.render`)."""
+    from shadowmath.render import Body
+
+    tilt = rotation((0.0, 1.0, 0.0), -35.0) @ rotation((1.0, 0.0, 0.0), -25.0)
+    return Body(*blocker_mesh(name), placement(tilt, at, scale), color)
+
+
 def mesh_formats() -> str:
     """The file types ``--mesh`` reads here, for messages."""
     try:
@@ -196,15 +226,45 @@ def check_direction(direction: NDArray[np.float64]) -> None:
             length whose square overflows or underflows, or parallel to the wall or
             the floor within rounding (Blinn's projection onto it is undefined).
     """
+    size = check_direction_sides(
+        direction,
+        (
+            (2, "z", "on or behind the wall (the plane z = 0)"),
+            (1, "y", "on or behind the floor (y = 0)"),
+        ),
+    )
+    given = shown(direction)
+    axis, name, receiver, plane = min(RECEIVER_SIDES, key=lambda side: direction[side[0]])
+    if direction[axis] <= PLANAR_ROUNDING * size:
+        raise OptionError(
+            f"--directional {given}: the light shines parallel to the {receiver} ({plane}) "
+            f"within rounding: {name} = {direction[axis]:g} is at most {PLANAR_ROUNDING:.2g} "
+            f"of the direction's length {size:.3g}, so Blinn's projection onto the "
+            f"{receiver} (drawn by --method planar, printed with depth) is undefined; tilt "
+            f"the light away from the {receiver}'s plane, {name} > "
+            f"{PLANAR_ROUNDING * size:.3g}"
+        )
+
+
+def check_direction_sides(
+    direction: NDArray[np.float64], sides: Sequence[tuple[int, str, str]]
+) -> float:
+    """``--directional``'s checks shared by every scene: finite, on the lit side of each
+    plane ``(axis, its name, where a direction <= 0 puts the light)``, and of a length
+    whose square floating point holds; returns the length.
+
+    Raises:
+        OptionError: not finite, ``direction[axis] <= 0`` for a side, a length whose square
+            overflows or underflows.
+    """
     given = shown(direction)
     if not np.all(np.isfinite(direction)):
         raise OptionError(f"--directional {given}: coordinates must be finite")
-    for axis, name, plane in ((2, "z", "wall (the plane z = 0)"), (1, "y", "floor (y = 0)")):
+    for axis, name, where in sides:
         if direction[axis] <= 0:
             raise OptionError(
                 f"--directional {given}: the direction points toward the light, and "
-                f"{name} = {direction[axis]:g} puts the light on or behind the {plane}; "
-                f"give {name} > 0"
+                f"{name} = {direction[axis]:g} puts the light {where}; give {name} > 0"
             )
     size = length(direction)
     if not TINY_LENGTH <= size <= HUGE_LENGTH:
@@ -216,16 +276,7 @@ def check_direction(direction: NDArray[np.float64]) -> None:
             f"{TINY_LENGTH:.2g} to {HUGE_LENGTH:.2g} work); only the direction matters, "
             f"e.g. --directional {shown(direction / size)}"
         )
-    axis, name, receiver, plane = min(RECEIVER_SIDES, key=lambda side: direction[side[0]])
-    if direction[axis] <= PLANAR_ROUNDING * size:
-        raise OptionError(
-            f"--directional {given}: the light shines parallel to the {receiver} ({plane}) "
-            f"within rounding: {name} = {direction[axis]:g} is at most {PLANAR_ROUNDING:.2g} "
-            f"of the direction's length {size:.3g}, so Blinn's projection onto the "
-            f"{receiver} (drawn by --method planar, printed with depth) is undefined; tilt "
-            f"the light away from the {receiver}'s plane, {name} > "
-            f"{PLANAR_ROUNDING * size:.3g}"
-        )
+    return size
 
 
 def check_planar_rounding(light: NDArray[np.float64]) -> None:

@@ -17,10 +17,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath import meshes
-
-from ._build import HUGE_LENGTH, TINY_LENGTH, blocker_mesh, length, placement, rotation
-from ._options import OptionError, Options, shown
+from ._build import check_direction_sides, ground_and_boxes, tilted_blocker
+from ._options import Options
 from ._run import (
     AMBIENT,
     BACKGROUND,
@@ -62,35 +60,13 @@ def check_sun(direction: NDArray[np.float64]) -> None:
         OptionError: ``--directional`` not finite, with ``y <= 0``, or of a length whose
             square leaves floating point's range.
     """
-    given = f"--directional {shown(direction)}"
-    if not np.all(np.isfinite(direction)):
-        raise OptionError(f"{given}: coordinates must be finite")
-    if direction[1] <= 0:
-        raise OptionError(
-            f"{given}: the direction points toward the sun, and y = {direction[1]:g} puts it "
-            "on or below the ground (the plane y = 0); give y > 0"
-        )
-    size = length(direction)
-    if not TINY_LENGTH <= size <= HUGE_LENGTH:
-        raise OptionError(
-            f"{given}: the direction's length {size:.3g} is beyond floating point's range for "
-            f"its square; only the direction matters, e.g. --directional {shown(direction / size)}"
-        )
+    check_direction_sides(direction, ((1, "y", "on or below the ground (the plane y = 0)"),))
 
 
 def cascade_bodies(options: Options) -> list[Body]:
     """The ground, the towers and the ``--mesh`` blocker (needs :mod:`shadowmath.render`)."""
-    from shadowmath.render import Body
-
-    ground = meshes.grid((GROUND_SIZE, GROUND_SIZE), segments=(1, 1))
-    flat = placement(rotation((1.0, 0.0, 0.0), -90.0), (0.0, 0.0, 0.0))
-    bodies = [Body(*ground, flat, (0.55, 0.62, 0.5))]
-    for x, z, w, d, h, turn in TOWERS:
-        turned = placement(rotation((0.0, 1.0, 0.0), turn), (x, 0.5 * h, z))
-        bodies.append(Body(*meshes.box((w, h, d)), turned, (0.82, 0.78, 0.7)))
-    tilt = rotation((0.0, 1.0, 0.0), -35.0) @ rotation((1.0, 0.0, 0.0), -25.0)
-    bodies.append(Body(*blocker_mesh(options.mesh), placement(tilt, BLOCKER_AT, 2.0),
-                       (0.85, 0.33, 0.18)))  # fmt: skip
+    bodies = ground_and_boxes(GROUND_SIZE, (0.55, 0.62, 0.5), TOWERS, (0.82, 0.78, 0.7))
+    bodies.append(tilted_blocker(options.mesh, BLOCKER_AT, 2.0, (0.85, 0.33, 0.18)))
     return bodies
 
 

@@ -70,8 +70,24 @@ def resolve_context(ctx: moderngl.Context | None) -> moderngl.Context:
 
 
 def shader_source(name: str) -> str:
-    """A shader file shipped in ``shadowmath/render/shaders``."""
-    return (resources.files("shadowmath.render") / "shaders" / name).read_text(encoding="utf-8")
+    """A shader file shipped in ``shadowmath/render/shaders``, each line ``#include "x"``
+    replaced by the source of file ``x`` there (GLSL and WGSL have no includes of their
+    own: the snippets that several shaders share are files included at load time;
+    moderngl would expand such a line itself from ``ctx.includes``, but finds none left).
+
+    Example:
+        >>> source = shader_source("depth_scene.wgsl")
+        >>> any(line.startswith("#include") for line in source.splitlines())
+        False
+        >>> "fn record(" in source
+        True
+    """
+    text = (resources.files("shadowmath.render") / "shaders" / name).read_text(encoding="utf-8")
+    lines = text.splitlines(keepends=True)
+    for i, line in enumerate(lines):
+        if line.startswith('#include "'):
+            lines[i] = shader_source(line.strip()[len('#include "') : -1]) + "\n"
+    return "".join(lines)
 
 
 def program(ctx: moderngl.Context, vertex: str, fragment: str) -> moderngl.Program:

@@ -42,13 +42,7 @@ class WgpuAtlasFrame(NamedTuple):
     """What :func:`render_atlas_wgpu` returns; images have row 0 at the *top*.
 
     Attributes:
-        shadow: ``(L, H, W)`` float32, each light's shadow mask on the visible bodies (1
-            shadowed, 0 lit or not reached by the light; PCF gives fractions).
-        position: ``(H, W, 3)`` float32 world position of the visible surface (NaN on
-            the background).
-        normal: ``(H, W, 3)`` float32 unit face normal (NaN on the background).
-        body: ``(H, W)`` int32, which body is visible (``-1`` the background).
-        atlas: the :class:`shadowmath.ShadowAtlas` (pass it as ``previous`` next frame).
+        shadow, position, normal, body, atlas: as in :class:`AtlasFrame`.
         fit: the :class:`shadowmath.AtlasFit` (``api="webgpu"``) drawn and sampled.
         shadow_map: ``(A, A)`` float32 depths of the whole atlas, row 0 its first row in
             memory (WebGPU's ``t = 0``); 1 where nothing was drawn.

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from shadowmath import ShadowSetup, Triangles, fit_shadow
 
 from ._context import program, set_matrix, set_uniform
-from ._resources import GpuScene, Prepared, PreparedLight
+from ._resources import Bodies, GpuScene, Prepared, PreparedLight, ShadowPass
 
 #: Default ``glPolygonOffset(factor, units)`` of the depth map without PCF: ``factor``
 #: times the depth slope of each caster triangle plus ``units`` times the smallest
@@ -103,29 +103,61 @@ def world_to_light_clip(setup: ShadowSetup) -> NDArray[np.float64]:
     return np.asarray(b2c @ np.linalg.inv(b2w), dtype=np.float64)
 
 
-def draw_depth_map(
-    scene: GpuScene, world_to_clip: NDArray[np.float64], bias: tuple[float, float]
-) -> moderngl.Texture:
-    """Every body's depth from the light into a new depth texture (released with the scene),
-    set up for hardware comparison (``sampler2DShadow``, ``<=``, nearest, clamp to edge)."""
-    gl = scene.ctx
-    tex: moderngl.Texture = scene.keep(gl.depth_texture(scene.map_size))
+def depth_map_texture(gl: moderngl.Context, size: tuple[int, int]) -> moderngl.Texture:
+    """A new depth texture of ``size`` for hardware comparison (``sampler2DShadow``):
+    nearest, clamp to edge; the caller sets ``compare_func`` once it is drawn."""
+    tex = gl.depth_texture(size)
     tex.repeat_x = False
     tex.repeat_y = False
     tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    fbo = gl.framebuffer(depth_attachment=tex)
+    return tex
+
+
+def draw_depths(
+    scene: GpuScene,
+    fbo: moderngl.Framebuffer,
+    world_to_clip: NDArray[np.float64],
+    bias: tuple[float, float],
+) -> None:
+    """Every body's depth through ``world_to_clip`` into the whole of ``fbo``
+    (:func:`begin_depth_pass`: cleared first), the polygon offset reset after."""
+    gl = scene.ctx
     prog = program(gl, "depth_map.vert", "depth_map.frag")
+    fbo.viewport = (0, 0, *fbo.size)
     try:
-        fbo.viewport = (0, 0, *scene.map_size)
         begin_depth_pass(gl, fbo, bias)
         for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
             set_matrix(prog, "body_to_clip", world_to_clip @ body.to_world)
             mesh.render(prog)
     finally:
         gl.polygon_offset = (0.0, 0.0)
+
+
+def draw_depth_map(
+    scene: GpuScene, world_to_clip: NDArray[np.float64], bias: tuple[float, float]
+) -> moderngl.Texture:
+    """Every body's depth from the light into a new depth texture (released with the scene),
+    set up for hardware comparison (``sampler2DShadow``, ``<=``, nearest, clamp to edge)."""
+    tex: moderngl.Texture = scene.keep(depth_map_texture(scene.ctx, scene.map_size))
+    fbo = scene.ctx.framebuffer(depth_attachment=tex)
+    try:
+        draw_depths(scene, fbo, world_to_clip, bias)
+    finally:
         fbo.release()
     tex.compare_func = "<="
     return tex
+
+
+def draw_receiving(
+    scene: GpuScene, prog: moderngl.Program, world_to_texture: NDArray[np.float64]
+) -> None:
+    """Every body into the bound mask target through ``prog``, with its ``body_to_world``,
+    ``body_to_texture = world_to_texture @ body_to_world`` and record (:meth:`bind_record`)."""
+    for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
+        set_matrix(prog, "body_to_world", body.to_world)
+        set_matrix(prog, "body_to_texture", world_to_texture @ body.to_world)
+        scene.bind_record(prog, i)
+        mesh.render(prog)
 
 
 def read_depth(tex: moderngl.Texture) -> NDArray[np.float32]:
@@ -137,7 +169,7 @@ def read_depth(tex: moderngl.Texture) -> NDArray[np.float32]:
     return data
 
 
-class DepthPass:
+class DepthPass(ShadowPass):
     """``method="depth"``: Williams' shadow z-buffer, one map per light.
 
     Every body casts and receives (the torus shadows itself and the floor, a box its
@@ -150,24 +182,20 @@ class DepthPass:
         self.pcf_radius = pcf_radius_option(pcf_radius)
         self.bias = depth_bias_option(bias, self.pcf_radius)
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
-        pass
-
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+    def setup_count(self, blockers: Bodies) -> int:
         return 1
 
-    def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
-    ) -> tuple[ShadowSetup, ...]:
-        position = light.homogeneous if light.directional else light.position
-        return (fit_depth(receivers, blockers, position, map_size, self.pcf_radius),)
+    def light_points(self, light: PreparedLight) -> NDArray[np.float64]:
+        """``(count, 3 or 4)``: the points the maps are drawn from, one per setup: the
+        light's own (a directional light's homogeneous ``(x, y, z, 0)``)."""
+        return (light.homogeneous if light.directional else light.position)[None]
 
-    def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
-        return tuple(range(len(scene.bodies)))
+    def fit(
+        self, receivers: Bodies, blockers: Bodies, light: PreparedLight, map_size: tuple[int, int]
+    ) -> tuple[ShadowSetup, ...]:
+        """One :func:`fit_depth` from each of :meth:`light_points`."""
+        points = self.light_points(light)
+        return tuple(fit_depth(receivers, blockers, a, map_size, self.pcf_radius) for a in points)
 
     def draw_mask(
         self, scene: GpuScene, light: PreparedLight, setups: tuple[ShadowSetup, ...]
@@ -179,12 +207,7 @@ class DepthPass:
         set_uniform(prog, "depth_map", 0)
         set_uniform(prog, "light", tuple(light.homogeneous))
         set_uniform(prog, "pcf_radius", self.pcf_radius)
-        world_to_texture = np.asarray(setup.world_to_texture, dtype=np.float64)
         scene.bind_mask()
         depth.use(location=0)
-        for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
-            set_matrix(prog, "body_to_world", body.to_world)
-            set_matrix(prog, "body_to_texture", world_to_texture @ body.to_world)
-            scene.bind_record(prog, i)
-            mesh.render(prog)
+        draw_receiving(scene, prog, np.asarray(setup.world_to_texture, dtype=np.float64))
         return (read_depth(depth),)

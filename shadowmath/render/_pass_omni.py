@@ -13,8 +13,8 @@ from numpy.typing import NDArray
 from shadowmath import ShadowSetup, cube_face_projection, cube_face_views
 
 from ._context import program, set_matrix, set_uniform
-from ._pass_depth import depth_bias_option
-from ._resources import GpuScene, Prepared, PreparedLight
+from ._pass_depth import depth_bias_option, draw_depths
+from ._resources import GpuScene, Prepared, PreparedLight, ShadowPass
 
 #: The near plane as a fraction of the far plane: bodies nearer the light than this (along
 #: a face's axis) are clipped from the map. Window depth keeps ``~2^-24 D^2 / near`` of
@@ -87,25 +87,13 @@ def draw_cube_depth(
     gl = scene.ctx
     face_tex = gl.depth_texture((side, side))
     fbo = gl.framebuffer(depth_attachment=face_tex)
-    prog = program(gl, "depth_map.vert", "depth_map.frag")
     faces = np.empty((6, side, side), dtype=np.float32)
     try:
-        fbo.use()
-        fbo.viewport = (0, 0, side, side)
-        gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
-        gl.enable(moderngl.DEPTH_TEST)
-        gl.depth_func = "<"
-        fbo.depth_mask = True
-        gl.polygon_offset = bias
         for i in range(6):
-            fbo.clear(depth=1.0)
-            for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
-                set_matrix(prog, "body_to_clip", world_to_clip[i] @ body.to_world)
-                mesh.render(prog)
+            draw_depths(scene, fbo, world_to_clip[i], bias)
             data = np.frombuffer(face_tex.read(alignment=1), dtype=np.float32)
             faces[i] = data.reshape(side, side)
     finally:
-        gl.polygon_offset = (0.0, 0.0)
         fbo.release()
         face_tex.release()
     cube: moderngl.TextureCube = scene.keep(gl.depth_texture_cube((side, side)))
@@ -123,7 +111,7 @@ def cube_filter_option(name: str, value: object) -> int:
     return CUBE_FILTERS[value]
 
 
-class OmniPass:
+class OmniPass(ShadowPass):
     """``method="omni"``: a point light that shines in every direction, through a cube map.
 
     Every body casts and receives. The six faces hold the window depth of every
@@ -159,24 +147,8 @@ class OmniPass:
             raise ValueError(f"seamless: expected a bool, got {seamless!r}")
         self.seamless = seamless
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
-        pass
-
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
-        return 0
-
-    def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
-    ) -> tuple[ShadowSetup, ...]:
+    def check_light(self, light: PreparedLight, map_size: tuple[int, int]) -> None:
         cube_map_side("map_size", map_size)
-        return ()
-
-    def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
-        return tuple(range(len(scene.bodies)))
 
     def draw_mask(
         self, scene: GpuScene, light: PreparedLight, setups: tuple[ShadowSetup, ...]

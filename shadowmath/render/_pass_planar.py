@@ -4,23 +4,21 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 from numpy.typing import NDArray
 
 from shadowmath import ShadowSetup, planar_projection
 
 from ._context import program, set_matrix
-from ._pass_texture import blocker_maps, fit_per_blocker
-from ._resources import GpuScene, Prepared, PreparedLight
+from ._pass_texture import TexturePass, blocker_maps
+from ._resources import Bodies, GpuScene, PreparedLight
 
 #: Polygon offset ``(factor, units)`` pulling Blinn's flattened blocker toward the
 #: camera, so that it wins the LEQUAL depth test against its coplanar receiver.
 PLANAR_POLYGON_OFFSET = (-1.0, -4.0)
 
 
-class PlanarPass:
+class PlanarPass(TexturePass):
     """``method="planar"``: every receiver needs its ``plane``; point and directional lights
     (``planar_projection(plane, (x, y, z, 0))`` flattens along the direction).
 
@@ -28,30 +26,15 @@ class PlanarPass:
     skipped for a light on the other side of its plane than the camera (the
     visible face is unlit: Blinn's back-face case). The blockers' silhouette maps
     are drawn too, from the same set-ups, so that a :class:`Frame` of either
-    method holds them.
+    method holds them. The setups are :class:`TexturePass`'s, one per blocker.
     """
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
+    def check(self, receivers: Bodies) -> None:
         for i, r in enumerate(receivers):
             if r.plane is None:
                 raise ValueError(
                     f"receivers[{i}].plane: method='planar' needs each receiver's plane"
                 )
-
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
-        return len(blockers)
-
-    def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
-    ) -> tuple[ShadowSetup, ...]:
-        return fit_per_blocker(blockers, light, map_size)
-
-    def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
-        return tuple(range(len(scene.receivers)))
 
     def draw_mask(
         self, scene: GpuScene, light: PreparedLight, setups: tuple[ShadowSetup, ...]

@@ -21,14 +21,22 @@ from numpy.typing import NDArray
 from shadowmath import ShadowSetup, area_light_samples, pyramid_to_unit_cube
 
 from ._context import image_size, program, resolve_context, set_matrix, set_uniform
-from ._pass_depth import depth_bias_option, fit_depth, pcf_radius_option, world_to_light_clip
+from ._pass_depth import (
+    DepthPass,
+    depth_map_texture,
+    draw_depths,
+    draw_receiving,
+    world_to_light_clip,
+)
 from ._resources import (
+    Bodies,
     Body,
     GpuMesh,
     GpuScene,
     Light,
     Prepared,
     PreparedLight,
+    ShadowPass,
     float_texture,
     prepare_body,
     prepare_light,
@@ -265,7 +273,7 @@ def radiance_texture(
     return visibility
 
 
-class SoftPass:
+class SoftPass(DepthPass):
     """``method="soft"``: seed 003's averaged hard shadows, one depth map per light sample.
 
     Every body casts and receives, as with ``method="depth"``: per sample ``a`` of the
@@ -284,38 +292,21 @@ class SoftPass:
     ) -> None:
         self.samples = check_samples(samples)
         self.seed = seed
-        self.pcf_radius = pcf_radius_option(pcf_radius)
-        self.bias = depth_bias_option(bias, self.pcf_radius)
+        super().__init__(pcf_radius, bias)
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
-        pass
-
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+    def setup_count(self, blockers: Bodies) -> int:
         return self.samples
 
-    def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
-    ) -> tuple[ShadowSetup, ...]:
-        points = light_samples("lights", light, self.samples, self.seed)
-        return tuple(fit_depth(receivers, blockers, a, map_size, self.pcf_radius) for a in points)
-
-    def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
-        return tuple(range(len(scene.bodies)))
+    def light_points(self, light: PreparedLight) -> NDArray[np.float64]:
+        """The area light's samples (:func:`light_samples`)."""
+        return light_samples("lights", light, self.samples, self.seed)
 
     def draw_mask(
         self, scene: GpuScene, light: PreparedLight, setups: tuple[ShadowSetup, ...]
     ) -> tuple[NDArray[np.float32], ...]:
         gl = scene.ctx
-        depth = gl.depth_texture(scene.map_size)
-        depth.repeat_x = False
-        depth.repeat_y = False
-        depth.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        depth = depth_map_texture(gl, scene.map_size)
         fbo = gl.framebuffer(depth_attachment=depth)
-        draw = program(gl, "depth_map.vert", "depth_map.frag")
         prog = program(gl, "surface.vert", "soft_mask.frag")
         set_matrix(prog, "world_to_clip", scene.world_to_clip)
         set_uniform(prog, "depth_map", 0)
@@ -324,40 +315,22 @@ class SoftPass:
         set_uniform(prog, "weight", 1.0 / len(setups))
         try:
             for setup in setups:
-                to_clip = world_to_light_clip(setup)
-                fbo.use()
-                fbo.viewport = (0, 0, *scene.map_size)
-                gl.disable(moderngl.BLEND | moderngl.CULL_FACE)
-                gl.enable(moderngl.DEPTH_TEST)
-                gl.depth_func = "<"
-                fbo.depth_mask = True
                 depth.compare_func = ""
-                fbo.clear(depth=1.0)
-                gl.polygon_offset = self.bias
-                for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
-                    set_matrix(draw, "body_to_clip", to_clip @ body.to_world)
-                    mesh.render(draw)
-                gl.polygon_offset = (0.0, 0.0)
+                draw_depths(scene, fbo, world_to_light_clip(setup), self.bias)
                 depth.compare_func = "<="
                 scene.bind_mask()
                 scene.blend(moderngl.FUNC_ADD)
                 depth.use(location=0)
-                world_to_texture = np.asarray(setup.world_to_texture, dtype=np.float64)
                 sample = np.linalg.inv(np.asarray(setup.world_to_light, np.float64))[:3, 3]
                 set_uniform(prog, "light_position", tuple(sample))
-                for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
-                    set_matrix(prog, "body_to_world", body.to_world)
-                    set_matrix(prog, "body_to_texture", world_to_texture @ body.to_world)
-                    scene.bind_record(prog, i)
-                    mesh.render(prog)
+                draw_receiving(scene, prog, np.asarray(setup.world_to_texture, dtype=np.float64))
         finally:
-            gl.polygon_offset = (0.0, 0.0)
             fbo.release()
             depth.release()
         return ()
 
 
-class RadiancePass:
+class RadiancePass(ShadowPass):
     """``method="radiance"``: Heckbert and Herf's radiance texture on each planar receiver.
 
     Per receiver (each needs a ``plane``): the rectangle around it in its plane
@@ -372,22 +345,12 @@ class RadiancePass:
         self.samples = check_samples(samples)
         self.seed = seed
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
+    def check(self, receivers: Bodies) -> None:
         for i, r in enumerate(receivers):
             receiver_parallelogram(f"receivers[{i}]", r)
 
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
-        return 0
-
-    def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
-    ) -> tuple[ShadowSetup, ...]:
+    def check_light(self, light: PreparedLight, map_size: tuple[int, int]) -> None:
         light_samples("lights", light, 1, 0)  # an area light, or a clear error now
-        return ()
 
     def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
         return tuple(range(len(scene.receivers)))

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from shadowmath import ShadowSetup, fit_shadow, receiver_texture_matrix
 
 from ._context import program, set_matrix, set_uniform
-from ._resources import GpuMesh, GpuScene, Prepared, PreparedLight
+from ._resources import Bodies, GpuMesh, GpuScene, Prepared, PreparedLight, ShadowPass
 
 
 def draw_shadow_map(
@@ -75,7 +75,7 @@ def blocker_maps(
     return maps
 
 
-class TexturePass:
+class TexturePass(ShadowPass):
     """``method="texture"``: each blocker's map projected onto every receiver.
 
     The receiver is drawn with ``receiver_texture_matrix(setup, to_world)`` to
@@ -83,18 +83,11 @@ class TexturePass:
     ``q <= 0`` (behind the light) or on faces with ``N . (L - P) <= 0``.
     """
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
-        pass
-
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
+    def setup_count(self, blockers: Bodies) -> int:
         return len(blockers)
 
     def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
+        self, receivers: Bodies, blockers: Bodies, light: PreparedLight, map_size: tuple[int, int]
     ) -> tuple[ShadowSetup, ...]:
         return fit_per_blocker(blockers, light, map_size)
 

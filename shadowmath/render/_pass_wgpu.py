@@ -11,7 +11,6 @@ texture matrix is ``gl_clip_to_texture @ (world to the light's OpenGL clip)``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from importlib import resources
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -20,7 +19,7 @@ from numpy.typing import NDArray
 
 from shadowmath import ShadowSetup, api_convention, column_major_bytes
 
-from ._context import check_matrix
+from ._context import check_matrix, shader_source
 from ._context import image_size as _image_size
 from ._pass_depth import DepthPass, fit_depth, world_to_light_clip
 from ._resources import Body, Light, Prepared, prepare_body, prepare_light, vertex_data
@@ -103,8 +102,7 @@ def adapter_description() -> str:
 
 
 def wgsl_module(device: Any, name: str) -> Any:
-    code = (resources.files("shadowmath.render") / "shaders" / name).read_text(encoding="utf-8")
-    return device.create_shader_module(label=name, code=code)
+    return device.create_shader_module(label=name, code=shader_source(name))
 
 
 def uniform_buffer(device: Any, data: bytes) -> Any:

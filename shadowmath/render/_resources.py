@@ -9,7 +9,7 @@ and framebuffers; and the checked lights. A pass module needs nothing else.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, NamedTuple, Protocol
+from typing import Any, NamedTuple
 
 import moderngl
 import numpy as np
@@ -342,38 +342,45 @@ class PassOptions(NamedTuple):
     seed: int | None = 0
 
 
-class ShadowPass(Protocol):
+#: A shadow pass's checked receivers or blockers.
+Bodies = Sequence[Prepared]
+
+
+class ShadowPass:
     """One shadow system: its setups per light, and the light's shadow mask.
 
-    A new system is a new module with one class like this; :func:`render_scene`
-    picks it by its ``method`` name and touches nothing else.
+    A new system is a new module with one subclass of this; :func:`render_scene`
+    picks it by its ``method`` name and touches nothing else. The defaults here are
+    a system that takes any receivers, shadows every body and draws without setups;
+    a subclass overrides what differs, and always :meth:`draw_mask`.
     """
 
-    def check(self, receivers: Sequence[Prepared]) -> None:
-        """Raise ``ValueError`` for receivers this system cannot shadow."""
-        ...
+    def check(self, receivers: Bodies) -> None:
+        """Raise ``ValueError`` for receivers this system cannot shadow (default: none)."""
 
-    def setup_count(self, blockers: Sequence[Prepared]) -> int:
-        """How many ShadowSetups this system draws one light with."""
-        ...
+    def setup_count(self, blockers: Bodies) -> int:
+        """How many ShadowSetups this system draws one light with (default 0)."""
+        return 0
 
     def fit(
-        self,
-        receivers: Sequence[Prepared],
-        blockers: Sequence[Prepared],
-        light: PreparedLight,
-        map_size: tuple[int, int],
+        self, receivers: Bodies, blockers: Bodies, light: PreparedLight, map_size: tuple[int, int]
     ) -> tuple[ShadowSetup, ...]:
-        """The ShadowSetups this system draws one light with."""
-        ...
+        """The ShadowSetups this system draws one light with (default: none, after
+        :meth:`check_light`)."""
+        self.check_light(light, map_size)
+        return ()
+
+    def check_light(self, light: PreparedLight, map_size: tuple[int, int]) -> None:
+        """Raise ``ValueError`` for a light or map size this system cannot draw (default:
+        none); the default :meth:`fit` calls it."""
 
     def shadowed(self, scene: GpuScene) -> tuple[int, ...]:
-        """The ids of the bodies that receive this system's shadows."""
-        ...
+        """The ids of the bodies that receive this system's shadows (default: every body)."""
+        return tuple(range(len(scene.bodies)))
 
     def draw_mask(
         self, scene: GpuScene, light: PreparedLight, setups: tuple[ShadowSetup, ...]
     ) -> tuple[NDArray[np.float32], ...]:
         """Draw the light's shadow into the cleared mask target (:meth:`GpuScene.bind_mask`
         after any off-screen map); return the maps it drew, as NumPy arrays."""
-        ...
+        raise NotImplementedError(type(self).__name__)

@@ -1,6 +1,6 @@
 """The whole method from a camera: the lit pass, then per light its shadow system's mask
 and the subtractive pass. Each shadow system is a pass module (``_pass_texture``,
-``_pass_planar``, ...) behind the :class:`ShadowPass` protocol, picked by ``method``."""
+``_pass_planar``, ...), a subclass of :class:`ShadowPass` picked by ``method``."""
 
 from __future__ import annotations
 

@@ -49,6 +49,8 @@ struct Body {
 @group(0) @binding(3) var<storage, read> lights: array<Light>;
 @group(0) @binding(4) var<uniform> body: Body;
 
+#include "surface.wgsl"
+
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
@@ -57,12 +59,8 @@ struct VertexOut {
 
 @vertex
 fn vs_main(@location(0) position: vec3<f32>, @location(1) face_normal: vec3<f32>) -> VertexOut {
-    var out: VertexOut;
-    let world = body.body_to_world * vec4<f32>(position, 1.0);
-    out.world = world.xyz / world.w;
-    out.face_normal = (body.normal_to_world * vec4<f32>(face_normal, 0.0)).xyz;
-    out.clip = frame.world_to_clip * world;
-    return out;
+    let v = place(position, face_normal);
+    return VertexOut(frame.world_to_clip * v.world, v.world.xyz / v.world.w, v.face_normal);
 }
 
 fn cube_face(d: vec3<f32>) -> i32 {
@@ -125,20 +123,11 @@ fn reaches(l: i32, p: vec3<f32>, n: vec3<f32>) -> bool {
     return light.spot.w < -1.5 || dot(-toward, light.spot.xyz) >= light.spot.w;
 }
 
-struct FragmentOut {
-    @location(0) shadow: f32,
-    @location(1) position: vec4<f32>,
-    @location(2) normal: vec4<f32>,
-};
-
 @fragment
 fn fs_main(in: VertexOut) -> FragmentOut {
-    var out: FragmentOut;
-    out.position = vec4<f32>(in.world, body.body_id + 1.0);
-    out.normal = vec4<f32>(normalize(in.face_normal), 0.0);
-    out.shadow = 0.0;
+    var out = record(in.world, in.face_normal);
     if (reaches(frame.which, in.world, in.face_normal)) {
-        out.shadow = shadow_of(frame.which, in.world, in.face_normal);
+        out.mask = shadow_of(frame.which, in.world, in.face_normal);
     }
     return out;
 }

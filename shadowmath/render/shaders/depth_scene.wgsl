@@ -18,6 +18,8 @@ struct Body {
 @group(0) @binding(1) var depth_map: texture_depth_2d;
 @group(0) @binding(2) var depth_compare: sampler_comparison;  // less-equal: 1 where lit
 
+#include "surface.wgsl"
+
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
@@ -27,27 +29,14 @@ struct VertexOut {
 
 @vertex
 fn vs_main(@location(0) position: vec3<f32>, @location(1) face_normal: vec3<f32>) -> VertexOut {
-    var out: VertexOut;
-    let world = body.body_to_world * vec4<f32>(position, 1.0);
-    out.world = world.xyz / world.w;
-    out.face_normal = (body.normal_to_world * vec4<f32>(face_normal, 0.0)).xyz;
-    out.strq = body.body_to_texture * vec4<f32>(position, 1.0);
-    out.clip = body.world_to_clip * world;
-    return out;
+    let v = place(position, face_normal);
+    let strq = body.body_to_texture * vec4<f32>(position, 1.0);
+    return VertexOut(body.world_to_clip * v.world, v.world.xyz / v.world.w, v.face_normal, strq);
 }
-
-struct FragmentOut {
-    @location(0) mask: f32,
-    @location(1) position: vec4<f32>,
-    @location(2) normal: vec4<f32>,
-};
 
 @fragment
 fn fs_main(in: VertexOut) -> FragmentOut {
-    var out: FragmentOut;
-    out.position = vec4<f32>(in.world, body.body_id + 1.0);
-    out.normal = vec4<f32>(normalize(in.face_normal), 0.0);
-    out.mask = 0.0;
+    var out = record(in.world, in.face_normal);
     let q = in.strq.w;
     if (q <= 0.0 || dot(in.face_normal, body.light_position - in.world) <= 0.0) {
         return out;

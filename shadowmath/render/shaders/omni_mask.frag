@@ -6,22 +6,15 @@
 // depth: compare the point's own window depth on the face samplerCube selects, computed
 // from D = max(|r_x|, |r_y|, |r_z|), the distance along that face's axis (not |r|).
 // No shadow outside the depth range (lit by this map) nor on faces turned from the light.
+#include "mask_pass.glsl"
+
 uniform samplerCubeShadow cube_map;  // compare_func <=: 1.0 where depth <= stored (lit)
-uniform sampler2D surface;           // the lit pass's position record (w = body id + 1)
-uniform float body_id;
 uniform vec3 light_position;
 uniform float near;
 uniform float far;
 
-in vec3 v_world;
-in vec3 v_normal;
-flat in vec3 v_face_normal;
-in vec4 v_stq;
-
-out float mask;
-
 void main() {
-    if (texelFetch(surface, ivec2(gl_FragCoord.xy), 0).w != body_id + 1.0) discard;
+    if (!visible()) discard;
     vec3 r = v_world - light_position;
     float D = max(abs(r.x), max(abs(r.y), abs(r.z)));
     if (dot(v_face_normal, -r) <= 0.0 || D <= near || D >= far) {
