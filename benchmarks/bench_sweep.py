@@ -423,8 +423,10 @@ def heat_map(results: Results, section: Section) -> list[str]:
     return lines
 
 
-def sweep(cfg: Config, section: Section, variants: Mapping[str, dict[str, Any]]) -> str:
-    image = TINY_IMAGE if cfg.tiny else IMAGE
+def measure_all(
+    image: tuple[int, int], variants: Mapping[str, dict[str, Any]]
+) -> tuple[Results, list[str]]:
+    """Every pose's statistics, and the keys of the poses left out (no sunlit receiver)."""
     projection = perspective(FOV_Y, ASPECT, NEAR, FAR)
     results: Results = []
     skipped = []
@@ -434,6 +436,12 @@ def sweep(cfg: Config, section: Section, variants: Mapping[str, dict[str, Any]])
             skipped.append(pose.key)
         else:
             results.append((pose, per))
+    return results, skipped
+
+
+def sweep(cfg: Config, section: Section, variants: Mapping[str, dict[str, Any]]) -> str:
+    image = TINY_IMAGE if cfg.tiny else IMAGE
+    results, skipped = measure_all(image, variants)
     uncovered = {name: sum(per[name].uncovered for _, per in results) for name in results[0][1]}
     for name, count in uncovered.items():
         section.figures[f"uncovered.{name}"] = float(count)
