@@ -279,6 +279,8 @@ ENGINES: dict[str, Callable[[Scene, F64], Fit]] = {
 TIGHT_RIVALS = ("three.js", "bevy")
 STABLE_RIVALS = ("three.js", "Godot", "Unreal")
 STATS = ("median", "p90")
+OURS = {"default": DEFAULT, "stable": f"{DEFAULT} stable", "LiSPSM": LISPSM}
+"""shadowmath's fits whose distance to the aliasing limit is reported."""
 
 
 class Comparison(NamedTuple):
@@ -349,7 +351,7 @@ def summary(results: Results, section: Section) -> list[str]:
         section.figures[f"summary.{key}.worst_margin"] = worst
     lines += ["", "| shadowmath | poses at the aliasing limit (p90 ≤ 1) | worst p90 | worst pose |",
               "|---|---|---|---|"]  # fmt: skip
-    for label, name in (("default", DEFAULT), ("stable", f"{DEFAULT} stable"), ("LiSPSM", LISPSM)):
+    for label, name in OURS.items():
         p90 = [(per[name].p90, pose) for pose, per in results]
         worst, pose = max(p90, key=lambda t: t[0])
         at_limit = sum(v <= 1 for v, _ in p90)
@@ -417,7 +419,8 @@ def heat_map(results: Results, section: Section) -> list[str]:
             for s, v in zip(STATS, g, strict=True):
                 section.figures[f"{pose.key}.{key}.gain_{s}"] = v
         p90 = per[DEFAULT].p90
-        section.figures[f"{pose.key}.default.p90"] = p90
+        for label, name in OURS.items():
+            section.figures[f"{pose.key}.{label}.p90"] = per[name].p90
         lines.append(f"| `{pose.key}` | {per[DEFAULT].pixels} | " + " | ".join(cells)
                      + f" | {p90:.3g} |")  # fmt: skip
     return lines
