@@ -79,6 +79,7 @@ from bench_cascades import (
     MAP_SIZE,
     NEAR,
     Fit,
+    Hits,
     Scene,
     Stats,
     bevy_fit,
@@ -95,6 +96,8 @@ from bench_cascades import (
     threejs_fit,
 )
 from speed._timing import Config, Section, table
+
+import shadowmath as sm
 
 NAME = "sweep"
 TITLE = "Cascades over 72 camera poses: shadowmath against three.js, bevy, Godot, Unreal (issue 27)"
@@ -259,15 +262,34 @@ def unreal_fit(scene: Scene, projection: F64, map_size: int = MAP_SIZE) -> Fit:
 # The sweep
 # ---------------------------------------------------------------------------
 
-VARIANTS: dict[str, dict[str, Any]] = {
+Options = dict[str, Any] | Callable[[Hits], dict[str, Any]]
+
+
+def measured_range(lam: float) -> Callable[[Hits], dict[str, Any]]:
+    """Practical splits over the view depths of the measured receiver pixels (what a min/max
+    reduction of the depth buffer gives, sample distribution shadow maps; here of this frame's
+    sunlit receivers in range, not last frame's: a bound on what the measurement can gain)."""
+
+    def options(hits: Hits) -> dict[str, Any]:
+        near, far = float(hits.depth.min()), float(hits.depth.max())
+        far = max(far, near * 1.001)
+        return {"splits": np.asarray(sm.cascade_splits(near, far, CASCADES, lam=lam))}
+
+    return options
+
+
+VARIANTS: dict[str, Options] = {
     "λ=0.9": {"lam": 0.9},
     "λ=0.75 (default)": {},
     "λ=0.6": {"lam": 0.6},
     "λ=0.5": {"lam": 0.5},
     "log": {"scheme": "log"},
     "uniform": {"scheme": "uniform"},
+    "λ=0.75, measured range": measured_range(0.75),
+    "λ=0.5, measured range": measured_range(0.5),
 }
-"""Candidate defaults: ``fit_cascades``'s keyword arguments (a new option is one line here)."""
+"""Candidate defaults: ``fit_cascades``'s keyword arguments, or a function of the pose's
+receiver pixels returning them (a new option is one line here)."""
 DEFAULT = "λ=0.75 (default)"
 LISPSM = "LiSPSM"
 ENGINES: dict[str, Callable[[Scene, F64], Fit]] = {
@@ -300,7 +322,7 @@ COMPARISONS = (
 
 
 def measure_pose(
-    pose: Pose, projection: F64, image: tuple[int, int], variants: Mapping[str, dict[str, Any]]
+    pose: Pose, projection: F64, image: tuple[int, int], variants: Mapping[str, Options]
 ) -> dict[str, Stats] | None:
     """Every scheme's statistics in one pose (``None``: no sunlit receiver pixel in range)."""
     scene = pose.scene
@@ -308,13 +330,16 @@ def measure_pose(
     if len(hits.depth) == 0:
         return None
     fits = {name: fit(scene, projection) for name, fit in ENGINES.items()}
-    for name, options in variants.items():
+    for name, variant in variants.items():
+        options = variant(hits) if callable(variant) else variant
         for stable in (False, True):
             fits[name + " stable" * stable] = shadowmath_fit(
                 scene, projection, stable=stable, splits=None, options=options
             )
+    plain = variants[DEFAULT]
+    plain = plain(hits) if callable(plain) else plain
     fits[LISPSM] = shadowmath_fit(
-        scene, projection, stable=False, splits=None, warp=True, options=variants[DEFAULT]
+        scene, projection, stable=False, splits=None, warp=True, options=plain
     )
     return {name: stats(ratios(fit, hits, scene.sun)) for name, fit in fits.items()}
 
@@ -361,7 +386,7 @@ def summary(results: Results, section: Section) -> list[str]:
     return lines
 
 
-def candidates(results: Results, variants: Mapping[str, Any], section: Section) -> list[str]:
+def candidates(results: Results, variants: Mapping[str, Options], section: Section) -> list[str]:
     """(b) each candidate default, tight against three.js and bevy, stable against three.js,
     Godot and Unreal."""
     lines = [
@@ -427,7 +452,7 @@ def heat_map(results: Results, section: Section) -> list[str]:
 
 
 def measure_all(
-    image: tuple[int, int], variants: Mapping[str, dict[str, Any]]
+    image: tuple[int, int], variants: Mapping[str, Options]
 ) -> tuple[Results, list[str]]:
     """Every pose's statistics, and the keys of the poses left out (no sunlit receiver)."""
     projection = perspective(FOV_Y, ASPECT, NEAR, FAR)
@@ -442,7 +467,7 @@ def measure_all(
     return results, skipped
 
 
-def sweep(cfg: Config, section: Section, variants: Mapping[str, dict[str, Any]]) -> str:
+def sweep(cfg: Config, section: Section, variants: Mapping[str, Options]) -> str:
     image = TINY_IMAGE if cfg.tiny else IMAGE
     results, skipped = measure_all(image, variants)
     uncovered = {name: sum(per[name].uncovered for _, per in results) for name in results[0][1]}
