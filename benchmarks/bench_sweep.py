@@ -50,7 +50,8 @@ Both are drawn in the light frame of :func:`bench_cascades.light_axes` (an engin
 turns the square about the light direction: the same texel size, another snapping phase).
 
 **Split schemes** (:data:`VARIANTS`): ``fit_cascades``'s keyword arguments per candidate
-default, each fitted tight and with ``stable=True`` in every pose; a new option is one line.
+default (or a function of the pose's receiver pixels returning them: the measured depth
+range), each fitted tight and with ``stable=True`` in every pose; a new option is one line.
 For each, the poses where it is finer than every engine at both statistics, its worst margin
 (the smallest gain over poses, engines and statistics), the geometric mean of its p90 and the
 poses where its p90 is the smallest of the candidates.
@@ -265,15 +266,16 @@ def unreal_fit(scene: Scene, projection: F64, map_size: int = MAP_SIZE) -> Fit:
 Options = dict[str, Any] | Callable[[Hits], dict[str, Any]]
 
 
-def measured_range(lam: float) -> Callable[[Hits], dict[str, Any]]:
+def measured_range(**split_options: Any) -> Callable[[Hits], dict[str, Any]]:
     """Practical splits over the view depths of the measured receiver pixels (what a min/max
     reduction of the depth buffer gives, sample distribution shadow maps; here of this frame's
-    sunlit receivers in range, not last frame's: a bound on what the measurement can gain)."""
+    sunlit receivers in range, not last frame's: a bound on what the measurement can gain);
+    ``split_options``: :func:`shadowmath.cascade_splits`'s ``scheme`` and ``lam``."""
 
     def options(hits: Hits) -> dict[str, Any]:
         near, far = float(hits.depth.min()), float(hits.depth.max())
         far = max(far, near * 1.001)
-        return {"splits": np.asarray(sm.cascade_splits(near, far, CASCADES, lam=lam))}
+        return {"splits": np.asarray(sm.cascade_splits(near, far, CASCADES, **split_options))}
 
     return options
 
@@ -285,8 +287,10 @@ VARIANTS: dict[str, Options] = {
     "λ=0.5": {"lam": 0.5},
     "log": {"scheme": "log"},
     "uniform": {"scheme": "uniform"},
-    "λ=0.75, measured range": measured_range(0.75),
-    "λ=0.5, measured range": measured_range(0.5),
+    "λ=0.9, measured range": measured_range(lam=0.9),
+    "λ=0.75, measured range": measured_range(lam=0.75),
+    "λ=0.5, measured range": measured_range(lam=0.5),
+    "log, measured range": measured_range(scheme="log"),
 }
 """Candidate defaults: ``fit_cascades``'s keyword arguments, or a function of the pose's
 receiver pixels returning them (a new option is one line here)."""
