@@ -52,8 +52,9 @@ import argparse
 import math
 import os
 import sys
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -368,6 +369,18 @@ def threejs_fit(scene: Scene, projection: F64) -> Fit:
     return Fit(t.splits, np.stack([t.texel, t.texel], axis=1), t.to_unit)
 
 
+def slice_corners(projection: F64, near: F64, far: F64) -> F64:
+    """``(n, 8, 3)`` view-space corners of the slices ``[near[i], far[i]]`` of a symmetric
+    perspective frustum: the near face's bottom-right, top-right, top-left, bottom-left (bevy's
+    order), then the far face's."""
+    tx, ty = 1 / projection[0, 0], 1 / projection[1, 1]
+    signs = np.array([[1.0, -1.0], [1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0]])  # BR, TR, TL, BL
+    z = np.stack([near, far], axis=1)[:, :, None, None]  # (n, 2, 1, 1)
+    xy = signs * np.array([tx, ty]) * z  # (n, 2, 4, 2)
+    corners = np.concatenate([xy, np.broadcast_to(-z, (*xy.shape[:3], 1))], axis=-1)
+    return np.asarray(corners.reshape(len(near), 8, 3), dtype=np.float64)
+
+
 def bevy_bounds(distance: float, first_bound: float = 10.0) -> F64:
     """bevy's far bounds: the first fixed, the others geometric up to the shadow distance."""
     return np.asarray(
@@ -388,12 +401,7 @@ def bevy_fit(
     n = CASCADES
     bounds = bevy_bounds(scene.distance, first_bound)
     near_bounds = np.concatenate([[near], (1 - overlap) * bounds[:-1]])
-    tx, ty = 1 / projection[0, 0], 1 / projection[1, 1]
-    signs = np.array([[1.0, -1.0], [1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0]])  # BR, TR, TL, BL
-    corners = np.empty((n, 8, 3))
-    for half, z in ((0, near_bounds), (1, bounds)):
-        for k, (sx, sy) in enumerate(signs):
-            corners[:, 4 * half + k] = np.stack([sx * tx * z, sy * ty * z, -z], axis=1)
+    corners = slice_corners(projection, near_bounds, bounds)
     axes = light_axes(scene.sun)
     view_to_light = axes @ np.linalg.inv(scene.view)[:3]
     light = corners @ view_to_light[:, :3].T + view_to_light[:, 3]
@@ -416,21 +424,25 @@ def bevy_fit(
 
 
 def shadowmath_fit(
-    scene: Scene, projection: F64, *, stable: bool, splits: F64 | None, warp: bool = False
+    scene: Scene,
+    projection: F64,
+    *,
+    stable: bool,
+    splits: F64 | None,
+    warp: bool = False,
+    options: Mapping[str, Any] | None = None,
 ) -> Fit:
-    c = sm.fit_cascades(
-        scene.sun,
-        scene.view,
-        projection,
-        scene.bounds,
-        MAP_SIZE,
-        count=CASCADES,
-        splits=splits,
-        max_distance=None if splits is not None else scene.distance,
-        pcf_radius=PCF_RADIUS,
-        stable=stable,
-        warp="lispsm" if warp else None,
-    )
+    """``sm.fit_cascades`` for the scene; ``options``: more keyword arguments (they win)."""
+    kwargs: dict[str, Any] = {
+        "count": CASCADES,
+        "splits": splits,
+        "max_distance": None if splits is not None else scene.distance,
+        "pcf_radius": PCF_RADIUS,
+        "stable": stable,
+        "warp": "lispsm" if warp else None,
+        **(options or {}),
+    }
+    c = sm.fit_cascades(scene.sun, scene.view, projection, scene.bounds, MAP_SIZE, **kwargs)
     if warp:
         return Fit(np.asarray(c.splits), np.asarray(c.texel_size), np.zeros((CASCADES, 3, 4)),
                    np.asarray(c.world_to_texture))  # fmt: skip

@@ -23,6 +23,12 @@ Sections (``--only NAME``, repeatable or comma-separated):
 * ``cascades``: ``benchmarks/bench_cascades.py``, ``fit_cascades``: the shadow-map texel's area
   per pixel on the receivers of three scenes against three.js's and bevy's schemes, and the
   time of four cascades for one camera and for a batch of 100.
+* ``sweep``: ``benchmarks/bench_sweep.py``, ``fit_cascades`` over 72 camera poses (heights
+  1.7-100 m, pitch from the horizon to steeply down, heading from facing the sun to away from
+  it, sun 10-70° high, two scenes): the texel area per pixel footprint, median and 90th
+  percentile, of the default fit against three.js and bevy, of ``stable=True`` against
+  three.js, Godot and Unreal, of the LiSPSM warp against none; the distance to the aliasing
+  limit; candidate default split schemes.
 * ``atlas``: ``benchmarks/bench_atlas.py``, ``allocate_atlas`` + ``fit_atlas`` for 64 lights per
   frame against a loop of public calls per light, the fraction of the atlas used, and the tiles
   moved over frames of small motion.
@@ -60,12 +66,14 @@ import bench_atlas
 import bench_cascades
 import bench_cube_depth
 import bench_pygfx
+import bench_sweep
 from speed import SECTIONS as SPEED_SECTIONS
 from speed._timing import Config, Section, table, target_line, targets
 
 SECTIONS: dict[str, ModuleType] = {
     **SPEED_SECTIONS,
     bench_cascades.NAME: bench_cascades,
+    bench_sweep.NAME: bench_sweep,
     bench_atlas.NAME: bench_atlas,
     bench_cube_depth.NAME: bench_cube_depth,
     bench_pygfx.NAME: bench_pygfx,

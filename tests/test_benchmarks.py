@@ -28,6 +28,7 @@ EXPECTED = [
     "gpu",
     "coverage",
     "cascades",
+    "sweep",
     "atlas",
     "cube",
     "pygfx",
