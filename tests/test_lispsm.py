@@ -139,47 +139,31 @@ def check_contains(c: sm.Cascades, sun: Any, view: Any, proj: Any, box: Any, i: 
 def test_every_point_of_each_slice_lands_inside_the_map(seed: int) -> None:
     sun, view, proj, box = scene(seed)
     c = sm.fit_cascades(sun, view, proj, box, SIZE, pcf_radius=2, warp="lispsm")
-    assert warped(c).all()
-    for i in range(4):
+    for i in np.flatnonzero(warped(c)):  # the others are the orthographic cascade's
         check_contains(c, sun, view, proj, box, i)
+
+
+def test_the_containment_scenes_are_warped() -> None:
+    """The warp's cap leaves enough of the cascades above warped to test them."""
+    count = 0
+    for seed in range(8):
+        sun, view, proj, box = scene(seed)
+        c = sm.fit_cascades(sun, view, proj, box, SIZE, pcf_radius=2, warp="lispsm")
+        count += int(warped(c).sum())
+    assert count >= 12
 
 
 def test_the_warped_horizon_scene_lands_inside_the_map() -> None:
     sun, view, proj, box = horizon()
     c = sm.fit_cascades(sun, view, proj, box, SIZE, warp="lispsm")
-    for i in range(4):
+    for i in np.flatnonzero(warped(c)):
         check_contains(c, sun, view, proj, box, i)
 
 
 # --- resolution -----------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(
-    ("sun", "facing"),
-    [([0.0, 1.0, 1.0], False), ([-1.0, 1.5, 0.4], False), ([1.0, 0.6, 0.2], True)],
-)
-def test_more_texels_near_the_eye(sun: list[float], facing: bool) -> None:
-    """Per slice, near and far ends on the camera's axis: the warp shifts texels nearer.
-
-    Beside or behind the camera (``facing=False``) every cascade's near texel is finer
-    than the orthographic one; facing the sun only the first cascade's is (the others'
-    footprints are skewed in the light's plane and the warp's trapezoid wastes area).
-    """
-    _, view, proj, box = horizon()
-    light = np.array(sun)
-    flat = sm.fit_cascades(light, view, proj, box, SIZE)
-    warp = sm.fit_cascades(light, view, proj, box, SIZE, warp="lispsm")
-    assert warped(warp).all()
-    for i in range(4):
-        ends = np.array([axis_point(view, flat.splits[i]), axis_point(view, flat.band_end[i])])
-        f_near, f_far = texel_size(np.asarray(flat.world_to_texture[i]), ends, light)
-        w_near, w_far = texel_size(np.asarray(warp.world_to_texture[i]), ends, light)
-        np.testing.assert_allclose(f_near, f_far, rtol=1e-9)  # orthographic: uniform
-        assert w_near / w_far < 0.9 * f_near / f_far  # finer near than far, unlike ortho
-        if i == 0 or not facing:
-            assert w_near < f_near  # and finer than the orthographic cascade's
-        # texel_size bounds the largest texel of the cascade (along each map axis).
-        assert w_far <= np.sqrt(np.prod(warp.texel_size[i])) * (1 + 1e-9)
+# tests/test_lispsm_fade.py: the warp's strength and its resolution.
 
 
 # --- fallback -------------------------------------------------------------------------------
@@ -195,9 +179,6 @@ def test_view_parallel_to_the_light_falls_back_to_the_orthographic_cascade() -> 
         assert not warped(warp).any()
         for a, b in zip(leaves(flat), leaves(warp), strict=True):
             np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12)
-    # Just beyond the threshold the warp applies.
-    beyond = np.array([1.5 * WARP_MIN_SIN, 1.0, 0.0])
-    assert warped(sm.fit_cascades(beyond, view, proj, box, SIZE, warp="lispsm")).all()
 
 
 def test_an_orthographic_camera_is_not_warped() -> None:
@@ -213,7 +194,7 @@ def test_an_orthographic_camera_is_not_warped() -> None:
 
 
 def test_a_batch_mixing_warped_and_fallback_cameras_equals_one_by_one() -> None:
-    sun, view, proj, box = scene(4)
+    sun, view, proj, box = scene(1)
     down = look_at([0.0, 30.0, 0.0], [0.0, 0.0, 0.0], up=(0.0, 0.0, -1.0))
     views = np.stack([view, down])
     light = np.stack([sun, [0.0, 1.0, 0.0]])

@@ -356,6 +356,14 @@ MODULES: tuple[Mutation, ...] = (
         "LiSPSM: the texel size along u without the perspective's f / n",
         ("tests/test_lispsm.py",),
     ),
+    Mutation(
+        "lispsm-fade-cap",
+        LISPSM_F,
+        "return g * k**3, dg * k**3 + 3.0 * g * k * k * dk",
+        "return g * k**2, dg * k**2 + 2.0 * g * k * dk",
+        "LiSPSM: the strength's cap with texel areas growing like t^2 instead of t^3 along u",
+        ("tests/test_lispsm_fade.py",),
+    ),
     # the atlas: allocation rule (integer arrays) and tile geometry
     Mutation(
         "atlas-hysteresis-upper",

@@ -193,10 +193,13 @@ def fit_cascades(
         warp: ``"lispsm"``: light-space perspective warping of each cascade (Wimmer
             et al. 2004, ``docs/lispsm.md``): more texels near the eye; the matrices
             then have ``q = w != 1`` (divide by it) and ``texel_size`` is the largest
-            texel, along the map's axes; ``frustum`` stays the unwarped box. Falls
-            back to the orthographic cascade where the view is within ~1.15 degrees
-            of the light (``sin < 0.02``) or the camera is orthographic. Not with
-            ``stable=True`` (``ValueError``).
+            texel, along the map's axes; ``frustum`` stays the unwarped box. Its
+            strength fades as the view turns toward the light and is capped so that
+            the warped texels are no coarser than the orthographic ones over the
+            nearer part of each cascade; falls back to the orthographic cascade
+            where the strength vanishes (the view within ~1.15 degrees of the light,
+            ``sin < 0.02``, or no warp beats the orthographic map) or the camera is
+            orthographic. Not with ``stable=True`` (``ValueError``).
 
     Returns:
         :class:`Cascades`.

@@ -28,8 +28,12 @@ Scherzer's and Filament's general case (derivation in ``docs/lispsm.md``):
 .. math:: n_\mathrm{opt} = \frac{z_0 + \sqrt{z_0 z_1}}{\sin\gamma}, \qquad z_1 = z_0 + d \sin\gamma
 
 with ``z_0`` the region's nearest view depth, ``d`` its extent along ``u`` and ``gamma``
-the angle between the view and light directions. Trusted inputs only: nothing here
-raises except :func:`check_warp`, on the options.
+the angle between the view and light directions. The warp's strength ``lambda = d / n``
+is that optimum faded to 0 at the threshold, ``lambda_opt = (1 - m / sin gamma) d / n_opt``
+(``m``: :data:`WARP_MIN_SIN`), and capped so that the warped texels are no larger than the
+orthographic ones along the view axis up to the view depth ``z_0 (z_1' / z_0)^0.9``
+(``[z_0, z_1']``: the region's view depths; :func:`_capped`). Trusted inputs only: nothing
+here raises except :func:`check_warp`, on the options.
 """
 
 from __future__ import annotations
@@ -41,12 +45,26 @@ from shadowmath._math._frustum import NEAR_FAR_SLACK
 
 from ._spec import ShadowMapSpec, api_rows
 
-__all__ = ["WARP_MIN_SIN", "check_warp", "warp_cascades"]
+__all__ = ["WARP_MIN_SIN", "WARP_MIN_STRENGTH", "check_warp", "warp_cascades"]
 
 #: The warp falls back to the orthographic cascade where ``sin(gamma) <= WARP_MIN_SIN``
 #: (the view within about 1.15 degrees of the light's direction, either way): the
 #: warp's axis ``u`` is then undefined or ill-conditioned (Filament's threshold).
 WARP_MIN_SIN = 0.02
+
+#: The cascade is not warped where the strength ``lambda = d / n`` (the warp frustum's depth
+#: over its near distance) falls below this: the warp is then within about 1 % of an
+#: orthographic map, and the map's rows would lose precision to ``n >> d``.
+WARP_MIN_STRENGTH = 0.01
+
+#: The warped map is no coarser than the orthographic one up to the point of the view
+#: axis at view depth ``z_0 (z_1 / z_0)^WARP_CHECK_DEPTH`` (``[z_0, z_1]``: the cascade's
+#: depths): chosen by the pose sweep of ``benchmarks/bench_cascades.py`` (0.85 lets the
+#: median get coarser in some poses, 1 leaves almost no warp), ``docs/lispsm.md``.
+WARP_CHECK_DEPTH = 0.9
+
+#: Newton steps toward the strongest warp within the cap (:func:`_capped`).
+NEWTON_STEPS = 8
 
 Rows = tuple[Any, ...]
 
@@ -71,6 +89,7 @@ class _View(NamedTuple):
     sin: Any  # sin(gamma), safe (1) where not ok
     depth: tuple[Any, Any, Any, Any]  # view depth = g . l + g3 in light coordinates
     eye_s: Any  # the eye's coordinate along w = (-uy, ux, 0)
+    eye_t: Any  # the eye's coordinate along u
     ok: Any  # sin(gamma) > WARP_MIN_SIN and a perspective camera
 
 
@@ -97,7 +116,7 @@ def _view(xp: Any, F: Any, cam: Any, V: Any, a: tuple[Any, ...]) -> _View:
     g = F.to_light(r[0], r[1], r[2], a)
     e = [m[..., i, 3][..., None] for i in range(3)]
     ex, ey, _ = F.to_light(e[0], e[1], e[2], a)
-    return _View(ux, uy, sin, (g[0], g[1], g[2], r[3]), -uy * ex + ux * ey, ok)
+    return _View(ux, uy, sin, (g[0], g[1], g[2], r[3]), -uy * ex + ux * ey, ux * ex + uy * ey, ok)
 
 
 class _Warp(NamedTuple):
@@ -110,11 +129,17 @@ class _Warp(NamedTuple):
     ok: Any
 
 
-def _warp(xp: Any, F: Any, body: tuple[Any, ...], view: _View) -> _Warp:
-    r"""``n_opt`` and the frustum along ``u`` from the body's vertices (light coordinates).
+def _warp(xp: Any, F: Any, body: tuple[Any, ...], view: _View, budget: Any) -> _Warp:
+    r"""The warp frustum along ``u`` from the body's vertices (light coordinates).
 
-    ``d = max(u . l) - min(u . l)`` over the vertices, ``z_0`` their smallest view
-    depth, ``z_1 = z_0 + d sin(gamma)``, ``n = (z_0 + sqrt(z_0 z_1)) / sin(gamma)``.
+    ``d = max(u . l) - min(u . l)`` over the vertices, ``z_0, z_1'`` their smallest and
+    largest view depths, ``z_1 = z_0 + d sin(gamma)``,
+    ``n_opt = (z_0 + sqrt(z_0 z_1)) / sin(gamma)``; the strength ``lambda = d / n`` is
+    ``(1 - m / sin(gamma)) d / n_opt`` (``m``: :data:`WARP_MIN_SIN`) capped by
+    :func:`_capped` at the view axis's point of depth ``z_0 (z_1' / z_0)^beta``
+    (``beta``: :data:`WARP_CHECK_DEPTH`) with ``budget``, the orthographic texel's area
+    times ``m_x m_y W H`` (``(*b, n)``). Not warped (``ok`` False) where
+    ``lambda <= WARP_MIN_STRENGTH``.
     """
     ends, ok2, _, bl = body
     seen = xp.any(ok2, axis=-1)
@@ -126,14 +151,77 @@ def _warp(xp: Any, F: Any, body: tuple[Any, ...], view: _View) -> _Warp:
     tau_lo = xp.min(xp.where(ok2, tau, inf), axis=-1)
     tau_hi = xp.max(xp.where(ok2, tau, -inf), axis=-1)
     z_near = xp.min(xp.where(ok2, depth, inf), axis=-1)
+    z_far = xp.max(xp.where(ok2, depth, -inf), axis=-1)
     d = tau_hi - tau_lo
     ok = view.ok & seen & (z_near > 0) & (d > 0)
     one = 1.0 + 0.0 * view.sin
-    tau_lo, d, z_near = (F.where(ok, v, one) for v in (tau_lo, d, z_near))
+    tau_lo, d, z_near, z_far = (F.where(ok, v, one) for v in (tau_lo, d, z_near, z_far))
+    # The view axis's point at depth z_c = z_0 (z_1' / z_0)^beta lies at u = u_eye + z_c sin(gamma).
+    z_check = z_near * (z_far / z_near) ** WARP_CHECK_DEPTH
+    check = (view.eye_t + z_check * view.sin - tau_lo) / d
+    check = xp.minimum(xp.maximum(check, 0.0), 1.0)
     z1 = z_near + d * view.sin
-    n = (z_near + F.sqrt(z_near * z1)) / view.sin
+    n_opt = (z_near + F.sqrt(z_near * z1)) / view.sin
+    lam = xp.maximum(1.0 - WARP_MIN_SIN / view.sin, 0.0) * d / n_opt
+    s = -view.uy[..., None] * ends[0] + view.ux[..., None] * ends[1] - view.eye_s[..., None]
+    alpha = (tau - tau_lo[..., None]) / d[..., None]
+    lam = _capped(xp, F, (s, alpha, ok2 & ok[..., None]), lam, (budget / d, check))
+    ok = ok & (lam > WARP_MIN_STRENGTH)
+    n = d / F.where(ok, lam, one)
     z0 = xp.min(bl[2], axis=-1)
     return _Warp(tau_lo - n, n, n + d, z0, ok)
+
+
+def _area(xp: Any, vertices: tuple[Any, Any, Any], lam: Any, check: Any) -> tuple[Any, Any]:
+    r"""``A(lambda)`` and ``A'(lambda)``: the warped texel's area at ``t_c = n + check d``, in
+    units of ``d / (m_x m_y W H)``, and its right derivative.
+
+    With ``t_i = n + alpha_i d`` and ``c_i = f / t_i = (1 + lambda) / (1 + lambda alpha_i)``,
+    ``2 f h = max_i s_i c_i - min_i s_i c_i = R`` and ``f / n = 1 + lambda``, so the texel
+    at ``t = f``, ``(2 f h / (m_x W)) (f d / (m_y H n))``, is ``G d / (m_x m_y W H)`` with
+    ``G = (1 + lambda) R``; the area grows like ``t^3``, so
+    ``A = G k^3``, ``k = t_c / f = (1 + lambda check) / (1 + lambda)``;
+    ``dc_i / dlambda = (1 - alpha_i) / (1 + lambda alpha_i)^2``.
+    """
+    s, alpha, valid = vertices
+    inf = xp.asarray(float("inf"), dtype=s.dtype)
+    lv = lam[..., None]
+    v = s * (1.0 + lv) / (1.0 + lv * alpha)
+    dv = s * (1.0 - alpha) / ((1.0 + lv * alpha) * (1.0 + lv * alpha))
+    hi = xp.max(xp.where(valid, v, -inf), axis=-1)
+    lo = xp.min(xp.where(valid, v, inf), axis=-1)
+    d_hi = xp.max(xp.where(valid & (v == hi[..., None]), dv, -inf), axis=-1)
+    d_lo = xp.min(xp.where(valid & (v == lo[..., None]), dv, inf), axis=-1)
+    g, dg = (1.0 + lam) * (hi - lo), (hi - lo) + (1.0 + lam) * (d_hi - d_lo)
+    k = (1.0 + lam * check) / (1.0 + lam)
+    dk = (check - 1.0) / ((1.0 + lam) * (1.0 + lam))
+    return g * k**3, dg * k**3 + 3.0 * g * k * k * dk
+
+
+def _capped(xp: Any, F: Any, vertices: tuple[Any, Any, Any], lam: Any, cap: tuple[Any, Any]) -> Any:
+    r"""The strongest warp ``lambda' <= lambda`` with ``A(lambda') <= target`` (:func:`_area`,
+    ``cap = (target, check)``): no coarser than the orthographic map at ``t_c``.
+
+    A warped texel's area in the plane across the light grows like ``t^3`` (the Jacobian of
+    ``(s / t, -2 f n / ((f - n) t))`` is ``2 f n / ((f - n) t^3)``), so the cap holds at
+    every ``t <= t_c``. ``A <= G <= (1 + lambda)^2 (max s_i^+ + max (-s_i)^+)``
+    (``1 <= c_i <= 1 + lambda``), so ``lambda_c = sqrt(target / (max s^+ + max (-s)^+)) - 1``
+    always satisfies it; Newton steps from ``lambda`` (where ``A > target``) go down toward
+    the root, kept in ``[lambda_c, lambda]``; a result still above the target (Newton not
+    converged) becomes ``lambda_c``.
+    """
+    s, _, valid = vertices
+    target, check = cap
+    spread = xp.max(xp.where(valid, xp.abs(s) + s, 0.0), axis=-1)
+    spread = 0.5 * (spread + xp.max(xp.where(valid, xp.abs(s) - s, 0.0), axis=-1))
+    floor = F.sqrt(target / F.where(spread > 0, spread, target)) - 1.0
+    inf = xp.asarray(float("inf"), dtype=s.dtype)
+    for _ in range(NEWTON_STEPS):
+        a, da = _area(xp, vertices, lam, check)
+        step = lam - (a - target) / F.where(da > 0, da, inf)
+        lam = F.where(a > target, xp.maximum(step, floor), lam)
+    a, _ = _area(xp, vertices, lam, check)
+    return F.where(a > target * (1.0 + 1e-9), xp.minimum(floor, lam), lam)
 
 
 def _rows(
@@ -224,7 +312,8 @@ def warp_cascades(
         ``(2 f h / (m_x W), f (f - n) / (m_y H n))``.
     """
     view = _view(xp, F, cam, V, a)
-    wp = _warp(xp, F, body, view)
+    texels = spec.margins[0] * spec.margins[1] * spec.size[0] * spec.size[1]
+    wp = _warp(xp, F, body, view, ortho[2][..., 0] * ortho[2][..., 1] * texels)
     rows, h, ok = _rows(xp, F, body, view, wp, margins=spec.margins)
     gl = _to_world(rows, a)
     C, TC = api_rows(spec.api, spec.reversed_z)

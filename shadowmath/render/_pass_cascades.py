@@ -126,6 +126,7 @@ def render_cascades(
     max_distance: float | None = None,
     overlap: float = 0.1,
     stable: bool = False,
+    warp: Literal[None, "lispsm"] = None,
     layout: Literal["layers", "atlas"] = "layers",
     pcf_radius: int = 0,
     depth_bias: tuple[float, float] | None = None,
@@ -145,8 +146,9 @@ def render_cascades(
        (``layout="layers"``), or into tile ``viewports[i]`` of one atlas.
     3. The lit pass, then the mask: each visible point's view depth
        ``d = -(view @ p)_z`` picks cascade ``i`` with ``splits[i] <= d < splits[i+1]``;
-       ``world_to_texture[i] @ p = (s, t, r, 1)`` (``p`` moved off its face by
-       :func:`shadowmath.normal_offset`'s offset) is compared with the map over a
+       ``world_to_texture[i] @ p = (s q, t q, r q, q)`` (``q = 1`` unless ``warp``: the
+       shader divides, and its bias follows the warped depth's gradients; ``p`` moved off
+       its face by :func:`shadowmath.normal_offset`'s offset) is compared with the map over a
        ``(2k + 1)^2`` box of texels clamped to the tile (``r - b <= stored``: lit, ``b``
        :func:`shadowmath.slope_scaled_bias`'s bias), and for ``d <=
        band_end[i - 1]`` the comparison in cascade ``i - 1`` is mixed in with weight
@@ -166,7 +168,7 @@ def render_cascades(
             receiver; default the bodies' bounding box. A caster outside it may lose
             its shadow (the maps reach toward the sun only to the box).
         image_size, map_size: the picture's and each cascade's map size in pixels/texels.
-        count, splits, scheme, lam, max_distance, overlap, stable, layout: as in
+        count, splits, scheme, lam, max_distance, overlap, stable, warp, layout: as in
             :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades).
         pcf_radius: the PCF kernel's radius ``k`` (also the maps' border).
         depth_bias: ``(factor, units)`` of the slope-scaled bias ``b = units r_min +
@@ -208,7 +210,7 @@ def render_cascades(
     fit_options = {
         "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
         "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
-        "stable": stable,
+        "stable": stable, "warp": warp,
     }  # fmt: skip
     scene = prepare_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options

@@ -94,6 +94,7 @@ def render_cascades_wgpu(
     max_distance: float | None = None,
     overlap: float = 0.1,
     stable: bool = False,
+    warp: Literal[None, "lispsm"] = None,
     layout: Literal["layers", "atlas"] = "layers",
     pcf_radius: int = 0,
     depth_bias: tuple[float, float] | None = None,
@@ -111,7 +112,7 @@ def render_cascades_wgpu(
         light: a directional :class:`Light` (``Light(direction=...)``, toward the sun).
         view, projection: the camera, in OpenGL's conventions, as in :func:`render_cascades`.
         scene_bounds, image_size, map_size: as in :func:`render_cascades`.
-        count, splits, scheme, lam, max_distance, overlap, stable, layout: as in
+        count, splits, scheme, lam, max_distance, overlap, stable, warp, layout: as in
             :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades).
         pcf_radius, normal_offset: as in :func:`render_cascades`.
         depth_bias: as in :func:`render_cascades`, ``units`` counting
@@ -142,7 +143,7 @@ def render_cascades_wgpu(
     fit_options = {
         "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
         "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
-        "stable": stable,
+        "stable": stable, "warp": warp,
     }  # fmt: skip
     scene = prepare_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options, api="webgpu"

@@ -4,10 +4,11 @@ A 200 x 200 ground of two triangles with boxes and towers spread over it, under 
 sun; every body casts and receives. The camera view with cascades may differ from the
 ray caster only in the band of BAND pixels around the edges of the shadow and of the lit
 region (as for method="depth"), and nowhere off it: across a camera near the ground
-looking to the horizon, a camera looking down, and a tower behind the camera whose
-shadow reaches into the view. The test can fail: with scene bounds that leave out that
-tower, its shadow is lost; without bias the faces shadow themselves; with wrong splits
-shadows are lost. Each runs on OpenGL (render_cascades, cascades.frag) and on WebGPU
+looking to the horizon, a camera looking down, one looking across from above, and a
+tower behind the camera whose shadow reaches into the view; tight, stable and
+LiSPSM-warped cascades. The test can fail: with scene bounds that leave out that tower,
+its shadow is lost; without bias the faces shadow themselves; with wrong splits shadows
+are lost. Each runs on OpenGL (render_cascades, cascades.frag) and on WebGPU
 (render_cascades_wgpu, cascades.wgsl), and the two agree pixel for pixel.
 """
 
@@ -61,6 +62,8 @@ CAMERAS = {
     "horizon": look_at((0.0, -90.0, 2.5), (0.0, 0.0, 2.0), (0, 0, 1)),
     # high above, looking down at the middle of the ground
     "down": look_at((-10.0, -60.0, 70.0), (0.0, 0.0, 0.0), (0, 0, 1)),
+    # 40 above the ground's edge, looking at its middle (every cascade warped with LiSPSM)
+    "oblique": look_at((0.0, -90.0, 40.0), (0.0, 0.0, 0.0), (0, 0, 1)),
 }
 PROJECTION = perspective(45.0, SIZE[0] / SIZE[1], NEAR, FAR)
 
@@ -125,6 +128,8 @@ VARIANTS = {
     "atlas": {"layout": "atlas"},
     "stable": {"stable": True},
     "stable atlas pcf": {"stable": True, "layout": "atlas", "pcf_radius": 1},
+    "lispsm": {"warp": "lispsm"},
+    "lispsm atlas pcf": {"warp": "lispsm", "layout": "atlas", "pcf_radius": 1},
 }
 
 
@@ -138,6 +143,17 @@ def test_cascades_agree_with_the_ray_caster(render, camera, variant):
     assert len(used) >= 3, f"the view must span several cascades, got {used}"
     assert count.differ_off_band == 0, count
     assert count.differ <= MAX_ALL * truth.on.sum(), count
+
+
+@pytest.mark.parametrize("camera", ["down", "oblique"])
+def test_the_warp_variant_warps_the_views_from_above(render, camera):
+    """LiSPSM's matrices divide by ``q`` (their last row is not ``(0, 0, 0, 1)``): the
+    ``lispsm`` variants above test the shaders' division and the bias that follows the
+    warped depth, from the cameras above; near the ground the warp's cap leaves the
+    orthographic maps (``docs/lispsm.md``)."""
+    frame, _, _ = shadows(camera, render, warp="lispsm")
+    rows = np.asarray(frame.cascades.world_to_clip)[..., 3, :3]
+    assert np.all(np.any(np.abs(rows) > 0, axis=-1))
 
 
 def test_every_cascade_has_a_band_where_both_agree(render):
