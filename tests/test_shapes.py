@@ -167,7 +167,7 @@ def test_a_wrong_field_of_light_frame_is_caught(monkeypatch):
 
 def test_a_result_of_pcf_outside_its_batch_is_caught(monkeypatch):
     lookup = _pcf.pcf
-    monkeypatch.setattr(_pcf, "pcf", lambda *args: lookup(*args)[..., None])
+    monkeypatch.setattr(_pcf, "pcf", lambda *args, **kwargs: lookup(*args, **kwargs)[..., None])
     depth_map = np.full((8, 8), 0.5)
     with pytest.raises(TypeCheckError, match=r"pcf: result"):
         sm.pcf(depth_map, np.full((3, 2), 0.5), np.full(3, 0.25), pcf_radius=0)
