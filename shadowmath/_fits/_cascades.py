@@ -56,9 +56,39 @@ from ._cascade_splits import (
 from ._lispsm import check_warp, warp_cascades
 from ._spec import ShadowMapSpec, api_rows, map_spec
 
-__all__ = ["Cascades", "fit_cascades"]
+__all__ = ["CascadeDepthState", "Cascades", "fit_cascades"]
 
 CascadeLayout = Literal["layers", "atlas"]
+DepthRangeName = Literal["camera", "visible"]
+_RANGE_CODES = {"camera": 0, "visible": 1}
+
+
+class CascadeDepthState(NamedTuple):
+    """The view depth range a :func:`fit_cascades` call used: the state of its hysteresis.
+
+    Start with :meth:`initial` (no range yet), then take it from the last frame's result
+    (``c.depth_state``) and give it to the next call as ``depth_state=``: the range
+    then has its ends on a fixed ladder of depths ``2^(k/4)``, grows at once and shrinks
+    only past a margin of one step, so the splits (and with ``stable=True`` the
+    cascades' sizes) change only at ladder steps (``docs/cascades.md``).
+
+    Attributes:
+        near: ``(*batch,)`` the first split (NaN: none yet).
+        far: ``(*batch,)`` the last split (NaN: none yet).
+
+    Example:
+        >>> import shadowmath as sm
+        >>> sm.CascadeDepthState.initial()
+        CascadeDepthState(near=nan, far=nan)
+    """
+
+    near: Real[ArrayLike, "*#batch"]
+    far: Real[ArrayLike, "*#batch"]
+
+    @classmethod
+    def initial(cls) -> CascadeDepthState:
+        """The state before the first frame: no range in use (both NaN)."""
+        return cls(math.nan, math.nan)
 
 
 class Cascades(NamedTuple):
@@ -106,6 +136,12 @@ class Cascades(NamedTuple):
     texture_size: tuple[int, int]
     texture_layers: int
 
+    @property
+    def depth_state(self) -> CascadeDepthState:
+        """The depth range these cascades span (``splits``' ends): the next frame's
+        ``depth_state=``."""
+        return CascadeDepthState(self.splits[..., 0], self.splits[..., -1])
+
 
 def fit_cascades(
     light: Real[ArrayLike, "*#batch 3"] | Real[ArrayLike, "*#batch 4"] | DirectionalLight,
@@ -131,6 +167,8 @@ def fit_cascades(
     camera_reversed_z: bool = False,
     layout: CascadeLayout = "layers",
     warp: Literal[None, "lispsm"] = None,
+    depth_range: DepthRangeName | Real[ArrayLike, "*#batch 2"] = "camera",
+    depth_state: CascadeDepthState | None = None,
 ) -> Cascades:
     r"""Fit a directional light's cascaded shadow maps to what a camera sees.
 
@@ -197,6 +235,20 @@ def fit_cascades(
             back to the orthographic cascade where the view is within ~1.15 degrees
             of the light (``sin < 0.02``) or the camera is orthographic. Not with
             ``stable=True`` (``ValueError``).
+        depth_range: the view depths the scheme's splits span. ``"camera"``: the
+            camera's ``[near, far]`` (or ``[near, max_distance]``); ``"visible"``: the
+            nearest and farthest view depth at which that range of the camera sees
+            ``scene_bounds``, exactly (the extremes of the affine view depth over the
+            vertices of the frustum intersected with the box; the camera's range where
+            they miss), so no cascade covers empty depths; or ``(*batch, 2)`` a range
+            the renderer measured (``[min, max]`` of last frame's view depths), clipped
+            to the camera's. Not with custom ``splits``.
+        depth_state: the range in use in the last frame (its result's
+            ``depth_state``; :meth:`CascadeDepthState.initial` before the first), with
+            ``depth_range`` ``"visible"`` or measured: the range's ends are then rounded
+            outward to a ladder of depths ``2^(k/4)``, grow at once and shrink only when
+            the target's ladder value is more than a step inside, so the splits (and
+            ``stable=True`` sizes) change only at ladder steps (``docs/cascades.md``).
 
     Returns:
         :class:`Cascades`.
@@ -207,8 +259,11 @@ def fit_cascades(
             neither perspective nor orthographic (a transposed or scaled matrix), a
             zero light direction, ``up`` parallel to the light, an inverted
             ``scene_bounds``, splits outside the camera's range or not increasing, bad
-            scheme options (these are NaN under JAX transformations); and whatever the
-            values: map options given both in a :class:`ShadowMapSpec` and as keywords.
+            scheme options, a measured ``depth_range`` not finite or with near beyond
+            far, a ``depth_state`` likewise (these are NaN under JAX transformations);
+            and whatever the values: map options given both in a :class:`ShadowMapSpec`
+            and as keywords, a ``depth_range`` that is neither a name nor ``(*batch,
+            2)``, with custom ``splits``, or a ``depth_state`` without one.
 
     Example:
         >>> import numpy as np, shadowmath as sm
@@ -229,6 +284,7 @@ def fit_cascades(
     _check_api(cam_api, camera_reversed_z)
     if layout not in ("layers", "atlas"):
         raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
+    range_code, measured = _range_option(depth_range, splits is not None, depth_state)
     direction = light.direction if isinstance(light, DirectionalLight) else light
     fixed = check_scheme(scheme)
     n_given = None if splits is not None else check_count(count)
@@ -237,25 +293,29 @@ def fit_cascades(
     plain = all(type(v) in (float, int) for v in (lam_v, overlap)) and (
         max_distance is None or type(max_distance) in (float, int)
     )
-    ctx, (L, V, P, box, S, U, dmax, lm, ov) = convert(
+    state = (None, None) if depth_state is None else (depth_state.near, depth_state.far)
+    ctx, (L, V, P, box, S, U, dmax, lm, ov, M, Qn, Qf) = convert(
         light=direction, view=view, projection=projection, scene_bounds=scene_bounds,
         splits=splits, up=up, max_distance=None if plain else max_distance,
         lam=None if plain else lam_v, overlap=None if plain else overlap,
+        depth_range=measured, **{"depth_state.near": state[0], "depth_state.far": state[1]},
     )  # fmt: skip
     if plain:
         lm, ov = float(lam_v), float(overlap)
         dmax = None if max_distance is None else float(max_distance)
     checks = Checks(ctx)
     L = _light_vector(checks, L)
-    shape = _batch(checks, (L, V, P, box, U, S, dmax))
+    shape = _batch(checks, (L, V, P, box, U, S, dmax, M, Qn, Qf))
     n = S.shape[-1] - 1 if S is not None else n_given
     assert n is not None
     _scalar_checks(checks, (lm, ov, dmax, S))
+    _range_checks(checks, M, (Qn, Qf))
     C = _clip_from_gl(cam_api, camera_reversed_z)
-    given = (U is not None, S is not None, dmax is not None)
+    given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None)
     o, record = _options(spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row))
     call = _Call(ctx, spec, layout, shape, o)
-    arrays = (L, V, P, box, U, S, dmax, lm, ov)
+    extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
+    arrays = (L, V, P, box, U, S, dmax, lm, ov, extra)
     if ctx.xp is np and warp is None:
         python = not _kernels.available()
         if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
@@ -267,9 +327,55 @@ def fit_cascades(
     return _arrays(call, checks, arrays, warp)
 
 
+def _range_option(
+    depth_range: Any, has_splits: bool, state: CascadeDepthState | None
+) -> tuple[int, Any]:
+    """``depth_range``'s code (0 camera, 1 visible, 2 measured) and the measured range."""
+    if isinstance(depth_range, str):
+        if depth_range not in _RANGE_CODES:
+            raise ValueError(
+                f"depth_range: expected 'camera', 'visible' or a measured (*batch, 2) "
+                f"[near, far], got {depth_range!r}"
+            )
+        code, measured = _RANGE_CODES[depth_range], None
+    else:
+        code, measured = 2, depth_range
+    if code and has_splits:
+        raise ValueError("depth_range: custom splits set their own range; give one or the other")
+    if state is not None and not isinstance(state, CascadeDepthState):
+        raise ValueError(
+            f"depth_state: expected a CascadeDepthState (a result's .depth_state), "
+            f"got {type(state).__name__}"
+        )
+    if state is not None and code == 0:
+        raise ValueError("depth_state: needs depth_range='visible' or a measured range")
+    return code, measured
+
+
+def _range_checks(checks: Checks, M: Any, state: tuple[Any, Any]) -> None:
+    """A measured range and a previous state: finite, ``near <= far``."""
+    xp = checks.ctx.xp
+    if M is not None:
+        checks.require(all_finite(xp, M, 1), non_finite("depth_range"))
+        checks.require(M[..., 0] <= M[..., 1], "depth_range: the measured near exceeds its far")
+    if state[0] is not None:
+        near, far = state
+        none = xp.isnan(near) & xp.isnan(far)  # CascadeDepthState.initial()
+        ok = none | (all_finite(xp, near, 0) & all_finite(xp, far, 0))
+        checks.require(ok, non_finite("depth_state") + " (or both NaN: initial())")
+        checks.require(none | (near <= far), "depth_state: its near exceeds its far")
+
+
+def _range_scalars(xp: Any, M: Any, state: tuple[Any, Any]) -> tuple[Any, ...]:
+    """The measured range's ends and the previous range's, NaN where not given."""
+    nan = math.nan
+    lo, hi = (nan, nan) if M is None else (M[..., 0], M[..., 1])
+    return (lo, hi, *((nan, nan) if state[0] is None else state))
+
+
 def _batch(checks: Checks, arrays: tuple[Any, ...]) -> tuple[int, ...]:
     """The shape checks of the arrays and their batch shape."""
-    L, V, P, box, U, S, dmax = arrays
+    L, V, P, box, U, S, dmax, M, Qn, Qf = arrays
     require_matrix("view", V)
     check_projection(checks, P)
     require_last("scene_bounds", box, 3, min_ndim=2, hint="[min_corner, max_corner]")
@@ -288,7 +394,13 @@ def _batch(checks: Checks, arrays: tuple[Any, ...]) -> tuple[int, ...]:
             )
     shapes = [L.shape[:-1], V.shape[:-2], P.shape[:-2], box.shape[:-2]]
     names = ["light", "view", "projection", "scene_bounds"]
-    for name, v, drop in (("up", U, 1), ("splits", S, 1), ("max_distance", dmax, 0)):
+    if M is not None:
+        require_last("depth_range", M, 2, hint="a measured [near, far]")
+    if (Qn is None) != (Qf is None) or (Qn is not None and Qn.shape != Qf.shape):
+        raise ValueError("depth_state: near and far must have one shape")
+    named = (("up", U, 1), ("splits", S, 1), ("max_distance", dmax, 0),
+             ("depth_range", M, 1), ("depth_state", Qn, 0))  # fmt: skip
+    for name, v, drop in named:
         if v is not None and not isinstance(v, float):
             shapes.append(v.shape[: v.ndim - drop])
             names.append(name)
@@ -347,16 +459,19 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
     extra, ``record`` its options), or, ``record`` None, run by Python on lists (a few
     cameras without Numba)."""
     ctx, shape, o = call.ctx, call.shape, call.o
-    L, V, P, box, U, S, dmax, lm, ov = arrays
+    L, V, P, box, U, S, dmax, lm, ov, extra = arrays
     n, total = o.cascades, math.prod(shape)
-    if type(lm) is float and type(ov) is float and (dmax is None or type(dmax) is float):
-        scal = np.array([[lm, np.nan if dmax is None else dmax, ov]])
+    d = np.nan if dmax is None else dmax
+    plain = extra is None and type(lm) is float and type(ov) is float
+    if plain and (dmax is None or type(dmax) is float):
+        scal = np.array([[lm, d, ov, np.nan, np.nan, np.nan, np.nan]])
     else:
-        scal = np.stack(np.broadcast_arrays(lm, np.nan if dmax is None else dmax, ov), axis=-1)
+        more = (np.nan,) * 4 if extra is None else extra
+        scal = np.stack(np.broadcast_arrays(lm, d, ov, *more), axis=-1)
     inputs = (
         flat_batch(L, shape, (3,)), flat_batch(V, shape, (4, 4)).reshape(-1, 16),
         flat_batch(P, shape, (4, 4)).reshape(-1, 16), flat_batch(box, shape, (2, 3)).reshape(-1, 6),
-        _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (3,)),
+        _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (7,)),
         _NO_SPLITS if S is None else flat_batch(S, shape, (n + 1,)),
     )  # fmt: skip
     if record is None:  # the same loop on Python lists and floats
@@ -382,7 +497,7 @@ def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | No
     values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``)."""
     ctx, o = call.ctx, call.o
     xp, F = ctx.xp, formulas(ctx.xp)
-    L, V, P, box, U, S, dmax, lm, ov = arrays
+    L, V, P, box, U, S, dmax, lm, ov, extra = arrays
     inputs = (
         tuple(L[..., c, None] for c in range(3)),
         tuple(V[..., i // 4, i % 4, None] for i in range(16)),
@@ -390,7 +505,10 @@ def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | No
         tuple(box[..., i // 3, i % 3, None] for i in range(6)),
         (0.0, 0.0, 0.0) if U is None else tuple(U[..., c, None] for c in range(3)),
     )
-    sc = tuple(v if v is None or isinstance(v, float) else v[..., None] for v in (lm, dmax, ov))
+    more = (math.nan,) * 4 if extra is None else extra
+    sc = tuple(
+        v if v is None or isinstance(v, float) else v[..., None] for v in (lm, dmax, ov, *more)
+    )
     j = np.arange(o.cascades + 1, dtype=ctx.dtype)  # the cascades' indices, in the work dtype
     with np.errstate(all="ignore"):  # invalid entries: their status bits say so
         e = F.cascade_entry(inputs, sc, S, o)
@@ -490,7 +608,7 @@ def _options(
     spec: ShadowMapSpec,
     layout: str,
     n: int,
-    given: tuple[bool, bool, bool],
+    given: tuple[bool, bool, bool, int, bool],
     *,
     eps: float,
     C: tuple[float, ...],
@@ -499,9 +617,10 @@ def _options(
     few recur every frame)."""
     cols, rows = _grid(n, layout)
     C_api, TC_api = api_rows(spec.api, spec.reversed_z)
-    has_up, has_splits, has_dmax = given
+    has_up, has_splits, has_dmax, range_code, has_state = given
     o = CascadeOptions(
         has_up=has_up, stable=spec.stable, has_splits=has_splits, has_dmax=has_dmax,
+        depth_range=range_code, has_state=has_state,
         mx=float(spec.margins[0]), my=float(spec.margins[1]), width=float(spec.size[0]),
         height=float(spec.size[1]), eps=eps, tol=math.sqrt(eps), cascades=n,
         slack=NEAR_FAR_SLACK, cols=cols, rows=rows, camera_clip=C, map_clip=tuple(C_api),

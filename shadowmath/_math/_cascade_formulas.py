@@ -31,8 +31,8 @@ from __future__ import annotations
 from typing import Any
 
 # Backend primitives and shared formulas, rebound by specialize().
-from ._fit_formulas import stable_sides  # noqa: F401  (looked up by the specialized copies)
-from ._formulas import fabs, sqrt, where  # noqa: F401
+from ._fit_formulas import rint, stable_sides  # noqa: F401  (looked up by the specialized copies)
+from ._formulas import fabs, log2, sqrt, where  # noqa: F401
 
 #: The 12 edges of a box or slice as pairs of corner indices ``i + 2 j + 4 l``.
 EDGES = (
@@ -52,6 +52,61 @@ def split_depth(near: Any, far: Any, lam: Any, frac: Any) -> Any:
     """
     safe = where(near > 0, near, 1.0 + 0.0 * near)
     return lam * (safe * (far / safe) ** frac) + (1.0 - lam) * (near + (far - near) * frac)
+
+
+#: The depth ladder's steps per octave: a laddered depth is ``2^(k / LADDER_STEPS)``.
+LADDER_STEPS = 4.0
+#: How many ladder steps a laddered end may lag behind its target before it follows.
+HYSTERESIS_STEPS = 1.0
+
+
+def ladder_up(x: Any) -> Any:
+    r"""The smallest ladder value ``2^(k/4) >= x`` (``k`` whole); ``x <= 0`` unchanged.
+
+    .. math:: k = \lceil 4 \log_2 x \rceil
+
+    written ``rint(4 log2 x + 1/2)`` (at least ``4 log2 x``), then one step up where
+    rounding left the value below ``x``.
+    """
+    safe = where(x > 0, x, 1.0 + 0.0 * x)
+    q = 2.0 ** (rint(LADDER_STEPS * log2(safe) + 0.5) / LADDER_STEPS)
+    q = where(q < safe, q * 2.0 ** (1.0 / LADDER_STEPS), q)
+    return where(x > 0, q, x)
+
+
+def ladder_down(x: Any) -> Any:
+    """The largest ladder value ``2^(k/4) <= x``: ``1 / ladder_up(1 / x)``; ``x <= 0`` unchanged.
+
+    At most ``x`` to rounding (the caller keeps the lesser of the two)."""
+    safe = where(x > 0, x, 1.0 + 0.0 * x)
+    return where(x > 0, 1.0 / ladder_up(1.0 / safe), x)
+
+
+def depth_hysteresis(t_lo: Any, t_hi: Any, p_lo: Any, p_hi: Any) -> tuple[Any, Any]:
+    r"""The depth range in use: ``[t_lo, t_hi]`` widened to the ladder, with hysteresis.
+
+    ``p_lo``, ``p_hi``: the range in use in the previous frame (NaN: none). Each end
+    grows at once and shrinks only past the margin: with ``q_lo``, ``q_hi`` the
+    target's ends rounded outward to the ladder (:func:`ladder_down`, :func:`ladder_up`)
+    and ``s = 2^{1/4}`` one step,
+
+    .. math::
+        hi = \begin{cases} p_{hi} & t_{hi} \le p_{hi} \le q_{hi}\, s^{M} \\
+                              q_{hi} & \text{otherwise} \end{cases} \qquad
+        lo = \begin{cases} p_{lo} & q_{lo} / s^{M} \le p_{lo} \le t_{lo} \\
+                              q_{lo} & \text{otherwise} \end{cases}
+
+    with ``M = HYSTERESIS_STEPS`` (compared at ``M + 1/2`` steps: ladder values are
+    ``s`` apart, so rounding of either side cannot flip the choice). The result
+    always holds the target.
+    """
+    margin = 2.0 ** ((HYSTERESIS_STEPS + 0.5) / LADDER_STEPS)
+    q_lo, q_hi = ladder_down(t_lo), ladder_up(t_hi)
+    keep_lo = (p_lo <= t_lo) & (p_lo * margin >= q_lo)
+    keep_hi = (p_hi >= t_hi) & (p_hi <= q_hi * margin)
+    lo = where(keep_lo, p_lo, where(q_lo <= t_lo, q_lo, t_lo))
+    hi = where(keep_hi, p_hi, where(q_hi >= t_hi, q_hi, t_hi))
+    return lo, hi
 
 
 def edge_point(n: tuple[Any, ...], f: tuple[Any, ...], s: Any, d: Any) -> tuple[Any, Any, Any]:
@@ -219,6 +274,9 @@ def cascade_box(
 
 FUNCTIONS = (
     "split_depth",
+    "ladder_up",
+    "ladder_down",
+    "depth_hysteresis",
     "edge_point",
     "affine",
     "camera_values",

@@ -54,6 +54,7 @@ from ._cascade_formulas import (  # noqa: F401
     cascade_box,
     clip_plane,
     clip_segment,
+    depth_hysteresis,
     edge_point,
     slice_sphere,
     slice_values,
@@ -99,6 +100,8 @@ class CascadeOptions(NamedTuple):
     camera_clip: tuple[float, ...]  # OpenGL clip to the camera's (16)
     map_clip: tuple[float, ...]  # OpenGL clip to the maps' API's (16)
     map_texture: tuple[float, ...]  # its texture rows (16)
+    depth_range: int  # 0: the camera's, 1: the visible range, 2: measured (sc[3], sc[4])
+    has_state: bool  # the previous range in use (sc[5], sc[6]): ladder and hysteresis
 
 
 _KINDS = {"bool": np.bool_, "float": np.float64, "int": np.int64}
@@ -250,7 +253,9 @@ def box_pass(VP: Any, box: Any, a_sign: Any, bl: Any, bg: Any) -> None:
 
 def cascade_entry(inputs: Any, sc: Any, G: Any, o: Any) -> Any:
     """One camera's steps before its cascades: frustum, checks, split range, light frame
-    and scene box. ``inputs = (L, V, P, box, U)``: 3, 16, 16, 6 and 3 per-entry values."""
+    and scene box. ``inputs = (L, V, P, box, U)``: 3, 16, 16, 6 and 3 per-entry values;
+    ``sc = (lam, max_distance, overlap, measured near, measured far, previous near,
+    previous far)``."""
     L, V, P, box, U = inputs
     nc, fc, bl, bg = alloc(12), alloc(16), alloc(24), alloc(40)
     sign, near, far, st = cascade_camera(V, P, o, nc, fc)
@@ -261,7 +266,44 @@ def cascade_entry(inputs: Any, sc: Any, G: Any, o: Any) -> Any:
     st = st | cascade_checks(inputs, o) | st_range
     st = st | flag(ok_light, C_LIGHT_ZERO) | flag(ok_up, C_UP_PARALLEL)
     box_pass((V, P), box, (a, sign), bl, bg)
-    return (sign, near, end, sc[0], sc[2]), (nc, fc, bl, bg), a, inverse4(V)[0], st
+    iV = inverse4(V)[0]
+    lo, hi = split_range((sign, nc, fc, iV, a), (box, bg), (near, end), sc, o)
+    return (sign, lo, hi, sc[0], sc[2]), (nc, fc, bl, bg), a, iV, st
+
+
+def split_range(cam: Any, scene: Any, ne: Any, sc: Any, o: Any) -> Any:
+    """The view depths the splits span: the camera's ``ne = (near, end)``, or the visible
+    range (:func:`visible_range`) or a measured one (``sc[3:5]``) within it; with the
+    previous range (``sc[5:7]``), widened to the ladder with hysteresis
+    (:func:`._cascade_formulas.depth_hysteresis`) and clamped to ``ne``."""
+    near, end = ne
+    if o.depth_range == 0:
+        return near, end
+    if o.depth_range == 1:
+        lo, hi = visible_range(cam, scene, ne)
+    else:
+        lo, hi = greater(lesser(sc[3], end), near), lesser(greater(sc[4], near), end)
+    if o.has_state:
+        lo, hi = depth_hysteresis(lo, hi, sc[5], sc[6])
+        lo, hi = greater(lo, near), lesser(hi, end)
+    return lo, hi
+
+
+def visible_range(cam: Any, scene: Any, ne: Any) -> Any:
+    """The nearest and farthest view depth of the camera's slice ``ne = (near, end)``
+    intersected with the scene box: the bounds pass (:data:`cascade_bounds`) with each
+    vertex's view depth as its first coordinate (depth is affine in the point, so its
+    extremes over the convex intersection are at vertices). ``ne`` where they miss."""
+    near, end = ne
+    box, bg = scene
+    _, _, gs = slice_corners(cam, box, near, end)
+    zero = 0.0 * near
+    sd, bd = alloc(24), alloc(24)
+    for k in range(8):
+        sd[3 * k], sd[3 * k + 1], sd[3 * k + 2] = near if k < 4 else end, zero, zero
+        bd[3 * k], bd[3 * k + 1], bd[3 * k + 2] = bg[5 * k + 4], zero, zero
+    b = cascade_bounds(sd, gs, (bd, bg), (near, end))
+    return b[0], b[1]
 
 
 def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
@@ -271,6 +313,15 @@ def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
     (sign, _, _, _, ov), (nc, fc, _, _), a, iV, _ = e
     s0, s1 = take_last(Z, j), take_last(Z, j + 1)
     s1 = lesser(s1 + ov * (s1 - s0), take_last(Z, o.cascades))
+    vc, lc, gs = slice_corners((sign, nc, fc, iV, a), box, s0, s1)
+    return s0, s1, vc, lc, gs
+
+
+def slice_corners(cam: Any, box: Any, s0: Any, s1: Any) -> Any:
+    """The corners of the camera's slice between view depths ``s0`` and ``s1``: view
+    (``vc``, 8 x 3), light (``lc``) and the box's half-space values at them (``gs``, 8 x 6).
+    ``cam = (sign, near corners, far corners, inverse view, light axes)``."""
+    sign, nc, fc, iV, a = cam
     vc, lc, gs = alloc(24), alloc(24), alloc(48)
     lo, hi = (box[0], box[1], box[2]), (box[3], box[4], box[5])
     for k in range(8):
@@ -285,7 +336,7 @@ def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
         g = box_values(w[0], w[1], w[2], lo, hi)
         for c in range(6):
             gs[6 * k + c] = g[c]
-    return s0, s1, vc, lc, gs
+    return vc, lc, gs
 
 
 def cascade_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
@@ -358,7 +409,8 @@ def cascade_loop(inputs: Any, opts: Any, out: Any, splits: Any, status: Any) -> 
     """The loop mode's driver: every camera's cascades, one camera at a time.
 
     ``inputs``: light ``(m, 3)``, views and projections ``(m, 16)``, boxes ``(m, 6)``
-    (min then max), ups ``(m, 3)``, scalars ``(m, 3)`` (lam, max_distance, overlap) and
+    (min then max), ups ``(m, 3)``, scalars ``(m, 7)`` (lam, max_distance, overlap, the
+    measured depth range, the previous range in use) and
     given splits ``(m, n + 1)``, each ``m = count or 1`` read at ``i % m``; ``opts``: the
     options record (``opts[0]``). ``out``: ``(count, n, ROW)``; ``splits``:
     ``(count, n + 1)``; ``status``: ``(count,)``.
@@ -390,7 +442,10 @@ FUNCTIONS = (
     "cascade_split",
     "box_pass",
     "cascade_entry",
+    "split_range",
+    "visible_range",
     "cascade_slice",
+    "slice_corners",
     "cascade_fit",
     "stable_box",
     "cascade_tile",
