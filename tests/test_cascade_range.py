@@ -16,7 +16,7 @@ import pytest
 import shadowmath as sm
 
 from .cameras import look_at, orthographic, perspective
-from .test_cascades import body
+from .test_cascades import body, ndc
 
 STEP = 2.0**0.25  # one step of the depth ladder
 BOX = np.array([[-150.0, -0.5, -150.0], [150.0, 15.0, 150.0]])
@@ -116,22 +116,25 @@ def is_ladder(x: np.ndarray) -> np.ndarray:
     return np.abs(k - np.round(k)) < 1e-9
 
 
-def test_the_ladder_with_hysteresis_along_a_path() -> None:
-    """A camera climbs, dives and turns: the range in use holds the visible range, its ends
-    are ladder values (or the camera's planes), an end grows at once and shrinks only once
-    the visible end's ladder value is more than a step inside it, and stable sizes change
-    only with it."""
-    proj = perspective(1.0, 1.6, 0.1, 400.0)
+def path() -> Any:
+    """A camera that climbs to 100, dives back to 3, turns, then bobs by 2 cm."""
     heights = np.r_[np.linspace(1.7, 100, 30), np.linspace(100, 3, 30), np.full(20, 3.0)]
     pitches = np.r_[np.linspace(0.1, 1.2, 30), np.linspace(1.2, 0.2, 30), np.full(20, 0.2)]
-    bob = np.r_[np.zeros(61), 0.02 * np.sin(np.arange(1, 20))]  # small oscillation at the end
-    state, used, prev_size, changes = sm.CascadeDepthState.initial(), None, None, 0
+    bob = np.r_[np.zeros(61), 0.02 * np.sin(np.arange(1, 20))]
     for k, (h, p) in enumerate(zip(heights + bob, pitches, strict=True)):
-        view = pose(h, p, yaw=0.4 + 0.02 * min(k, 60))
+        yield k, pose(h, p, yaw=0.4 + 0.02 * min(k, 60))
+
+
+def test_the_ladder_with_hysteresis_along_a_path() -> None:
+    """The range in use holds the visible range, its ends are ladder values (or the
+    camera's planes), an end grows at once and shrinks only once the visible end's ladder
+    value is more than a step inside it."""
+    proj = perspective(1.0, 1.6, 0.1, 400.0)
+    state, used, changes = sm.CascadeState.initial(), None, 0
+    for k, view in path():
         lo, hi = visible(view, proj, BOX)
-        c = sm.fit_cascades(SUN, view, proj, BOX, 512, depth_range="visible", stable=True,
-                            depth_state=state)  # fmt: skip
-        near, far = c.depth_state
+        c = sm.fit_cascades(SUN, view, proj, BOX, 512, depth_range="visible", state=state)
+        near, far = c.state.near, c.state.far
         assert near <= lo * (1 + 1e-12) and far >= hi * (1 - 1e-12)  # holds the visible range
         assert (is_ladder(near) or near == 0.1) and (is_ladder(far) or far == 400.0)
         assert far < hi * STEP**2 and near > lo / STEP**2  # within the margin and one step
@@ -142,21 +145,57 @@ def test_the_ladder_with_hysteresis_along_a_path() -> None:
                 assert hi <= used[1] / STEP**2 * (1 + 1e-12)
             if near > used[0]:
                 assert lo >= used[0] * STEP**2 * (1 - 1e-12)
-            if (near, far) == used:
-                np.testing.assert_array_equal(c.frustum.rx_max, prev_size)  # exactly
             if far > used[1]:
                 assert hi > used[1]  # grew only to hold the range
             if near < used[0]:
                 assert lo < used[0]
-        changes += prev_size is not None and not np.array_equal(c.frustum.rx_max, prev_size)
-        texel = c.texel_size[:, 0]
-        steps = c.frustum.x_offset / texel
-        np.testing.assert_allclose(steps, np.round(steps), atol=1e-6)  # whole texels
-        used, prev_size, state = (near, far), c.frustum.rx_max, c.depth_state
+            changes += (near, far) != used
+        used, state = (near, far), c.state
         if k == 60:
             settled = changes
-    assert changes == settled  # the bobbing camera kept its cascades
-    assert changes < 40
+    assert changes == settled  # the bobbing camera kept its range
+    assert changes < 30
+
+
+def test_stable_squares_along_a_path() -> None:
+    """Each stable square holds the visible part of its slice (Qhull); its half-width is
+    the lesser of the slice's sphere's and a ladder value that grows at once and shrinks
+    only once the part's ladder value is more than a step inside; it keeps its size bit
+    for bit while both hold, and moves by whole texels."""
+    proj = perspective(1.0, 1.6, 0.1, 400.0)
+    state, prev, changes = sm.CascadeState.initial(), None, 0
+    for k, view in path():
+        c = sm.fit_cascades(SUN, view, proj, BOX, 512, depth_range="visible", stable=True,
+                            state=state)  # fmt: skip
+        sphere = sm.fit_cascades(SUN, view, proj, BOX, 512, splits=c.splits, stable=True)
+        hw = c.state.half_width
+        for i in range(4):
+            v = body(view, proj, BOX, c.splits[i], c.band_end[i])
+            q = ndc(c.world_to_clip[i], v)
+            assert np.all(np.abs(q[:, :2]) <= c.frustum.margin_x[i] * (1 + 1e-12))
+            assert np.all((q[:, 2] > -1) & (q[:, 2] < 1))
+            xy = v @ c.world_to_light[i, :2, :3].T
+            need = 0.5 * np.max(xy.max(axis=0) - xy.min(axis=0))
+            assert hw[i] >= need * (1 - 1e-9)
+            assert is_ladder(hw[i]) and hw[i] < need * STEP**2
+            half = c.frustum.rx_max[i] * (1 - 1 / (c.frustum.margin_x[i] * 512))
+            assert half == pytest.approx(min(hw[i], sphere.state.half_width[i]), rel=1e-12)
+            if prev is not None:
+                if hw[i] < prev.state.half_width[i]:  # shrank past the margin
+                    assert need <= prev.state.half_width[i] / STEP**2 * (1 + 1e-9)
+                if hw[i] > prev.state.half_width[i]:  # grew: only to hold the part
+                    assert need > prev.state.half_width[i]
+        if prev is not None:
+            same = (hw == prev.state.half_width) & np.all(c.splits == prev.splits)
+            np.testing.assert_array_equal(c.frustum.rx_max[same], prev.frustum.rx_max[same])
+            changes += int(np.sum(~same))
+        steps = c.frustum.x_offset / c.texel_size[:, 0]
+        np.testing.assert_allclose(steps, np.round(steps), atol=1e-6)  # whole texels
+        prev, state = c, c.state
+        if k == 60:
+            settled = changes
+    assert changes == settled  # the bobbing camera kept its squares
+    assert changes < 120
 
 
 def test_without_hysteresis_the_range_follows_every_frame() -> None:
@@ -171,16 +210,23 @@ def test_without_hysteresis_the_range_follows_every_frame() -> None:
 
 
 def test_the_ladder_values() -> None:
+    """Without a previous range the ends are the nearest ladder values outside the target."""
     from shadowmath._math._specialize import formulas, scalar_formulas
 
     x = np.geomspace(1e-3, 1e4, 997)
+    nan = float("nan")
     for F in (formulas(np), scalar_formulas()):
         up = np.array([F.ladder_up(float(v)) for v in x])
-        down = np.array([F.ladder_down(float(v)) for v in x])
-        assert np.all(is_ladder(up)) and np.all(is_ladder(down))
+        ends = np.array([F.depth_hysteresis(float(v), float(v), nan, nan) for v in x])
+        for lo_hi in (up, ends[:, 0], ends[:, 1]):
+            assert np.all(is_ladder(lo_hi))
         assert np.all((up >= x) & (up < x * STEP * (1 + 1e-12)))
-        assert np.all((down <= x * (1 + 1e-12)) & (down > x / STEP))
-    assert F.ladder_up(2.0) == pytest.approx(2.0) and F.ladder_down(2.0) == pytest.approx(2.0)
+        np.testing.assert_array_equal(ends[:, 1], up)
+        assert np.all((ends[:, 0] <= x) & (ends[:, 0] > x / STEP))
+        for v in (2.0, 2.0**0.25, 0.5):  # ladder values are their own ends (to a rounding
+            lo, hi = F.depth_hysteresis(v, v, nan, nan)  # of 1 / v that may cost a step)
+            assert hi == pytest.approx(v, rel=1e-14)
+            assert lo == pytest.approx(v, rel=1e-14) or lo == pytest.approx(v / STEP, rel=1e-14)
 
 
 @pytest.mark.parametrize(
@@ -188,13 +234,13 @@ def test_the_ladder_values() -> None:
     [
         ({"depth_range": "scene"}, "depth_range: expected 'camera', 'visible'"),
         ({"depth_range": "visible", "splits": [0.5, 2.0, 9.0]}, "depth_range: custom splits"),
-        ({"depth_state": sm.CascadeDepthState(1.0, 9.0)}, "depth_state: needs depth_range"),
-        ({"depth_range": "visible", "depth_state": (1.0, 9.0)}, "depth_state: expected"),
+        ({"state": sm.CascadeState(1.0, 9.0, 2.0)}, "state: needs depth_range"),
+        ({"depth_range": "visible", "state": (1.0, 9.0)}, "state: expected"),
         ({"depth_range": np.array([9.0, 1.0])}, "depth_range: the measured near exceeds"),
         ({"depth_range": np.array([np.nan, 1.0])}, "depth_range"),
         ({"depth_range": np.array([1.0, 2.0, 3.0])}, "depth_range"),
-        ({"depth_range": "visible", "depth_state": sm.CascadeDepthState(9.0, 1.0)},
-         "depth_state: its near exceeds"),
+        ({"depth_range": "visible", "state": sm.CascadeState(9.0, 1.0, 2.0)},
+         "state: its near exceeds"),
     ],
 )  # fmt: skip
 def test_range_errors_name_the_argument(kwargs: dict[str, Any], message: str) -> None:

@@ -376,8 +376,8 @@ def test_errors_name_the_argument(change: dict[str, Any], message: str, path: st
      {"overlap": 0.0, "pcf_radius": 3}, {"depth_range": "visible"},
      {"depth_range": np.array([[2.0, 50.0], [1.0, 30.0], [0.7, 200.0]]), "stable": True},
      {"depth_range": "visible", "stable": True,
-      "depth_state": sm.CascadeDepthState(np.array([2.0, np.nan, 0.6]),
-                                          np.array([60.0, np.nan, 99.0]))}],
+      "state": sm.CascadeState(np.array([2.0, np.nan, 0.6]), np.array([60.0, np.nan, 99.0]),
+                               np.array([[3.0, 9.0, 20.0, 40.0]] * 2 + [[np.nan] * 4]))}],
 )  # fmt: skip
 def test_compiled_loop_equals_array_path(options: dict[str, Any]) -> None:
     pytest.importorskip("numba")

@@ -2396,11 +2396,15 @@ def test_fuzz_fit_cascades(data: st.DataObject) -> None:
     (compiled, Python loop, arrays) agree; a zero sun is refused by name."""
     CASES["fit_cascades"] += 1
     sun, view, proj, box = _cascade_scene(data)
-    state = sm.CascadeDepthState(np.float64(data.draw(st.floats(0.5, 5))), np.float64(80.0))
+    state = sm.CascadeState(
+        np.float64(data.draw(st.floats(0.5, 5))),
+        np.float64(80.0),
+        np.float64(data.draw(st.floats(0.5, 50))),
+    )
     options = data.draw(st.sampled_from([{}, {"stable": True}, {"layout": "atlas"},
                                          {"scheme": "uniform", "count": 2},
                                          {"depth_range": "visible"},
-                                         {"depth_range": "visible", "depth_state": state,
+                                         {"depth_range": "visible", "state": state,
                                           "stable": True}]))  # fmt: skip
     c = sm.fit_cascades(sun, view, proj, box, 512, **options)
     assert isinstance(c, sm.Cascades)
@@ -2546,7 +2550,7 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "NEAR_FAR_SLACK": ("test_fuzz_fit_shadow_scene_options",),
     "ApiConvention": ("test_fuzz_api_convention",),
     "Cascades": ("test_fuzz_fit_cascades",),
-    "CascadeDepthState": ("test_fuzz_fit_cascades",),
+    "CascadeState": ("test_fuzz_fit_cascades",),
     "CubeDepthRange": ("test_fuzz_cube_depth_range",),
     "CubeFaceCoords": ("test_fuzz_cube_face", "test_fuzz_cube_jax_eager_jit_vmap"),
     "CubeFaceDepth": ("test_fuzz_cube_face_projection_and_depth",),

@@ -56,39 +56,45 @@ from ._cascade_splits import (
 from ._lispsm import check_warp, warp_cascades
 from ._spec import ShadowMapSpec, api_rows, map_spec
 
-__all__ = ["CascadeDepthState", "Cascades", "fit_cascades"]
+__all__ = ["CascadeState", "Cascades", "fit_cascades"]
 
 CascadeLayout = Literal["layers", "atlas"]
 DepthRangeName = Literal["camera", "visible"]
 _RANGE_CODES = {"camera": 0, "visible": 1}
 
 
-class CascadeDepthState(NamedTuple):
-    """The view depth range a :func:`fit_cascades` call used: the state of its hysteresis.
+class CascadeState(NamedTuple):
+    """What a :func:`fit_cascades` call used, for the next frame's hysteresis.
 
-    Start with :meth:`initial` (no range yet), then take it from the last frame's result
-    (``c.depth_state``) and give it to the next call as ``depth_state=``: the range
-    then has its ends on a fixed ladder of depths ``2^(k/4)``, grows at once and shrinks
-    only past a margin of one step, so the splits (and with ``stable=True`` the
-    cascades' sizes) change only at ladder steps (``docs/cascades.md``).
+    Start with :meth:`initial` (nothing in use yet), then give the last frame's result's
+    ``state`` to the next call as ``state=`` (with ``depth_range`` ``"visible"`` or
+    measured): the depth range's ends, and with ``stable=True`` each cascade's size,
+    are then values of a fixed ladder ``2^(k/4)`` that grow at once and shrink only past
+    a margin of one step, so the splits and the stable cascades' sizes change only at
+    ladder steps (``docs/cascades.md``).
 
     Attributes:
-        near: ``(*batch,)`` the first split (NaN: none yet).
-        far: ``(*batch,)`` the last split (NaN: none yet).
+        near: ``(*batch,)`` the first split in use (NaN: none yet).
+        far: ``(*batch,)`` the last split in use (NaN: none yet).
+        half_width: ``(*batch, n)`` each stable cascade's laddered half-width (the
+            square uses the lesser of it and the slice's sphere's radius, then adds its
+            half texel of snapping room); NaN: none yet; NaN in a result without
+            ``stable=True``, the sphere's radius in one without ``state``.
 
     Example:
         >>> import shadowmath as sm
-        >>> sm.CascadeDepthState.initial()
-        CascadeDepthState(near=nan, far=nan)
+        >>> sm.CascadeState.initial()
+        CascadeState(near=nan, far=nan, half_width=nan)
     """
 
     near: Real[ArrayLike, "*#batch"]
     far: Real[ArrayLike, "*#batch"]
+    half_width: Real[ArrayLike, "*#batch _"] | Real[ArrayLike, ""]
 
     @classmethod
-    def initial(cls) -> CascadeDepthState:
-        """The state before the first frame: no range in use (both NaN)."""
-        return cls(math.nan, math.nan)
+    def initial(cls) -> CascadeState:
+        """The state before the first frame: nothing in use (every value NaN)."""
+        return cls(math.nan, math.nan, math.nan)
 
 
 class Cascades(NamedTuple):
@@ -123,6 +129,8 @@ class Cascades(NamedTuple):
             Every viewport lies inside it.
         texture_layers: the texture's layer count: ``n`` with ``layout="layers"``
             (a texture array), 1 with ``layout="atlas"``.
+        state: what this fit used (the splits' ends, the stable sizes): the next
+            frame's ``state=`` (not needed by a renderer).
     """
 
     world_to_light: Float[Array, "*batch n 4 4"]
@@ -136,11 +144,7 @@ class Cascades(NamedTuple):
     texture_size: tuple[int, int]
     texture_layers: int
 
-    @property
-    def depth_state(self) -> CascadeDepthState:
-        """The depth range these cascades span (``splits``' ends): the next frame's
-        ``depth_state=``."""
-        return CascadeDepthState(self.splits[..., 0], self.splits[..., -1])
+    state: CascadeState
 
 
 def fit_cascades(
@@ -168,7 +172,7 @@ def fit_cascades(
     layout: CascadeLayout = "layers",
     warp: Literal[None, "lispsm"] = None,
     depth_range: DepthRangeName | Real[ArrayLike, "*#batch 2"] = "camera",
-    depth_state: CascadeDepthState | None = None,
+    state: CascadeState | None = None,
 ) -> Cascades:
     r"""Fit a directional light's cascaded shadow maps to what a camera sees.
 
@@ -185,7 +189,9 @@ def fit_cascades(
       bounding sphere (which depends on the projection and the splits only) plus
       half a texel, its centre snapped to whole texels of a grid anchored at the
       world origin: as the camera moves and turns, every cascade keeps its size
-      and its texel grid moves by whole texels;
+      and its texel grid moves by whole texels (with ``state``, the square of the
+      visible part's bounds instead: half-width the lesser of the sphere's and a
+      ladder value with hysteresis, centred on the part);
     * **depth**: from the scene box's corner nearest the light (every caster that
       can shadow the slice lies behind it, seen or not) to the slice's deepest
       point in the scene, widened by ``NEAR_FAR_SLACK``;
@@ -243,12 +249,13 @@ def fit_cascades(
             they miss), so no cascade covers empty depths; or ``(*batch, 2)`` a range
             the renderer measured (``[min, max]`` of last frame's view depths), clipped
             to the camera's. Not with custom ``splits``.
-        depth_state: the range in use in the last frame (its result's
-            ``depth_state``; :meth:`CascadeDepthState.initial` before the first), with
+        state: the range in use in the last frame (its result's
+            ``state``; :meth:`CascadeState.initial` before the first), with
             ``depth_range`` ``"visible"`` or measured: the range's ends are then rounded
             outward to a ladder of depths ``2^(k/4)``, grow at once and shrink only when
-            the target's ladder value is more than a step inside, so the splits (and
-            ``stable=True`` sizes) change only at ladder steps (``docs/cascades.md``).
+            the target's ladder value is more than a step inside, so the splits change
+            only at ladder steps; with ``stable=True`` each square's half-width likewise
+            follows its slice's visible part (``docs/cascades.md``).
 
     Returns:
         :class:`Cascades`.
@@ -260,10 +267,10 @@ def fit_cascades(
             zero light direction, ``up`` parallel to the light, an inverted
             ``scene_bounds``, splits outside the camera's range or not increasing, bad
             scheme options, a measured ``depth_range`` not finite or with near beyond
-            far, a ``depth_state`` likewise (these are NaN under JAX transformations);
+            far, a ``state`` likewise (these are NaN under JAX transformations);
             and whatever the values: map options given both in a :class:`ShadowMapSpec`
             and as keywords, a ``depth_range`` that is neither a name nor ``(*batch,
-            2)``, with custom ``splits``, or a ``depth_state`` without one.
+            2)``, with custom ``splits``, or a ``state`` without one.
 
     Example:
         >>> import numpy as np, shadowmath as sm
@@ -284,7 +291,7 @@ def fit_cascades(
     _check_api(cam_api, camera_reversed_z)
     if layout not in ("layers", "atlas"):
         raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
-    range_code, measured = _range_option(depth_range, splits is not None, depth_state)
+    range_code, measured = _range_option(depth_range, splits is not None, state)
     direction = light.direction if isinstance(light, DirectionalLight) else light
     fixed = check_scheme(scheme)
     n_given = None if splits is not None else check_count(count)
@@ -293,12 +300,13 @@ def fit_cascades(
     plain = all(type(v) in (float, int) for v in (lam_v, overlap)) and (
         max_distance is None or type(max_distance) in (float, int)
     )
-    state = (None, None) if depth_state is None else (depth_state.near, depth_state.far)
-    ctx, (L, V, P, box, S, U, dmax, lm, ov, M, Qn, Qf) = convert(
+    prev = (None,) * 3 if state is None else tuple(state)
+    ctx, (L, V, P, box, S, U, dmax, lm, ov, M, Qn, Qf, W) = convert(
         light=direction, view=view, projection=projection, scene_bounds=scene_bounds,
         splits=splits, up=up, max_distance=None if plain else max_distance,
         lam=None if plain else lam_v, overlap=None if plain else overlap,
-        depth_range=measured, **{"depth_state.near": state[0], "depth_state.far": state[1]},
+        depth_range=measured,
+        **{"state.near": prev[0], "state.far": prev[1], "state.half_width": prev[2]},
     )  # fmt: skip
     if plain:
         lm, ov = float(lam_v), float(overlap)
@@ -309,13 +317,13 @@ def fit_cascades(
     n = S.shape[-1] - 1 if S is not None else n_given
     assert n is not None
     _scalar_checks(checks, (lm, ov, dmax, S))
-    _range_checks(checks, M, (Qn, Qf))
+    W = _range_checks(checks, M, (Qn, Qf, W), (shape, n))
     C = _clip_from_gl(cam_api, camera_reversed_z)
     given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None)
     o, record = _options(spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row))
     call = _Call(ctx, spec, layout, shape, o)
     extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
-    arrays = (L, V, P, box, U, S, dmax, lm, ov, extra)
+    arrays = (L, V, P, box, U, S, dmax, lm, ov, extra, W)
     if ctx.xp is np and warp is None:
         python = not _kernels.available()
         if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
@@ -328,7 +336,7 @@ def fit_cascades(
 
 
 def _range_option(
-    depth_range: Any, has_splits: bool, state: CascadeDepthState | None
+    depth_range: Any, has_splits: bool, state: CascadeState | None
 ) -> tuple[int, Any]:
     """``depth_range``'s code (0 camera, 1 visible, 2 measured) and the measured range."""
     if isinstance(depth_range, str):
@@ -342,31 +350,47 @@ def _range_option(
         code, measured = 2, depth_range
     if code and has_splits:
         raise ValueError("depth_range: custom splits set their own range; give one or the other")
-    if state is not None and not isinstance(state, CascadeDepthState):
+    if state is not None and not isinstance(state, CascadeState):
         raise ValueError(
-            f"depth_state: expected a CascadeDepthState (a result's .depth_state), "
-            f"got {type(state).__name__}"
+            f"state: expected a CascadeState (a result's .state), got {type(state).__name__}"
         )
     if state is not None and code == 0:
-        raise ValueError("depth_state: needs depth_range='visible' or a measured range")
+        raise ValueError("state: needs depth_range='visible' or a measured range")
     return code, measured
 
 
-def _range_checks(checks: Checks, M: Any, state: tuple[Any, Any]) -> None:
-    """A measured range and a previous state: finite, ``near <= far``."""
+def _range_checks(checks: Checks, M: Any, state: tuple[Any, ...], sn: Any) -> Any:
+    """A measured range and a previous state: finite (or NaN: none), ``near <= far``,
+    half-widths positive; the half-widths broadcast to ``(*batch, n)``."""
     xp = checks.ctx.xp
     if M is not None:
         checks.require(all_finite(xp, M, 1), non_finite("depth_range"))
         checks.require(M[..., 0] <= M[..., 1], "depth_range: the measured near exceeds its far")
-    if state[0] is not None:
-        near, far = state
-        none = xp.isnan(near) & xp.isnan(far)  # CascadeDepthState.initial()
-        ok = none | (all_finite(xp, near, 0) & all_finite(xp, far, 0))
-        checks.require(ok, non_finite("depth_state") + " (or both NaN: initial())")
-        checks.require(none | (near <= far), "depth_state: its near exceeds its far")
+    if state[0] is None:
+        return None
+    near, far, W = state
+    shape, n = sn
+    if W.ndim and (W.shape[-1] not in (1, n) or not _broadcasts(W.shape[:-1], shape)):
+        raise ValueError(
+            f"state: half_width must be (*batch, n) = {(*shape, n)} or one number, "
+            f"got {tuple(W.shape)}"
+        )
+    none = xp.isnan(near) & xp.isnan(far)  # CascadeState.initial()
+    ok = none | (all_finite(xp, near, 0) & all_finite(xp, far, 0))
+    checks.require(ok, non_finite("state") + " (or NaN: initial())")
+    checks.require(none | (near <= far), "state: its near exceeds its far")
+    checks.require(~(W <= 0) & ~xp.isinf(W), "state: half_width must be positive or NaN")
+    return xp.broadcast_to(W, (*shape, n))
 
 
-def _range_scalars(xp: Any, M: Any, state: tuple[Any, Any]) -> tuple[Any, ...]:
+def _broadcasts(a: tuple[int, ...], shape: tuple[int, ...]) -> bool:
+    """Whether a batch shape ``a`` broadcasts to ``shape``."""
+    return len(a) <= len(shape) and all(
+        x in (1, y) for x, y in zip(a[::-1], shape[::-1], strict=False)
+    )
+
+
+def _range_scalars(xp: Any, M: Any, state: tuple[Any, ...]) -> tuple[Any, ...]:
     """The measured range's ends and the previous range's, NaN where not given."""
     nan = math.nan
     lo, hi = (nan, nan) if M is None else (M[..., 0], M[..., 1])
@@ -375,7 +399,7 @@ def _range_scalars(xp: Any, M: Any, state: tuple[Any, Any]) -> tuple[Any, ...]:
 
 def _batch(checks: Checks, arrays: tuple[Any, ...]) -> tuple[int, ...]:
     """The shape checks of the arrays and their batch shape."""
-    L, V, P, box, U, S, dmax, M, Qn, Qf = arrays
+    L, V, P, box, U, S, dmax, M, Qn, Qf = arrays[:10]
     require_matrix("view", V)
     check_projection(checks, P)
     require_last("scene_bounds", box, 3, min_ndim=2, hint="[min_corner, max_corner]")
@@ -397,9 +421,9 @@ def _batch(checks: Checks, arrays: tuple[Any, ...]) -> tuple[int, ...]:
     if M is not None:
         require_last("depth_range", M, 2, hint="a measured [near, far]")
     if (Qn is None) != (Qf is None) or (Qn is not None and Qn.shape != Qf.shape):
-        raise ValueError("depth_state: near and far must have one shape")
+        raise ValueError("state: near and far must have one shape")
     named = (("up", U, 1), ("splits", S, 1), ("max_distance", dmax, 0),
-             ("depth_range", M, 1), ("depth_state", Qn, 0))  # fmt: skip
+             ("depth_range", M, 1), ("state", Qn, 0))  # fmt: skip
     for name, v, drop in named:
         if v is not None and not isinstance(v, float):
             shapes.append(v.shape[: v.ndim - drop])
@@ -459,7 +483,7 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
     extra, ``record`` its options), or, ``record`` None, run by Python on lists (a few
     cameras without Numba)."""
     ctx, shape, o = call.ctx, call.shape, call.o
-    L, V, P, box, U, S, dmax, lm, ov, extra = arrays
+    L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
     n, total = o.cascades, math.prod(shape)
     d = np.nan if dmax is None else dmax
     plain = extra is None and type(lm) is float and type(ov) is float
@@ -473,6 +497,7 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
         flat_batch(P, shape, (4, 4)).reshape(-1, 16), flat_batch(box, shape, (2, 3)).reshape(-1, 6),
         _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (7,)),
         _NO_SPLITS if S is None else flat_batch(S, shape, (n + 1,)),
+        _NO_SIZES if W is None else flat_batch(W, shape, (n,)),
     )  # fmt: skip
     if record is None:  # the same loop on Python lists and floats
         rows = [[[0.0] * ROW for _ in range(n)] for _ in range(total)]
@@ -497,7 +522,7 @@ def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | No
     values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``)."""
     ctx, o = call.ctx, call.o
     xp, F = ctx.xp, formulas(ctx.xp)
-    L, V, P, box, U, S, dmax, lm, ov, extra = arrays
+    L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
     inputs = (
         tuple(L[..., c, None] for c in range(3)),
         tuple(V[..., i // 4, i % 4, None] for i in range(16)),
@@ -511,7 +536,7 @@ def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | No
     )
     j = np.arange(o.cascades + 1, dtype=ctx.dtype)  # the cascades' indices, in the work dtype
     with np.errstate(all="ignore"):  # invalid entries: their status bits say so
-        e = F.cascade_entry(inputs, sc, S, o)
+        e = F.cascade_entry(inputs, sc, (S, W), o)
         splits = F.cascade_split(S, j, e[0][1:4], o)
         sl = F.cascade_slice(e, inputs[3], splits, j[:-1], o)
         row: list[Any] = [0.0] * ROW
@@ -557,6 +582,7 @@ def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
     xp, n, spec = call.ctx.xp, call.o.cascades, call.spec
     m = xp.reshape(rows[..., :48], (*call.shape, n, 3, 4, 4))
     rx, ry, near, far, m_x, m_y, cx, cy = (rows[..., 48 + k] for k in range(8))
+    state = CascadeState(splits[..., 0], splits[..., -1], rows[..., 59])
     texture = _texture(n, spec.size, call.layout)
     return Cascades(
         world_to_light=m[..., 0, :, :],
@@ -569,6 +595,7 @@ def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
         viewports=_tiles(n, spec.size, call.layout),
         texture_size=texture[0],
         texture_layers=texture[1],
+        state=state,
     )
 
 
@@ -578,6 +605,7 @@ PYTHON_LOOP_CAMERAS = 4
 
 _NO_UP = np.zeros((1, 3))
 _NO_SPLITS = np.zeros((1, 2))
+_NO_SIZES = np.zeros((1, 1))
 
 
 def _scalar_checks(checks: Checks, values: tuple[Any, ...]) -> None:

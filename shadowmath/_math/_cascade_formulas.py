@@ -28,6 +28,7 @@ Trusted inputs only: nothing here raises.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 # Backend primitives and shared formulas, rebound by specialize().
@@ -74,39 +75,38 @@ def ladder_up(x: Any) -> Any:
     return where(x > 0, q, x)
 
 
-def ladder_down(x: Any) -> Any:
-    """The largest ladder value ``2^(k/4) <= x``: ``1 / ladder_up(1 / x)``; ``x <= 0`` unchanged.
+def ladder_hold(t: Any, p: Any) -> Any:
+    r"""A value ``>= t`` on the ladder, with hysteresis: ``p`` (the last one) or ``q``.
 
-    At most ``x`` to rounding (the caller keeps the lesser of the two)."""
-    safe = where(x > 0, x, 1.0 + 0.0 * x)
-    return where(x > 0, 1.0 / ladder_up(1.0 / safe), x)
+    With ``q`` = :func:`ladder_up` of ``t`` and one step ``s = 2^{1/4}``:
+
+    .. math:: \begin{cases} p & t \le p \le q\, s^{M} \\ q & \text{otherwise} \end{cases}
+
+    (``M = HYSTERESIS_STEPS``, compared at ``M + 1/2`` steps: ladder values are ``s``
+    apart, so rounding cannot flip the choice). It grows at once (``t > p``) and
+    shrinks only once ``q`` lies more than ``M`` steps below ``p``. ``p`` NaN: ``q``.
+    """
+    margin = 2.0 ** ((HYSTERESIS_STEPS + 0.5) / LADDER_STEPS)
+    q = ladder_up(t)
+    keep = (p >= t) & (p <= q * margin)
+    return where(keep, p, where(q >= t, q, t))
 
 
 def depth_hysteresis(t_lo: Any, t_hi: Any, p_lo: Any, p_hi: Any) -> tuple[Any, Any]:
-    r"""The depth range in use: ``[t_lo, t_hi]`` widened to the ladder, with hysteresis.
+    r"""The depth range in use: the target ``[t_lo, t_hi]`` widened to the ladder with
+    hysteresis, from the last one ``[p_lo, p_hi]`` (NaN: none).
 
-    ``p_lo``, ``p_hi``: the range in use in the previous frame (NaN: none). Each end
-    grows at once and shrinks only past the margin: with ``q_lo``, ``q_hi`` the
-    target's ends rounded outward to the ladder (:func:`ladder_down`, :func:`ladder_up`)
-    and ``s = 2^{1/4}`` one step,
-
-    .. math::
-        hi = \begin{cases} p_{hi} & t_{hi} \le p_{hi} \le q_{hi}\, s^{M} \\
-                              q_{hi} & \text{otherwise} \end{cases} \qquad
-        lo = \begin{cases} p_{lo} & q_{lo} / s^{M} \le p_{lo} \le t_{lo} \\
-                              q_{lo} & \text{otherwise} \end{cases}
-
-    with ``M = HYSTERESIS_STEPS`` (compared at ``M + 1/2`` steps: ladder values are
-    ``s`` apart, so rounding of either side cannot flip the choice). The result
-    always holds the target.
+    The far end is :func:`ladder_hold`; the near end is its mirror,
+    ``1 / ladder_hold(1 / t_lo, 1 / p_lo)`` (a ladder value at most ``t_lo``, which
+    grows the range at once and shrinks it only past the margin); ``t_lo <= 0`` (an
+    orthographic camera's) is kept as it is. The result holds the target.
     """
-    margin = 2.0 ** ((HYSTERESIS_STEPS + 0.5) / LADDER_STEPS)
-    q_lo, q_hi = ladder_down(t_lo), ladder_up(t_hi)
-    keep_lo = (p_lo <= t_lo) & (p_lo * margin >= q_lo)
-    keep_hi = (p_hi >= t_hi) & (p_hi <= q_hi * margin)
-    lo = where(keep_lo, p_lo, where(q_lo <= t_lo, q_lo, t_lo))
-    hi = where(keep_hi, p_hi, where(q_hi >= t_hi, q_hi, t_hi))
-    return lo, hi
+    pos = t_lo > 0
+    inv_t = 1.0 / where(pos, t_lo, 1.0 + 0.0 * t_lo)
+    inv_p = 1.0 / where(p_lo > 0, p_lo, 0.0 * t_lo + math.inf)
+    lo = 1.0 / ladder_hold(inv_t, inv_p)
+    lo = where(pos, where(lo <= t_lo, lo, t_lo), t_lo)
+    return lo, ladder_hold(t_hi, p_hi)
 
 
 def edge_point(n: tuple[Any, ...], f: tuple[Any, ...], s: Any, d: Any) -> tuple[Any, Any, Any]:
@@ -275,7 +275,7 @@ def cascade_box(
 FUNCTIONS = (
     "split_depth",
     "ladder_up",
-    "ladder_down",
+    "ladder_hold",
     "depth_hysteresis",
     "edge_point",
     "affine",
