@@ -361,9 +361,10 @@ def _range_option(
 
 def _range_checks(checks: Checks, M: Any, state: tuple[Any, ...], sn: Any) -> Any:
     """A measured range and a previous state: finite (or NaN: none), ``near <= far``,
-    half-widths positive; the half-widths broadcast to ``(*batch, n)``."""
+    half-widths positive; the half-widths with a last axis of ``n``. One camera's NumPy
+    values are checked as Python floats first (the per-frame case)."""
     xp = checks.ctx.xp
-    if M is not None:
+    if M is not None and not (xp is np and M.ndim == 1 and _plain_range(*M.tolist())):
         checks.require(all_finite(xp, M, 1), non_finite("depth_range"))
         checks.require(M[..., 0] <= M[..., 1], "depth_range: the measured near exceeds its far")
     if state[0] is None:
@@ -375,12 +376,28 @@ def _range_checks(checks: Checks, M: Any, state: tuple[Any, ...], sn: Any) -> An
             f"state: half_width must be (*batch, n) = {(*shape, n)} or one number, "
             f"got {tuple(W.shape)}"
         )
-    none = xp.isnan(near) & xp.isnan(far)  # CascadeState.initial()
-    ok = none | (all_finite(xp, near, 0) & all_finite(xp, far, 0))
-    checks.require(ok, non_finite("state") + " (or NaN: initial())")
-    checks.require(none | (near <= far), "state: its near exceeds its far")
-    checks.require(~(W <= 0) & ~xp.isinf(W), "state: half_width must be positive or NaN")
-    return xp.broadcast_to(W, (*shape, n))
+    if not (xp is np and near.ndim == far.ndim == 0 and W.ndim <= 1 and _plain_state(state)):
+        none = xp.isnan(near) & xp.isnan(far)  # CascadeState.initial()
+        ok = none | (all_finite(xp, near, 0) & all_finite(xp, far, 0))
+        checks.require(ok, non_finite("state") + " (or NaN: initial())")
+        checks.require(none | (near <= far), "state: its near exceeds its far")
+        checks.require(~(W <= 0) & ~xp.isinf(W), "state: half_width must be positive or NaN")
+    return W if W.ndim and W.shape[-1] == n else xp.broadcast_to(W, (*W.shape[:-1], n))
+
+
+def _plain_range(lo: float, hi: float) -> bool:
+    """A measured range that passes its checks (Python floats)."""
+    return math.isfinite(lo) and math.isfinite(hi) and lo <= hi
+
+
+def _plain_state(state: tuple[Any, ...]) -> bool:
+    """One camera's state that passes its checks (as Python floats)."""
+    near, far, W = float(state[0]), float(state[1]), state[2].tolist()
+    none = near != near and far != far
+    ws = W if isinstance(W, list) else [W]
+    return (none or _plain_range(near, far)) and all(
+        not (w <= 0) and w not in (math.inf, -math.inf) for w in ws
+    )
 
 
 def _broadcasts(a: tuple[int, ...], shape: tuple[int, ...]) -> bool:
@@ -485,13 +502,16 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
     ctx, shape, o = call.ctx, call.shape, call.o
     L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
     n, total = o.cascades, math.prod(shape)
-    d = np.nan if dmax is None else dmax
-    plain = extra is None and type(lm) is float and type(ov) is float
-    if plain and (dmax is None or type(dmax) is float):
-        scal = np.array([[lm, d, ov, np.nan, np.nan, np.nan, np.nan]])
+    values = (
+        lm,
+        np.nan if dmax is None else dmax,
+        ov,
+        *((np.nan,) * 4 if extra is None else extra),
+    )
+    if all(type(v) is float or (type(v) is np.ndarray and v.ndim == 0) for v in values):
+        scal = np.array([[float(v) for v in values]])  # one camera's: no broadcasting
     else:
-        more = (np.nan,) * 4 if extra is None else extra
-        scal = np.stack(np.broadcast_arrays(lm, d, ov, *more), axis=-1)
+        scal = np.stack(np.broadcast_arrays(*values), axis=-1)
     inputs = (
         flat_batch(L, shape, (3,)), flat_batch(V, shape, (4, 4)).reshape(-1, 16),
         flat_batch(P, shape, (4, 4)).reshape(-1, 16), flat_batch(box, shape, (2, 3)).reshape(-1, 6),
