@@ -239,6 +239,10 @@ def test_the_ladder_values() -> None:
         ({"depth_range": np.array([9.0, 1.0])}, "depth_range: the measured near exceeds"),
         ({"depth_range": np.array([np.nan, 1.0])}, "depth_range"),
         ({"depth_range": np.array([1.0, 2.0, 3.0])}, "depth_range"),
+        ({"depth_range": "visible", "state": sm.CascadeState(1.0, 9.0, -2.0)},
+         "state: half_width must be positive"),
+        ({"depth_range": "visible", "state": sm.CascadeState(1.0, 9.0, np.ones(3))},
+         r"state: half_width must be \(\*batch, n\)"),
         ({"depth_range": "visible", "state": sm.CascadeState(9.0, 1.0, 2.0)},
          "state: its near exceeds"),
     ],
@@ -281,3 +285,24 @@ def test_jax_gradients_of_the_visible_range() -> None:
         )
     )
     assert np.all(np.isnan(bad(jnp.array([9.0, 1.0]))))
+
+
+def test_jax_stable_squares_with_a_state_equal_numpy() -> None:
+    jax = pytest.importorskip("jax")
+    jax.config.update("jax_enable_x64", True)
+    jnp = jax.numpy
+    proj, views = perspective(1.0, 1.6, 0.1, 400.0), [pose(30.0, 0.5), pose(31.0, 0.55)]
+    state = sm.CascadeState.initial()
+    fit = jax.jit(lambda v, s: sm.fit_cascades(jnp.asarray(SUN), v, jnp.asarray(proj),
+                                               jnp.asarray(BOX), 256, depth_range="visible",
+                                               stable=True, state=s))  # fmt: skip
+    jstate = sm.CascadeState(jnp.nan, jnp.nan, jnp.full(4, jnp.nan))
+    for view in views:
+        want = sm.fit_cascades(SUN, view, proj, BOX, 256, depth_range="visible", stable=True,
+                               state=state)  # fmt: skip
+        got = fit(jnp.asarray(view), jstate)
+        np.testing.assert_allclose(got.world_to_clip, want.world_to_clip, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(got.state.half_width, want.state.half_width, rtol=1e-12)
+        state, jstate = want.state, got.state
+    bad = fit(jnp.asarray(views[0]), jstate._replace(half_width=-jstate.half_width))
+    assert np.all(np.isnan(bad.world_to_clip))  # an invalid state: NaN, as every invalid input

@@ -381,7 +381,8 @@ def _range_checks(checks: Checks, M: Any, state: tuple[Any, ...], sn: Any) -> An
         ok = none | (all_finite(xp, near, 0) & all_finite(xp, far, 0))
         checks.require(ok, non_finite("state") + " (or NaN: initial())")
         checks.require(none | (near <= far), "state: its near exceeds its far")
-        checks.require(~(W <= 0) & ~xp.isinf(W), "state: half_width must be positive or NaN")
+        w_ok = ~(W <= 0) & ~xp.isinf(W)  # per cascade: the entry's check is all of them
+        checks.require(xp.all(w_ok, axis=-1) if W.ndim else w_ok, _HALF_WIDTH)
     return W if W.ndim and W.shape[-1] == n else xp.broadcast_to(W, (*W.shape[:-1], n))
 
 
@@ -677,6 +678,7 @@ def _options(
     return o, options_record(o)
 
 
+_HALF_WIDTH = "state: half_width must be positive or NaN"
 _LAM_RANGE = "lam: the practical scheme's blend must lie in [0, 1]"
 _OVERLAP_RANGE = "overlap: the blend band must be a fraction in [0, 1)"
 
