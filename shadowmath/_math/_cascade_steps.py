@@ -103,7 +103,7 @@ class CascadeOptions(NamedTuple):
     map_clip: tuple[float, ...]  # OpenGL clip to the maps' API's (16)
     map_texture: tuple[float, ...]  # its texture rows (16)
     depth_range: int  # 0: the camera's, 1: the visible range, 2: measured (sc[3], sc[4])
-    has_state: bool  # the previous range in use (sc[5], sc[6]): ladder and hysteresis
+    has_state: bool  # the last range and sizes in use (sc[5], sc[6]; W): the ladder
 
 
 _KINDS = {"bool": np.bool_, "float": np.float64, "int": np.int64}
@@ -349,12 +349,8 @@ def cascade_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
     b = cascade_bounds(lc, gs, (bl, bg), (s0, s1))
     if o.stable:
         hx, hy, cx, cy, z_lo, z_hi, r = stable_box((vc, iV, a), b, e[0][5], j, o)
-        if o.has_state:
-            pad = (b[5] - b[4]) + greater(hx, hy)  # the visible part's own depths
-            near, far, z_lo = pad, pad + (b[5] - b[4]), b[4]
-        else:
-            pad = (z_hi - z_lo) + greater(hx, hy)
-            near, far = pad, pad + (z_hi - z_lo)
+        pad = (z_hi - z_lo) + greater(hx, hy)
+        near, far = pad, pad + (z_hi - z_lo)
         row[59] = r
     else:
         hx, hy, cx, cy, near, far = cascade_box((b[0], b[1], b[2], b[3], b[4], b[5]))
@@ -373,7 +369,7 @@ def stable_box(cam: Any, b: Any, W: Any, j: Any, o: Any) -> Any:
     (``W``: the laddered half-widths in use) the half-width of the visible part's
     light-space bounds ``b`` on the ladder with hysteresis
     (:func:`._cascade_formulas.ladder_hold`), returned as the last value, but at most
-    ``r``, centred on those bounds."""
+    ``r``, centred on those bounds, with their depths."""
     vc, iV, a = cam
     corners = (
         vc[0], vc[1], vc[2], vc[3], vc[4], vc[5], vc[6], vc[7], vc[8], vc[9], vc[10], vc[11],
@@ -392,6 +388,8 @@ def stable_box(cam: Any, b: Any, W: Any, j: Any, o: Any) -> Any:
     hx, hy, ox, oy, _ = stable_sides((c, r * r), a, (o.mx, o.my, o.width, o.height), r, o.eps)
     cx = c[0] * a[0] + c[1] * a[1] + c[2] * a[2] + ox
     cy = c[0] * a[3] + c[1] * a[4] + c[2] * a[5] + oy
+    if o.has_state:  # the visible part's own depths
+        return hx, hy, cx, cy, b[4], b[5], held
     cz = c[0] * a[6] + c[1] * a[7] + c[2] * a[8]
     z_hi = lesser(cz + r, b[7])
     return hx, hy, cx, cy, lesser(b[6], z_hi - r), z_hi, held
