@@ -4,20 +4,19 @@ The scene, cameras and comparison of ``test_render_cascades``; ``sm.fit_cascades
 called by ``render_cascades`` with ``depth_range="visible"`` (alone, stable with the
 slice's sphere, and with stable squares on the ladder from ``CascadeState.initial()``)
 or with the range measured on a first frame (the view depths of its visible points).
-Off the edge band no pixel may differ from the ray caster (OpenGL).
+Off the edge band no pixel may differ from the ray caster (OpenGL and WebGPU).
 """
 
 from __future__ import annotations
-
-import functools
 
 import numpy as np
 import pytest
 
 import shadowmath as sm
-from shadowmath.render import render_cascades
 
-from .test_render_cascades import CAMERAS, NEAR, shadows
+from .test_render_cascades import CAMERAS, NEAR, render, shadows
+
+__all__ = ["render"]  # the fixture: render_cascades (OpenGL) or render_cascades_wgpu
 
 VARIANTS = {
     "visible": {"depth_range": "visible"},
@@ -34,12 +33,11 @@ CASES = [(camera, variant) for camera in CAMERAS for variant in VARIANTS
 
 
 @pytest.mark.parametrize(("camera", "variant"), CASES)
-def test_the_visible_range_agrees_with_the_ray_caster(gl, monkeypatch, camera, variant):
+def test_the_visible_range_agrees_with_the_ray_caster(render, monkeypatch, camera, variant):
     options = dict(VARIANTS[variant])
     stable = options.pop("stable", False)
     if options.pop("state", False):
         options["state"] = sm.CascadeState.initial()
-    render = functools.partial(render_cascades, ctx=gl)
     if options["depth_range"] == "measured":  # the view depths a first frame saw
         frame, _, _ = shadows(camera, render)
         p = frame.position[frame.body >= 0].astype(np.float64)
