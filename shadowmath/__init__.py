@@ -87,6 +87,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._fits._atlas_viewports import atlas_viewports as atlas_viewports
     from ._fits._cascade_splits import cascade_splits as cascade_splits
     from ._fits._cascades import Cascades as Cascades
+    from ._fits._cascades import CascadeState as CascadeState
     from ._fits._cascades import fit_cascades as fit_cascades
     from ._fits._cube_depth import CubeDepthRange as CubeDepthRange
     from ._fits._cube_depth import cube_depth_range as cube_depth_range
@@ -180,6 +181,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "._fits._atlas_viewports": ("atlas_tile_transforms", "atlas_viewports"),
     "._fits._cascade_splits": ("cascade_splits",),
     "._fits._cascades": (
+        "CascadeState",
         "Cascades",
         "fit_cascades",
     ),
@@ -262,6 +264,7 @@ __all__ = [
     "NEAR_FAR_SLACK",
     "ApiConvention",
     "AtlasFit",
+    "CascadeState",
     "Cascades",
     "CubeDepthRange",
     "CubeFaceCoords",

@@ -373,7 +373,11 @@ def test_errors_name_the_argument(change: dict[str, Any], message: str, path: st
     "options",
     [{}, {"stable": True}, {"layout": "atlas", "count": 3}, {"splits": [0.5, 3.0, 20.0, 90.0]},
      {"max_distance": 60.0, "scheme": "log"}, {"up": np.array([0.0, 0.0, 1.0]), "api": "vulkan"},
-     {"overlap": 0.0, "pcf_radius": 3}],
+     {"overlap": 0.0, "pcf_radius": 3}, {"depth_range": "visible"},
+     {"depth_range": np.array([[2.0, 50.0], [1.0, 30.0], [0.7, 200.0]]), "stable": True},
+     {"depth_range": "visible", "stable": True,
+      "state": sm.CascadeState(np.array([2.0, np.nan, 0.6]), np.array([60.0, np.nan, 99.0]),
+                               np.array([[3.0, 9.0, 20.0, 40.0]] * 2 + [[np.nan] * 4]))}],
 )  # fmt: skip
 def test_compiled_loop_equals_array_path(options: dict[str, Any]) -> None:
     pytest.importorskip("numba")
@@ -467,7 +471,7 @@ def test_the_options_record_reads_back_each_option_by_name() -> None:
 
     rows = tuple(tuple(float(16 * m + k) for k in range(16)) for m in range(3))
     o = CascadeOptions(True, False, True, False, 0.9, 0.8, 512.0, 256.0, 2.0**-52, 2.0**-26,
-                       3, 0.01, 2, 2, *rows)  # fmt: skip
+                       3, 0.01, 2, 2, *rows, 2, True)  # fmt: skip
     record = options_record(o)[0]
     for name, value in o._asdict().items():
         got = record[name]

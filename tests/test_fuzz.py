@@ -2398,8 +2398,16 @@ def test_fuzz_fit_cascades(data: st.DataObject) -> None:
     (compiled, Python loop, arrays) agree; a zero sun is refused by name."""
     CASES["fit_cascades"] += 1
     sun, view, proj, box = _cascade_scene(data)
+    state = sm.CascadeState(
+        np.float64(data.draw(st.floats(0.5, 5))),
+        np.float64(80.0),
+        np.float64(data.draw(st.floats(0.5, 50))),
+    )
     options = data.draw(st.sampled_from([{}, {"stable": True}, {"layout": "atlas"},
-                                         {"scheme": "uniform", "count": 2}]))  # fmt: skip
+                                         {"scheme": "uniform", "count": 2},
+                                         {"depth_range": "visible"},
+                                         {"depth_range": "visible", "state": state,
+                                          "stable": True}]))  # fmt: skip
     c = sm.fit_cascades(sun, view, proj, box, 512, **options)
     assert isinstance(c, sm.Cascades)
     assert np.all(np.isfinite(c.world_to_clip)) and np.all(np.diff(c.splits) > 0)
@@ -2544,6 +2552,7 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "NEAR_FAR_SLACK": ("test_fuzz_fit_shadow_scene_options",),
     "ApiConvention": ("test_fuzz_api_convention",),
     "Cascades": ("test_fuzz_fit_cascades",),
+    "CascadeState": ("test_fuzz_fit_cascades",),
     "CubeDepthRange": ("test_fuzz_cube_depth_range",),
     "CubeFaceCoords": ("test_fuzz_cube_face", "test_fuzz_cube_jax_eager_jit_vmap"),
     "CubeFaceDepth": ("test_fuzz_cube_face_projection_and_depth",),

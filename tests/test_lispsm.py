@@ -94,6 +94,7 @@ def leaves(c: sm.Cascades) -> list[np.ndarray]:
     out = []
     for v in c:
         fields = v[:8] if isinstance(v, sm.OrthographicBox) else (v,)
+        fields = tuple(v) if isinstance(v, sm.CascadeState) else fields
         out += [np.asarray(f) for f in fields]
     return out
 

@@ -56,9 +56,45 @@ from ._cascade_splits import (
 from ._lispsm import check_warp, warp_cascades
 from ._spec import ShadowMapSpec, api_rows, map_spec
 
-__all__ = ["Cascades", "fit_cascades"]
+__all__ = ["CascadeState", "Cascades", "fit_cascades"]
 
 CascadeLayout = Literal["layers", "atlas"]
+DepthRangeName = Literal["camera", "visible"]
+_RANGE_CODES = {"camera": 0, "visible": 1}
+
+
+class CascadeState(NamedTuple):
+    """What a :func:`fit_cascades` call used, for the next frame's hysteresis.
+
+    Start with :meth:`initial` (nothing in use yet), then give the last frame's result's
+    ``state`` to the next call as ``state=`` (with ``depth_range`` ``"visible"`` or
+    measured): the depth range's ends, and with ``stable=True`` each cascade's size,
+    are then values of a fixed ladder ``2^(k/4)`` that grow at once and shrink only past
+    a margin of one step, so the splits and the stable cascades' sizes change only at
+    ladder steps (``docs/cascades.md``).
+
+    Attributes:
+        near: ``(*batch,)`` the first split in use (NaN: none yet).
+        far: ``(*batch,)`` the last split in use (NaN: none yet).
+        half_width: ``(*batch, n)`` each stable cascade's laddered half-width (the
+            square uses the lesser of it and the slice's sphere's radius, then adds its
+            half texel of snapping room); NaN: none yet; NaN in a result without
+            ``stable=True``, the sphere's radius in one without ``state``.
+
+    Example:
+        >>> import shadowmath as sm
+        >>> sm.CascadeState.initial()
+        CascadeState(near=nan, far=nan, half_width=nan)
+    """
+
+    near: Real[ArrayLike, "*#batch"]
+    far: Real[ArrayLike, "*#batch"]
+    half_width: Real[ArrayLike, "*#batch _"] | Real[ArrayLike, ""]
+
+    @classmethod
+    def initial(cls) -> CascadeState:
+        """The state before the first frame: nothing in use (every value NaN)."""
+        return cls(math.nan, math.nan, math.nan)
 
 
 class Cascades(NamedTuple):
@@ -93,6 +129,8 @@ class Cascades(NamedTuple):
             Every viewport lies inside it.
         texture_layers: the texture's layer count: ``n`` with ``layout="layers"``
             (a texture array), 1 with ``layout="atlas"``.
+        state: what this fit used (the splits' ends, the stable sizes): the next
+            frame's ``state=`` (not needed by a renderer).
     """
 
     world_to_light: Float[Array, "*batch n 4 4"]
@@ -105,6 +143,8 @@ class Cascades(NamedTuple):
     viewports: Int[Array, "n 4"]
     texture_size: tuple[int, int]
     texture_layers: int
+
+    state: CascadeState
 
 
 def fit_cascades(
@@ -131,6 +171,8 @@ def fit_cascades(
     camera_reversed_z: bool = False,
     layout: CascadeLayout = "layers",
     warp: Literal[None, "lispsm"] = None,
+    depth_range: DepthRangeName | Real[ArrayLike, "*#batch 2"] = "camera",
+    state: CascadeState | None = None,
 ) -> Cascades:
     r"""Fit a directional light's cascaded shadow maps to what a camera sees.
 
@@ -147,7 +189,9 @@ def fit_cascades(
       bounding sphere (which depends on the projection and the splits only) plus
       half a texel, its centre snapped to whole texels of a grid anchored at the
       world origin: as the camera moves and turns, every cascade keeps its size
-      and its texel grid moves by whole texels;
+      and its texel grid moves by whole texels (with ``state``, the square of the
+      visible part's bounds instead: half-width the lesser of the sphere's and a
+      ladder value with hysteresis, centred on the part);
     * **depth**: from the scene box's corner nearest the light (every caster that
       can shadow the slice lies behind it, seen or not) to the slice's deepest
       point in the scene, widened by ``NEAR_FAR_SLACK``;
@@ -200,6 +244,21 @@ def fit_cascades(
             where the strength vanishes (the view within ~1.15 degrees of the light,
             ``sin < 0.02``, or no warp beats the orthographic map) or the camera is
             orthographic. Not with ``stable=True`` (``ValueError``).
+        depth_range: the view depths the scheme's splits span. ``"camera"``: the
+            camera's ``[near, far]`` (or ``[near, max_distance]``); ``"visible"``: the
+            nearest and farthest view depth at which that range of the camera sees
+            ``scene_bounds``, exactly (the extremes of the affine view depth over the
+            vertices of the frustum intersected with the box; the camera's range where
+            they miss), so no cascade covers empty depths; or ``(*batch, 2)`` a range
+            the renderer measured (``[min, max]`` of last frame's view depths), clipped
+            to the camera's. Not with custom ``splits``.
+        state: the range in use in the last frame (its result's
+            ``state``; :meth:`CascadeState.initial` before the first), with
+            ``depth_range`` ``"visible"`` or measured: the range's ends are then rounded
+            outward to a ladder of depths ``2^(k/4)``, grow at once and shrink only when
+            the target's ladder value is more than a step inside, so the splits change
+            only at ladder steps; with ``stable=True`` each square's half-width likewise
+            follows its slice's visible part (``docs/cascades.md``).
 
     Returns:
         :class:`Cascades`.
@@ -210,8 +269,11 @@ def fit_cascades(
             neither perspective nor orthographic (a transposed or scaled matrix), a
             zero light direction, ``up`` parallel to the light, an inverted
             ``scene_bounds``, splits outside the camera's range or not increasing, bad
-            scheme options (these are NaN under JAX transformations); and whatever the
-            values: map options given both in a :class:`ShadowMapSpec` and as keywords.
+            scheme options, a measured ``depth_range`` not finite or with near beyond
+            far, a ``state`` likewise (these are NaN under JAX transformations);
+            and whatever the values: map options given both in a :class:`ShadowMapSpec`
+            and as keywords, a ``depth_range`` that is neither a name nor ``(*batch,
+            2)``, with custom ``splits``, or a ``state`` without one.
 
     Example:
         >>> import numpy as np, shadowmath as sm
@@ -232,6 +294,7 @@ def fit_cascades(
     _check_api(cam_api, camera_reversed_z)
     if layout not in ("layers", "atlas"):
         raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
+    range_code, measured = _range_option(depth_range, splits is not None, state)
     direction = light.direction if isinstance(light, DirectionalLight) else light
     fixed = check_scheme(scheme)
     n_given = None if splits is not None else check_count(count)
@@ -240,25 +303,30 @@ def fit_cascades(
     plain = all(type(v) in (float, int) for v in (lam_v, overlap)) and (
         max_distance is None or type(max_distance) in (float, int)
     )
-    ctx, (L, V, P, box, S, U, dmax, lm, ov) = convert(
+    prev = (None,) * 3 if state is None else tuple(state)
+    ctx, (L, V, P, box, S, U, dmax, lm, ov, M, Qn, Qf, W) = convert(
         light=direction, view=view, projection=projection, scene_bounds=scene_bounds,
         splits=splits, up=up, max_distance=None if plain else max_distance,
         lam=None if plain else lam_v, overlap=None if plain else overlap,
+        depth_range=measured,
+        **{"state.near": prev[0], "state.far": prev[1], "state.half_width": prev[2]},
     )  # fmt: skip
     if plain:
         lm, ov = float(lam_v), float(overlap)
         dmax = None if max_distance is None else float(max_distance)
     checks = Checks(ctx)
     L = _light_vector(checks, L)
-    shape = _batch(checks, (L, V, P, box, U, S, dmax))
+    shape = _batch(checks, (L, V, P, box, U, S, dmax, M, Qn, Qf))
     n = S.shape[-1] - 1 if S is not None else n_given
     assert n is not None
     _scalar_checks(checks, (lm, ov, dmax, S))
+    W = _range_checks(checks, M, (Qn, Qf, W), (shape, n))
     C = _clip_from_gl(cam_api, camera_reversed_z)
-    given = (U is not None, S is not None, dmax is not None)
+    given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None)
     o, record = _options(spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row))
     call = _Call(ctx, spec, layout, shape, o)
-    arrays = (L, V, P, box, U, S, dmax, lm, ov)
+    extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
+    arrays = (L, V, P, box, U, S, dmax, lm, ov, extra, W)
     if ctx.xp is np and warp is None:
         python = not _kernels.available()
         if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
@@ -270,9 +338,89 @@ def fit_cascades(
     return _arrays(call, checks, arrays, warp)
 
 
+def _range_option(
+    depth_range: Any, has_splits: bool, state: CascadeState | None
+) -> tuple[int, Any]:
+    """``depth_range``'s code (0 camera, 1 visible, 2 measured) and the measured range."""
+    if isinstance(depth_range, str):
+        if depth_range not in _RANGE_CODES:
+            raise ValueError(
+                f"depth_range: expected 'camera', 'visible' or a measured (*batch, 2) "
+                f"[near, far], got {depth_range!r}"
+            )
+        code, measured = _RANGE_CODES[depth_range], None
+    else:
+        code, measured = 2, depth_range
+    if code and has_splits:
+        raise ValueError("depth_range: custom splits set their own range; give one or the other")
+    if state is not None and not isinstance(state, CascadeState):
+        raise ValueError(
+            f"state: expected a CascadeState (a result's .state), got {type(state).__name__}"
+        )
+    if state is not None and code == 0:
+        raise ValueError("state: needs depth_range='visible' or a measured range")
+    return code, measured
+
+
+def _range_checks(checks: Checks, M: Any, state: tuple[Any, ...], sn: Any) -> Any:
+    """A measured range and a previous state: finite (or NaN: none), ``near <= far``,
+    half-widths positive; the half-widths with a last axis of ``n``. One camera's NumPy
+    values are checked as Python floats first (the per-frame case)."""
+    xp = checks.ctx.xp
+    if M is not None and not (xp is np and M.ndim == 1 and _plain_range(*M.tolist())):
+        checks.require(all_finite(xp, M, 1), non_finite("depth_range"))
+        checks.require(M[..., 0] <= M[..., 1], "depth_range: the measured near exceeds its far")
+    if state[0] is None:
+        return None
+    near, far, W = state
+    shape, n = sn
+    if W.ndim and (W.shape[-1] not in (1, n) or not _broadcasts(W.shape[:-1], shape)):
+        raise ValueError(
+            f"state: half_width must be (*batch, n) = {(*shape, n)} or one number, "
+            f"got {tuple(W.shape)}"
+        )
+    if not (xp is np and near.ndim == far.ndim == 0 and W.ndim <= 1 and _plain_state(state)):
+        none = xp.isnan(near) & xp.isnan(far)  # CascadeState.initial()
+        ok = none | (all_finite(xp, near, 0) & all_finite(xp, far, 0))
+        checks.require(ok, non_finite("state") + " (or NaN: initial())")
+        checks.require(none | (near <= far), "state: its near exceeds its far")
+        w_ok = ~(W <= 0) & ~xp.isinf(W)  # per cascade: the entry's check is all of them
+        checks.require(xp.all(w_ok, axis=-1) if W.ndim else w_ok, _HALF_WIDTH)
+    return W if W.ndim and W.shape[-1] == n else xp.broadcast_to(W, (*W.shape[:-1], n))
+
+
+def _plain_range(lo: float, hi: float) -> bool:
+    """A measured range that passes its checks (Python floats)."""
+    return math.isfinite(lo) and math.isfinite(hi) and lo <= hi
+
+
+def _plain_state(state: tuple[Any, ...]) -> bool:
+    """One camera's state that passes its checks (as Python floats)."""
+    near, far, W = float(state[0]), float(state[1]), state[2].tolist()
+    none = near != near and far != far
+    ws = W if isinstance(W, list) else [W]
+    return (none or _plain_range(near, far)) and all(
+        not (w <= 0) and w not in (math.inf, -math.inf) for w in ws
+    )
+
+
+def _broadcasts(a: tuple[int, ...], shape: tuple[int, ...]) -> bool:
+    """Whether a batch shape ``a`` broadcasts to ``shape``."""
+    return len(a) <= len(shape) and all(
+        x in (1, y) for x, y in zip(a[::-1], shape[::-1], strict=False)
+    )
+
+
+def _range_scalars(xp: Any, M: Any, state: tuple[Any, ...]) -> tuple[Any, ...]:
+    """The measured range's ends and the previous range's, NaN where not given."""
+    nan = math.nan
+    lo, hi = (nan, nan) if M is None else (M[..., 0], M[..., 1])
+    return (lo, hi, *((nan, nan) if state[0] is None else state))
+
+
 def _batch(checks: Checks, arrays: tuple[Any, ...]) -> tuple[int, ...]:
     """The shape checks of the arrays and their batch shape."""
-    L, V, P, box, U, S, dmax = arrays
+    L, V, P, box, U, S, dmax, M, Qn, Qf = arrays[:10]
     require_matrix("view", V)
     check_projection(checks, P)
     require_last("scene_bounds", box, 3, min_ndim=2, hint="[min_corner, max_corner]")
@@ -291,7 +439,13 @@ def _batch(checks: Checks, arrays: tuple[Any, ...]) -> tuple[int, ...]:
             )
     shapes = [L.shape[:-1], V.shape[:-2], P.shape[:-2], box.shape[:-2]]
     names = ["light", "view", "projection", "scene_bounds"]
-    for name, v, drop in (("up", U, 1), ("splits", S, 1), ("max_distance", dmax, 0)):
+    if M is not None:
+        require_last("depth_range", M, 2, hint="a measured [near, far]")
+    if (Qn is None) != (Qf is None) or (Qn is not None and Qn.shape != Qf.shape):
+        raise ValueError("state: near and far must have one shape")
+    named = (("up", U, 1), ("splits", S, 1), ("max_distance", dmax, 0),
+             ("depth_range", M, 1), ("state", Qn, 0))  # fmt: skip
+    for name, v, drop in named:
         if v is not None and not isinstance(v, float):
             shapes.append(v.shape[: v.ndim - drop])
             names.append(name)
@@ -350,17 +504,24 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
     extra, ``record`` its options), or, ``record`` None, run by Python on lists (a few
     cameras without Numba)."""
     ctx, shape, o = call.ctx, call.shape, call.o
-    L, V, P, box, U, S, dmax, lm, ov = arrays
+    L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
     n, total = o.cascades, math.prod(shape)
-    if type(lm) is float and type(ov) is float and (dmax is None or type(dmax) is float):
-        scal = np.array([[lm, np.nan if dmax is None else dmax, ov]])
+    values = (
+        lm,
+        np.nan if dmax is None else dmax,
+        ov,
+        *((np.nan,) * 4 if extra is None else extra),
+    )
+    if all(type(v) is float or (type(v) is np.ndarray and v.ndim == 0) for v in values):
+        scal = np.array([[float(v) for v in values]])  # one camera's: no broadcasting
     else:
-        scal = np.stack(np.broadcast_arrays(lm, np.nan if dmax is None else dmax, ov), axis=-1)
+        scal = np.stack(np.broadcast_arrays(*values), axis=-1)
     inputs = (
         flat_batch(L, shape, (3,)), flat_batch(V, shape, (4, 4)).reshape(-1, 16),
         flat_batch(P, shape, (4, 4)).reshape(-1, 16), flat_batch(box, shape, (2, 3)).reshape(-1, 6),
-        _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (3,)),
+        _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (7,)),
         _NO_SPLITS if S is None else flat_batch(S, shape, (n + 1,)),
+        _NO_SIZES if W is None else flat_batch(W, shape, (n,)),
     )  # fmt: skip
     if record is None:  # the same loop on Python lists and floats
         rows = [[[0.0] * ROW for _ in range(n)] for _ in range(total)]
@@ -385,7 +546,7 @@ def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | No
     values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``)."""
     ctx, o = call.ctx, call.o
     xp, F = ctx.xp, formulas(ctx.xp)
-    L, V, P, box, U, S, dmax, lm, ov = arrays
+    L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
     inputs = (
         tuple(L[..., c, None] for c in range(3)),
         tuple(V[..., i // 4, i % 4, None] for i in range(16)),
@@ -393,10 +554,13 @@ def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | No
         tuple(box[..., i // 3, i % 3, None] for i in range(6)),
         (0.0, 0.0, 0.0) if U is None else tuple(U[..., c, None] for c in range(3)),
     )
-    sc = tuple(v if v is None or isinstance(v, float) else v[..., None] for v in (lm, dmax, ov))
+    more = (math.nan,) * 4 if extra is None else extra
+    sc = tuple(
+        v if v is None or isinstance(v, float) else v[..., None] for v in (lm, dmax, ov, *more)
+    )
     j = np.arange(o.cascades + 1, dtype=ctx.dtype)  # the cascades' indices, in the work dtype
     with np.errstate(all="ignore"):  # invalid entries: their status bits say so
-        e = F.cascade_entry(inputs, sc, S, o)
+        e = F.cascade_entry(inputs, sc, (S, W), o)
         splits = F.cascade_split(S, j, e[0][1:4], o)
         sl = F.cascade_slice(e, inputs[3], splits, j[:-1], o)
         row: list[Any] = [0.0] * ROW
@@ -442,6 +606,7 @@ def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
     xp, n, spec = call.ctx.xp, call.o.cascades, call.spec
     m = xp.reshape(rows[..., :48], (*call.shape, n, 3, 4, 4))
     rx, ry, near, far, m_x, m_y, cx, cy = (rows[..., 48 + k] for k in range(8))
+    state = CascadeState(splits[..., 0], splits[..., -1], rows[..., 59])
     texture = _texture(n, spec.size, call.layout)
     return Cascades(
         world_to_light=m[..., 0, :, :],
@@ -454,6 +619,7 @@ def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
         viewports=_tiles(n, spec.size, call.layout),
         texture_size=texture[0],
         texture_layers=texture[1],
+        state=state,
     )
 
 
@@ -463,6 +629,7 @@ PYTHON_LOOP_CAMERAS = 4
 
 _NO_UP = np.zeros((1, 3))
 _NO_SPLITS = np.zeros((1, 2))
+_NO_SIZES = np.zeros((1, 1))
 
 
 def _scalar_checks(checks: Checks, values: tuple[Any, ...]) -> None:
@@ -493,7 +660,7 @@ def _options(
     spec: ShadowMapSpec,
     layout: str,
     n: int,
-    given: tuple[bool, bool, bool],
+    given: tuple[bool, bool, bool, int, bool],
     *,
     eps: float,
     C: tuple[float, ...],
@@ -502,9 +669,10 @@ def _options(
     few recur every frame)."""
     cols, rows = _grid(n, layout)
     C_api, TC_api = api_rows(spec.api, spec.reversed_z)
-    has_up, has_splits, has_dmax = given
+    has_up, has_splits, has_dmax, range_code, has_state = given
     o = CascadeOptions(
         has_up=has_up, stable=spec.stable, has_splits=has_splits, has_dmax=has_dmax,
+        depth_range=range_code, has_state=has_state,
         mx=float(spec.margins[0]), my=float(spec.margins[1]), width=float(spec.size[0]),
         height=float(spec.size[1]), eps=eps, tol=math.sqrt(eps), cascades=n,
         slack=NEAR_FAR_SLACK, cols=cols, rows=rows, camera_clip=C, map_clip=tuple(C_api),
@@ -513,6 +681,7 @@ def _options(
     return o, options_record(o)
 
 
+_HALF_WIDTH = "state: half_width must be positive or NaN"
 _LAM_RANGE = "lam: the practical scheme's blend must lie in [0, 1]"
 _OVERLAP_RANGE = "overlap: the blend band must be a fraction in [0, 1)"
 

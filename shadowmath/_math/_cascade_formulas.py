@@ -28,11 +28,12 @@ Trusted inputs only: nothing here raises.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 # Backend primitives and shared formulas, rebound by specialize().
-from ._fit_formulas import stable_sides  # noqa: F401  (looked up by the specialized copies)
-from ._formulas import fabs, sqrt, where  # noqa: F401
+from ._fit_formulas import rint, stable_sides  # noqa: F401  (looked up by the specialized copies)
+from ._formulas import fabs, log2, sqrt, where  # noqa: F401
 
 #: The 12 edges of a box or slice as pairs of corner indices ``i + 2 j + 4 l``.
 EDGES = (
@@ -52,6 +53,60 @@ def split_depth(near: Any, far: Any, lam: Any, frac: Any) -> Any:
     """
     safe = where(near > 0, near, 1.0 + 0.0 * near)
     return lam * (safe * (far / safe) ** frac) + (1.0 - lam) * (near + (far - near) * frac)
+
+
+#: The depth ladder's steps per octave: a laddered depth is ``2^(k / LADDER_STEPS)``.
+LADDER_STEPS = 4.0
+#: How many ladder steps a laddered end may lag behind its target before it follows.
+HYSTERESIS_STEPS = 1.0
+
+
+def ladder_up(x: Any) -> Any:
+    r"""The smallest ladder value ``2^(k/4) >= x`` (``k`` whole); ``x <= 0`` unchanged.
+
+    .. math:: k = \lceil 4 \log_2 x \rceil
+
+    written ``rint(4 log2 x + 1/2)`` (at least ``4 log2 x``), then one step up where
+    rounding left the value below ``x``.
+    """
+    safe = where(x > 0, x, 1.0 + 0.0 * x)
+    q = 2.0 ** (rint(LADDER_STEPS * log2(safe) + 0.5) / LADDER_STEPS)
+    q = where(q < safe, q * 2.0 ** (1.0 / LADDER_STEPS), q)
+    return where(x > 0, q, x)
+
+
+def ladder_hold(t: Any, p: Any) -> Any:
+    r"""A value ``>= t`` on the ladder, with hysteresis: ``p`` (the last one) or ``q``.
+
+    With ``q`` = :func:`ladder_up` of ``t`` and one step ``s = 2^{1/4}``:
+
+    .. math:: \begin{cases} p & t \le p \le q\, s^{M} \\ q & \text{otherwise} \end{cases}
+
+    (``M = HYSTERESIS_STEPS``, compared at ``M + 1/2`` steps: ladder values are ``s``
+    apart, so rounding cannot flip the choice). It grows at once (``t > p``) and
+    shrinks only once ``q`` lies more than ``M`` steps below ``p``. ``p`` NaN: ``q``.
+    """
+    margin = 2.0 ** ((HYSTERESIS_STEPS + 0.5) / LADDER_STEPS)
+    q = ladder_up(t)
+    keep = (p >= t) & (p <= q * margin)
+    return where(keep, p, where(q >= t, q, t))
+
+
+def depth_hysteresis(t_lo: Any, t_hi: Any, p_lo: Any, p_hi: Any) -> tuple[Any, Any]:
+    r"""The depth range in use: the target ``[t_lo, t_hi]`` widened to the ladder with
+    hysteresis, from the last one ``[p_lo, p_hi]`` (NaN: none).
+
+    The far end is :func:`ladder_hold`; the near end is its mirror,
+    ``1 / ladder_hold(1 / t_lo, 1 / p_lo)`` (a ladder value at most ``t_lo``, which
+    grows the range at once and shrinks it only past the margin); ``t_lo <= 0`` (an
+    orthographic camera's) is kept as it is. The result holds the target.
+    """
+    pos = t_lo > 0
+    inv_t = 1.0 / where(pos, t_lo, 1.0 + 0.0 * t_lo)
+    inv_p = 1.0 / where(p_lo > 0, p_lo, 0.0 * t_lo + math.inf)
+    lo = 1.0 / ladder_hold(inv_t, inv_p)
+    lo = where(pos, where(lo <= t_lo, lo, t_lo), t_lo)
+    return lo, ladder_hold(t_hi, p_hi)
 
 
 def edge_point(n: tuple[Any, ...], f: tuple[Any, ...], s: Any, d: Any) -> tuple[Any, Any, Any]:
@@ -219,6 +274,9 @@ def cascade_box(
 
 FUNCTIONS = (
     "split_depth",
+    "ladder_up",
+    "ladder_hold",
+    "depth_hysteresis",
     "edge_point",
     "affine",
     "camera_values",

@@ -54,7 +54,9 @@ from ._cascade_formulas import (  # noqa: F401
     cascade_box,
     clip_plane,
     clip_segment,
+    depth_hysteresis,
     edge_point,
+    ladder_hold,
     slice_sphere,
     slice_values,
     split_depth,
@@ -75,8 +77,9 @@ cascade_bounds: Any = None
 # Status bits (module constants: Numba freezes them at compile time).
 
 #: One output row per cascade: world_to_light, world_to_clip, world_to_texture (16 each),
-#: the frustum's eight numbers, the band's end, the texel's size along X and Y.
-ROW = 48 + 8 + 3
+#: the frustum's eight numbers, the band's end, the texel's size along X and Y, and a
+#: stable cascade's laddered half-width (NaN otherwise).
+ROW = 48 + 8 + 3 + 1
 
 
 class CascadeOptions(NamedTuple):
@@ -99,6 +102,8 @@ class CascadeOptions(NamedTuple):
     camera_clip: tuple[float, ...]  # OpenGL clip to the camera's (16)
     map_clip: tuple[float, ...]  # OpenGL clip to the maps' API's (16)
     map_texture: tuple[float, ...]  # its texture rows (16)
+    depth_range: int  # 0: the camera's, 1: the visible range, 2: measured (sc[3], sc[4])
+    has_state: bool  # the last range and sizes in use (sc[5], sc[6]; W): the ladder
 
 
 _KINDS = {"bool": np.bool_, "float": np.float64, "int": np.int64}
@@ -248,10 +253,13 @@ def box_pass(VP: Any, box: Any, a_sign: Any, bl: Any, bg: Any) -> None:
         bg[5 * k + 4] = sign * (V[8] * x + V[9] * y + V[10] * z + V[11])
 
 
-def cascade_entry(inputs: Any, sc: Any, G: Any, o: Any) -> Any:
+def cascade_entry(inputs: Any, sc: Any, GW: Any, o: Any) -> Any:
     """One camera's steps before its cascades: frustum, checks, split range, light frame
-    and scene box. ``inputs = (L, V, P, box, U)``: 3, 16, 16, 6 and 3 per-entry values."""
+    and scene box. ``inputs = (L, V, P, box, U)``: 3, 16, 16, 6 and 3 per-entry values;
+    ``sc = (lam, max_distance, overlap, measured near, measured far, previous near,
+    previous far)``; ``GW``: the given splits and the previous stable half-widths (rows)."""
     L, V, P, box, U = inputs
+    G, W = GW
     nc, fc, bl, bg = alloc(12), alloc(16), alloc(24), alloc(40)
     sign, near, far, st = cascade_camera(V, P, o, nc, fc)
     end, st_range = cascade_range(near, far, sc, G, o)
@@ -261,16 +269,62 @@ def cascade_entry(inputs: Any, sc: Any, G: Any, o: Any) -> Any:
     st = st | cascade_checks(inputs, o) | st_range
     st = st | flag(ok_light, C_LIGHT_ZERO) | flag(ok_up, C_UP_PARALLEL)
     box_pass((V, P), box, (a, sign), bl, bg)
-    return (sign, near, end, sc[0], sc[2]), (nc, fc, bl, bg), a, inverse4(V)[0], st
+    iV = inverse4(V)[0]
+    lo, hi = split_range((sign, nc, fc, iV, a), (box, bg), (near, end), sc, o)
+    return (sign, lo, hi, sc[0], sc[2], W), (nc, fc, bl, bg), a, iV, st
+
+
+def split_range(cam: Any, scene: Any, ne: Any, sc: Any, o: Any) -> Any:
+    """The view depths the splits span: the camera's ``ne = (near, end)``, or the visible
+    range (:func:`visible_range`) or a measured one (``sc[3:5]``) within it; with the
+    previous range (``sc[5:7]``), widened to the ladder with hysteresis
+    (:func:`._cascade_formulas.depth_hysteresis`) and clamped to ``ne``."""
+    near, end = ne
+    if o.depth_range == 0:
+        return near, end
+    if o.depth_range == 1:
+        lo, hi = visible_range(cam, scene, ne)
+    else:
+        lo, hi = greater(lesser(sc[3], end), near), lesser(greater(sc[4], near), end)
+    if o.has_state:
+        lo, hi = depth_hysteresis(lo, hi, sc[5], sc[6])
+        lo, hi = greater(lo, near), lesser(hi, end)
+    return lo, hi
+
+
+def visible_range(cam: Any, scene: Any, ne: Any) -> Any:
+    """The nearest and farthest view depth of the camera's slice ``ne = (near, end)``
+    intersected with the scene box: the bounds pass (:data:`cascade_bounds`) with each
+    vertex's view depth as its first coordinate (depth is affine in the point, so its
+    extremes over the convex intersection are at vertices). ``ne`` where they miss."""
+    near, end = ne
+    box, bg = scene
+    _, _, gs = slice_corners(cam, box, near, end)
+    zero = 0.0 * near
+    sd, bd = alloc(24), alloc(24)
+    for k in range(8):
+        sd[3 * k], sd[3 * k + 1], sd[3 * k + 2] = near if k < 4 else end, zero, zero
+        bd[3 * k], bd[3 * k + 1], bd[3 * k + 2] = bg[5 * k + 4], zero, zero
+    b = cascade_bounds(sd, gs, (bd, bg), (near, end))
+    return b[0], b[1]
 
 
 def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
     """Cascade ``j``'s depths ``s0 <= s1`` (with its band; ``Z``: the ``n + 1`` splits)
     and its slice's corners: view (``vc``), light (``lc``) and the box's half-space values
     at them (``gs``)."""
-    (sign, _, _, _, ov), (nc, fc, _, _), a, iV, _ = e
+    (sign, _, _, _, ov, _), (nc, fc, _, _), a, iV, _ = e
     s0, s1 = take_last(Z, j), take_last(Z, j + 1)
     s1 = lesser(s1 + ov * (s1 - s0), take_last(Z, o.cascades))
+    vc, lc, gs = slice_corners((sign, nc, fc, iV, a), box, s0, s1)
+    return s0, s1, vc, lc, gs
+
+
+def slice_corners(cam: Any, box: Any, s0: Any, s1: Any) -> Any:
+    """The corners of the camera's slice between view depths ``s0`` and ``s1``: view
+    (``vc``, 8 x 3), light (``lc``) and the box's half-space values at them (``gs``, 8 x 6).
+    ``cam = (sign, near corners, far corners, inverse view, light axes)``."""
+    sign, nc, fc, iV, a = cam
     vc, lc, gs = alloc(24), alloc(24), alloc(48)
     lo, hi = (box[0], box[1], box[2]), (box[3], box[4], box[5])
     for k in range(8):
@@ -285,7 +339,7 @@ def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
         g = box_values(w[0], w[1], w[2], lo, hi)
         for c in range(6):
             gs[6 * k + c] = g[c]
-    return s0, s1, vc, lc, gs
+    return vc, lc, gs
 
 
 def cascade_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
@@ -294,19 +348,29 @@ def cascade_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
     _, (_, _, bl, bg), a, iV, _ = e
     b = cascade_bounds(lc, gs, (bl, bg), (s0, s1))
     if o.stable:
-        hx, hy, cx, cy, z_lo, z_hi = stable_box(vc, iV, a, b, o)
+        hx, hy, cx, cy, z_lo, z_hi, r = stable_box((vc, iV, a), b, e[0][5], j, o)
         pad = (z_hi - z_lo) + greater(hx, hy)
         near, far = pad, pad + (z_hi - z_lo)
+        row[59] = r
     else:
         hx, hy, cx, cy, near, far = cascade_box((b[0], b[1], b[2], b[3], b[4], b[5]))
         z_lo = b[4]
+        row[59] = math.nan
     store_cascade(a, (hx, hy, cx, cy, near, far), z_lo, (j, o), row)
     row[56] = s1
 
 
-def stable_box(vc: Any, iV: Any, a: Any, b: Any, o: Any) -> Any:
-    """The stable box of one cascade: the slice's sphere plus half a texel, its centre
-    snapped to whole texels; its depth range (``b``: the bounds with the box's own ``z``)."""
+def stable_box(cam: Any, b: Any, W: Any, j: Any, o: Any) -> Any:
+    """The stable box of one cascade: a square of half-width ``r`` plus half a texel,
+    its centre snapped to whole texels (:func:`._fit_formulas.stable_sides`), its depth
+    range (``b``: the bounds, with the box's own ``z``) and ``r``.
+
+    ``r`` is the radius of the slice's sphere, centred there; with a previous state
+    (``W``: the laddered half-widths in use) the half-width of the visible part's
+    light-space bounds ``b`` on the ladder with hysteresis
+    (:func:`._cascade_formulas.ladder_hold`), returned as the last value, but at most
+    ``r``, centred on those bounds, with their depths."""
+    vc, iV, a = cam
     corners = (
         vc[0], vc[1], vc[2], vc[3], vc[4], vc[5], vc[6], vc[7], vc[8], vc[9], vc[10], vc[11],
         vc[12], vc[13], vc[14], vc[15], vc[16], vc[17], vc[18], vc[19], vc[20], vc[21],
@@ -315,12 +379,20 @@ def stable_box(vc: Any, iV: Any, a: Any, b: Any, o: Any) -> Any:
     vx, vy, vz, r2 = slice_sphere(corners)
     c = affine(iV, vx, vy, vz)
     r = sqrt(r2)
-    hx, hy, ox, oy, _ = stable_sides((c, r2), a, (o.mx, o.my, o.width, o.height), r, o.eps)
+    held = r
+    if o.has_state:
+        held = ladder_hold(0.5 * greater(b[1] - b[0], b[3] - b[2]), take_last(W, j))
+        r = lesser(held, r)
+        mx, my = 0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3])
+        c = (mx * a[0] + my * a[3], mx * a[1] + my * a[4], mx * a[2] + my * a[5])
+    hx, hy, ox, oy, _ = stable_sides((c, r * r), a, (o.mx, o.my, o.width, o.height), r, o.eps)
     cx = c[0] * a[0] + c[1] * a[1] + c[2] * a[2] + ox
     cy = c[0] * a[3] + c[1] * a[4] + c[2] * a[5] + oy
+    if o.has_state:  # the visible part's own depths
+        return hx, hy, cx, cy, b[4], b[5], held
     cz = c[0] * a[6] + c[1] * a[7] + c[2] * a[8]
     z_hi = lesser(cz + r, b[7])
-    return hx, hy, cx, cy, lesser(b[6], z_hi - r), z_hi
+    return hx, hy, cx, cy, lesser(b[6], z_hi - r), z_hi, held
 
 
 def cascade_tile(tex: Any, j: Any, o: Any) -> Any:
@@ -358,12 +430,13 @@ def cascade_loop(inputs: Any, opts: Any, out: Any, splits: Any, status: Any) -> 
     """The loop mode's driver: every camera's cascades, one camera at a time.
 
     ``inputs``: light ``(m, 3)``, views and projections ``(m, 16)``, boxes ``(m, 6)``
-    (min then max), ups ``(m, 3)``, scalars ``(m, 3)`` (lam, max_distance, overlap) and
-    given splits ``(m, n + 1)``, each ``m = count or 1`` read at ``i % m``; ``opts``: the
-    options record (``opts[0]``). ``out``: ``(count, n, ROW)``; ``splits``:
+    (min then max), ups ``(m, 3)``, scalars ``(m, 7)`` (lam, max_distance, overlap, the
+    measured depth range, the previous range in use), given splits ``(m, n + 1)`` and
+    the previous stable half-widths ``(m, n)``, each ``m = count or 1`` read at
+    ``i % m``; ``opts``: the options record (``opts[0]``). ``out``: ``(count, n, ROW)``; ``splits``:
     ``(count, n + 1)``; ``status``: ``(count,)``.
     """
-    light, views, projs, boxes, ups, scalars, given = inputs
+    light, views, projs, boxes, ups, scalars, given, sizes = inputs
     o = opts[0]
     for i in range(len(out)):
         L, U, bx = light[i % len(light)], ups[i % len(ups)], boxes[i % len(boxes)]
@@ -371,7 +444,7 @@ def cascade_loop(inputs: Any, opts: Any, out: Any, splits: Any, status: Any) -> 
         G = given[i % len(given)]
         e = cascade_entry(
             ((L[0], L[1], L[2]), row16(views[i % len(views)], 0), row16(projs[i % len(projs)], 0),
-             box, (U[0], U[1], U[2])), scalars[i % len(scalars)], G, o,
+             box, (U[0], U[1], U[2])), scalars[i % len(scalars)], (G, sizes[i % len(sizes)]), o,
         )  # fmt: skip
         status[i] = e[4]
         rng = (e[0][1], e[0][2], e[0][3])
@@ -390,7 +463,10 @@ FUNCTIONS = (
     "cascade_split",
     "box_pass",
     "cascade_entry",
+    "split_range",
+    "visible_range",
     "cascade_slice",
+    "slice_corners",
     "cascade_fit",
     "stable_box",
     "cascade_tile",

@@ -24,6 +24,7 @@ sqrt: Callable[..., Any] = np.sqrt
 fabs: Callable[..., Any] = np.abs
 isfinite: Callable[..., Any] = np.isfinite
 maximum: Callable[..., Any] = np.maximum
+log2: Callable[..., Any] = np.log2
 
 
 def flag(ok: Any, bit: int) -> Any:

@@ -3,7 +3,7 @@
 The formulas of :mod:`._formulas` and :mod:`._fit_formulas` (and the loops of
 :mod:`._loops` that drive them per entry, and fit_cascades' steps, :mod:`._cascade_steps`)
 are written with five primitives (``where``, ``sqrt``, ``fabs``, ``rint``, ``isfinite``;
-the cascades' steps also ``alloc``, ``flag`` and ``take_last``). :func:`specialize`
+the cascades' steps also ``log2``, ``alloc``, ``flag`` and ``take_last``). :func:`specialize`
 copies every one of them into one namespace where those names mean one backend's
 functions, so a specialized formula calls specialized formulas: the frame, the
 frustum, the fits and the matrices are written once and the backends cannot drift.
@@ -84,7 +84,7 @@ def specialize(
     return types.SimpleNamespace(**{name: namespace[name] for name in exported})
 
 
-_PRIMITIVES = ("where", "sqrt", "fabs", "rint", "isfinite", "maximum", "flag")
+_PRIMITIVES = ("where", "sqrt", "fabs", "rint", "isfinite", "maximum", "log2", "flag")
 
 
 @functools.cache
@@ -100,7 +100,7 @@ def array_primitives(xp: ModuleType) -> dict[str, Any]:
         "where": where, "sqrt": xp.sqrt, "fabs": xp.abs, "rint": xp.round,
         "isfinite": xp.isfinite, "alloc": _zeros_list, "array_api": xp,
         "flag": functools.partial(_array_flag, xp), "take_last": _take_last,
-        "maximum": xp.maximum, "to_single": _same,
+        "maximum": xp.maximum, "log2": xp.log2, "to_single": _same,
     }  # fmt: skip
 
 
@@ -119,6 +119,7 @@ def scalar_primitives() -> dict[str, Any]:
         "rint": _rint,
         "isfinite": math.isfinite,
         "maximum": max,
+        "log2": math.log2,
         "to_single": _fit_entry.to_single,
         "alloc": _zeros_list,
         "flag": _scalar_flag,
