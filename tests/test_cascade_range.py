@@ -178,7 +178,7 @@ def test_stable_squares_along_a_path() -> None:
             need = 0.5 * np.max(xy.max(axis=0) - xy.min(axis=0))
             assert hw[i] >= need * (1 - 1e-9)
             assert is_ladder(hw[i]) and hw[i] < need * STEP**2
-            half = c.frustum.rx_max[i] * (1 - 1 / (c.frustum.margin_x[i] * 512))
+            half = c.frustum.half_width[i] * (1 - 1 / (c.frustum.margin_x[i] * 512))
             assert half == pytest.approx(min(hw[i], sphere.state.half_width[i]), rel=1e-12)
             if prev is not None:
                 if hw[i] < prev.state.half_width[i]:  # shrank past the margin
@@ -187,9 +187,9 @@ def test_stable_squares_along_a_path() -> None:
                     assert need > prev.state.half_width[i]
         if prev is not None:
             same = (hw == prev.state.half_width) & np.all(c.splits == prev.splits)
-            np.testing.assert_array_equal(c.frustum.rx_max[same], prev.frustum.rx_max[same])
+            np.testing.assert_array_equal(c.frustum.half_width[same], prev.frustum.half_width[same])
             changes += int(np.sum(~same))
-        steps = c.frustum.x_offset / c.texel_size[:, 0]
+        steps = c.frustum.center_x / c.texel_size[:, 0]
         np.testing.assert_allclose(steps, np.round(steps), atol=1e-6)  # whole texels
         prev, state = c, c.state
         if k == 60:
@@ -205,7 +205,7 @@ def test_without_hysteresis_the_range_follows_every_frame() -> None:
     for k in range(5):
         view = pose(3 + 0.02 * np.sin(k), 0.2)
         c = sm.fit_cascades(SUN, view, proj, BOX, 512, depth_range="visible", stable=True)
-        sizes.append(c.frustum.rx_max)
+        sizes.append(c.frustum.half_width)
     assert all(not np.array_equal(a, b) for a, b in itertools.pairwise(sizes))
 
 
