@@ -280,6 +280,30 @@ def measured_range(**split_options: Any) -> Callable[[Hits], dict[str, Any]]:
     return options
 
 
+def visible_with_state(**split_options: Any) -> Callable[[Hits], dict[str, Any]]:
+    """``depth_range="visible"`` (the camera frustum meets the scene box) from a first frame's
+    :class:`shadowmath.CascadeState` (the ladder's range; with ``stable=True`` the squares of
+    each slice's visible part)."""
+
+    def options(hits: Hits) -> dict[str, Any]:
+        del hits
+        return {"depth_range": "visible", "state": sm.CascadeState.initial(), **split_options}
+
+    return options
+
+
+def measured_with_state(**split_options: Any) -> Callable[[Hits], dict[str, Any]]:
+    """``fit_cascades``' own measured range: ``depth_range=(min, max)`` of the receiver
+    pixels' view depths (as :func:`measured_range`) with a first frame's state."""
+
+    def options(hits: Hits) -> dict[str, Any]:
+        near, far = float(hits.depth.min()), float(hits.depth.max())
+        span = np.array([near, max(far, near * 1.001)])
+        return {"depth_range": span, "state": sm.CascadeState.initial(), **split_options}
+
+    return options
+
+
 VARIANTS: dict[str, Options] = {
     "λ=0.9": {"lam": 0.9},
     "λ=0.75 (default)": {},
@@ -291,6 +315,11 @@ VARIANTS: dict[str, Options] = {
     "λ=0.75, measured range": measured_range(lam=0.75),
     "λ=0.5, measured range": measured_range(lam=0.5),
     "log, measured range": measured_range(scheme="log"),
+    "λ=0.75, visible range": {"depth_range": "visible"},
+    "log, visible range": {"depth_range": "visible", "scheme": "log"},
+    "λ=0.75, visible range, state": visible_with_state(lam=0.75),
+    "log, visible range, state": visible_with_state(scheme="log"),
+    "log, measured range, state": measured_with_state(scheme="log"),
 }
 """Candidate defaults: ``fit_cascades``'s keyword arguments, or a function of the pose's
 receiver pixels returning them (a new option is one line here)."""
