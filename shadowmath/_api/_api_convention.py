@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from shadowmath._boundary._shapes import BoolLike
 from shadowmath._math import _conventions
 from shadowmath._math._conventions import GRAPHICS_APIS, ApiConvention
 
@@ -20,7 +21,7 @@ def check_api(api: object, reversed_z: object) -> None:
         raise ValueError(f"reversed_z: expected True or False, got {reversed_z!r}")
 
 
-def api_convention(*, api: str = "opengl", reversed_z: bool = False) -> ApiConvention:
+def api_convention(*, api: str = "opengl", reversed_z: BoolLike = False) -> ApiConvention:
     r"""The clip and texture conventions of a graphics API, as constant matrices.
 
     With ``P W`` an OpenGL clip matrix from world coordinates (e.g.

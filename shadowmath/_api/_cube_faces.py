@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, Real
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, IntLike, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -121,7 +121,7 @@ def cube_face_projection(
     map_size: IntLike,
     border_texels: IntLike = 0,
     api: GraphicsApi = "opengl",
-    reversed_z: bool = False,
+    reversed_z: BoolLike = False,
 ) -> Float[Array, "*batch 4 4"]:
     r"""The 90-degree projection of a cube shadow map's faces, with an optional border ring.
 
@@ -326,7 +326,7 @@ def cube_face_depth(
     near: Real[ArrayLike, "*#batch"],
     far: Real[ArrayLike, "*#batch"],
     *,
-    reversed_z: bool = False,
+    reversed_z: BoolLike = False,
 ) -> CubeFaceDepth:
     r"""The depth a receiver point compares against its light's cube shadow map.
 

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from shadowmath._boundary._renamed import renamed_keywords
-from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, Real
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, IntLike, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -70,7 +70,7 @@ def pcf(
     *,
     pcf_radius: IntLike = 1,
     pcf_filter: PcfFilter = "box",
-    reversed_z: bool = False,
+    reversed_z: BoolLike = False,
     softness: float = 0.0,
 ) -> Float[Array, "*batch"]:
     r"""Percentage-closer filtering: the lit fraction of receiver points in ``[0, 1]``.

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from shadowmath._boundary._shapes import ArrayLike, Float, IntLike, MapSize, Real
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, IntLike, MapSize, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -107,7 +107,7 @@ def smooth_frustum(
     map_size: MapSize,
     *,
     temperature: Real[ArrayLike, "*#batch"],
-    symmetric: bool = True,
+    symmetric: BoolLike = True,
     border_texels: IntLike = 1,
     margin: float | tuple[float, float] | None = None,
     near: Real[ArrayLike, "*#batch"] | None = None,

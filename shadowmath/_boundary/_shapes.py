@@ -12,11 +12,12 @@ types:
   scalars;
 * :data:`Array` for results: NumPy in gives NumPy out, JAX in gives JAX out.
 
-and two option types: :data:`IntLike`, a count or a size that the door takes as an
-integer, and :data:`MapSize`, a map's texels (``size`` or ``(width, height)``). For mypy
-they are ``int`` and ``int | tuple[int, int]``; at run time they accept what the doors
-accept: NumPy's integers too (``map_size=np.int64(64)``), and a map size as a list or a
-NumPy array of two.
+and three option types: :data:`IntLike`, a count or a size that the door takes as an
+integer, :data:`BoolLike`, a switch the door takes as a boolean, and :data:`MapSize`, a
+map's texels (``size`` or ``(width, height)``). For mypy they are ``int``, ``bool`` and
+``int | tuple[int, int]``; at run time they accept what the doors accept: NumPy's integers
+and booleans too (``map_size=np.int64(64)``, ``reversed_z=np.True_``), and a map size as a
+list or a NumPy array of two.
 
 For mypy both are ``Any`` (``Float[Array, "4 4"]`` is ``Annotated[Any, ...]``): mypy checks
 the rest of each signature (options, light and mesh types, results' NamedTuples) and that
@@ -55,6 +56,7 @@ __all__ = [
     "Array",
     "ArrayLike",
     "Bool",
+    "BoolLike",
     "Float",
     "Int",
     "IntLike",
@@ -72,9 +74,14 @@ if TYPE_CHECKING:
     ArrayLike: TypeAlias = Any
     Array: TypeAlias = Any
     IntLike: TypeAlias = int
+    BoolLike: TypeAlias = bool
     MapSize: TypeAlias = int | tuple[int, int]
 else:
     from numbers import Integral as IntLike
+
+    import numpy as _np
+
+    BoolLike = bool | _np.bool_
 
     class _MapSizeType(type):
         def __instancecheck__(cls, value: object) -> bool:

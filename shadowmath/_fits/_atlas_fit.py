@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from shadowmath._api._api_convention import check_api as _check_api
 from shadowmath._api._depth_bias import check_kernel as _check_kernel
-from shadowmath._boundary._shapes import ArrayLike, Float, Int, Real
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Int, Real
 from shadowmath._boundary._validate import RECEIVER_KINDS, Array, convert, non_finite, shape_error
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi
@@ -97,7 +97,7 @@ def fit_atlas(
     near: Real[ArrayLike, "*#l"] | None = None,
     far: Real[ArrayLike, "*#l"] | None = None,
     api: GraphicsApi = "opengl",
-    reversed_z: bool = False,
+    reversed_z: BoolLike = False,
     pcf_radius: int | None = None,
     pcf_filter: PcfFilter = "box",
     spec: ShadowMapSpec | None = None,

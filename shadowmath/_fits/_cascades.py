@@ -25,7 +25,7 @@ import numpy as np
 from shadowmath._api._api_convention import check_api as _check_api
 from shadowmath._backends import _kernels
 from shadowmath._boundary._projection import check_projection
-from shadowmath._boundary._shapes import ArrayLike, Float, Int, Real
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Int, Real
 from shadowmath._boundary._status import cascade_messages
 from shadowmath._boundary._validate import (
     Array,
@@ -161,14 +161,14 @@ def fit_cascades(
     max_distance: Real[ArrayLike, "*#batch"] | None = None,
     overlap: Real[ArrayLike, "*#batch"] = 0.1,
     up: Real[ArrayLike, "*#batch 3"] | None = None,
-    stable: bool = False,
+    stable: BoolLike = False,
     border_texels: int | None = None,
     pcf_radius: int | None = None,
     pcf_filter: PcfFilter = "box",
     api: GraphicsApi = "opengl",
-    reversed_z: bool = False,
+    reversed_z: BoolLike = False,
     camera_api: GraphicsApi | None = None,
-    camera_reversed_z: bool = False,
+    camera_reversed_z: BoolLike = False,
     layout: CascadeLayout = "layers",
     warp: Literal[None, "lispsm"] = None,
     depth_range: DepthRangeName | Real[ArrayLike, "*#batch 2"] = "camera",

@@ -33,7 +33,7 @@ import numpy as np
 from shadowmath._api._adaptive_frustum import bounded_frustum, check_blocker, margins
 from shadowmath._api._light_frame import frame_along
 from shadowmath._api._smooth_frustum import rolled_frame
-from shadowmath._boundary._shapes import ArrayLike, Float, Real
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -286,7 +286,7 @@ def optimize_frustum(
     vertices: Real[ArrayLike, "*#batch N 3"],
     map_size: int | tuple[int, int],
     *,
-    symmetric: bool = False,
+    symmetric: BoolLike = False,
     steps: int = 80,
     starts: int = 6,
     learning_rate: float = 0.1,

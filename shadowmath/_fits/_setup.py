@@ -23,7 +23,7 @@ import numpy as np
 from shadowmath._api._light_frame import check_aim
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
-from shadowmath._boundary._shapes import ArrayLike, Float, Real
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
@@ -69,8 +69,8 @@ def fit_shadow(
     pcf_filter: PcfFilter = "box",
     margin: float | tuple[float, float] | None = None,
     api: GraphicsApi = "opengl",
-    reversed_z: bool = False,
-    stable: bool = False,
+    reversed_z: BoolLike = False,
+    stable: BoolLike = False,
 ) -> ShadowSetup:
     r"""Nagy's projective shadow texture for one point or directional light and one blocker.
 
