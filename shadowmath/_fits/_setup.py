@@ -245,10 +245,10 @@ def _fit(
         small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
         if small and _kernels.python_loop():
             return _compiled.fit(ctx, key, shape, a, used=used, python=True)
-    return _fit_arrays(ctx, a, shape, key)._replace(casters_used=used)
+    return _fit_on_arrays(ctx, a, shape, key)._replace(casters_used=used)
 
 
-def _fit_arrays(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey) -> ShadowSetup:
+def _fit_on_arrays(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey) -> ShadowSetup:
     """The fit on whole arrays: JAX (under one cached ``jax.jit`` when concrete), or NumPy
     without Numba."""
     if ctx.is_jax and not ctx.lazy:
