@@ -52,8 +52,13 @@ def _rigid(rng: np.random.Generator, scale: float) -> np.ndarray:
     return B
 
 
-def _helper(frame: sm.LightFrame) -> np.ndarray:
-    return np.asarray(sm.helper_axis(frame.z_axis))
+def _helper(frame: sm.LightFrame) -> int:
+    """The helper axis a fit *used*: ``X = normalize(Z x e_k)`` has ``X_k = 0`` exactly.
+
+    (``helper_axis`` of the returned, rounded ``Z`` may differ from the one decided on
+    the fit's own unrounded ``Z`` at a near tie.)
+    """
+    return int(np.argmin(np.abs(np.asarray(frame.x_axis, np.float64))))
 
 
 LOOPS = pytest.mark.parametrize("loop", ["compiled", "python"])
@@ -91,7 +96,7 @@ def test_compiled_loop_equals_array_path(loop: str, dtype: Any, data: st.DataObj
     # The compiled loop sums in float64: its Z differs from the array path's by the
     # array path's rounding, and at a helper-axis tie the two may pick different axes.
     np.testing.assert_allclose(fast.frame.z_axis, ref.frame.z_axis, rtol=0, atol=64 * eps * kappa)
-    assume(np.array_equal(_helper(fast.frame), _helper(ref.frame)))
+    assume(_helper(fast.frame) == _helper(ref.frame))
     tol = 64 * eps * kappa * p.distance_ratio
     # Compared where they act: on the scene's points, relative to |M_i| |p| + |t_i| per
     # row i (M's linear rows are rounded relative to their norms, not entry by entry: an
