@@ -18,6 +18,7 @@ from shadowmath._math._cube import APIS as _APIS
 from shadowmath._math._cube import cube_face_views as _cube_face_views
 from shadowmath._math._cube import depth_row as _depth_row
 from shadowmath._math._frame import stack_matrix
+from shadowmath._math._vector import matmul
 
 from ._atlas_allocate import ShadowAtlas
 from ._atlas_report import AtlasInputs, Report, pick
@@ -54,9 +55,9 @@ def fit_cubes(
     zero_to_one, flip_y = _APIS[api]
     a, b = _depth_row(lo, hi, zero_to_one, bool(report.reversed_z))
     Pm = _face_projections(xp, k, -k if flip_y else k, a, b)
-    clip = Pm[:, None] @ _cube_face_views(xp, P)  # (C, 6, 4, 4)
+    clip = matmul(xp, Pm[:, None], _cube_face_views(xp, P))  # (C, 6, 4, 4)
     T = ctx.constant(_texture_from_clip(api, bool(report.reversed_z)))
-    tex = T @ clip
+    tex = matmul(xp, T, clip)
     tile = atlas.light_tiles[cubes].reshape(-1)
     values = (clip.reshape(-1, 4, 4), tex.reshape(-1, 4, 4), xp.repeat(lo, 6), xp.repeat(hi, 6))
     return (tile, *report.replace(ctx, np.repeat(failed, 6), values))

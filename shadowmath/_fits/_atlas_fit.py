@@ -30,6 +30,7 @@ from shadowmath._boundary._validate import RECEIVER_KINDS, Array, convert, non_f
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._pcf import border_texels as _border_texels
+from shadowmath._math._vector import matmul
 from shadowmath.lights import Light
 from shadowmath.receivers import Mesh, Triangles
 
@@ -224,7 +225,7 @@ def fit_atlas(
     clip, tex, lo, hi = gather(ctx, parts, atlas.tile_light.shape[0])
     errors = tuple(report.errors)
     return AtlasFit(
-        clip, T @ tex, atlas_viewports(atlas), atlas.tile_clamp, lo, hi,
+        clip, matmul(xp, T, tex), atlas_viewports(atlas), atlas.tile_clamp, lo, hi,
         texture_size=(atlas.atlas_size, atlas.atlas_size), tile_id=atlas.tile_id,
         tile_face=atlas.tile_face, light_errors=errors,
     )  # fmt: skip

@@ -46,6 +46,7 @@ from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._conventions import clip_from_gl as _clip_from_gl
 from shadowmath._math._frustum import NEAR_FAR_SLACK, OrthographicBox
 from shadowmath._math._specialize import formulas, scalar_formulas
+from shadowmath._math._vector import matmul
 from shadowmath.lights import DirectionalLight
 
 from ._cascade_splits import (
@@ -590,7 +591,7 @@ def _warp(call: _Call, steps: tuple[Any, ...], VP: tuple[Array, Array], row: lis
     V, P = VP
     body = F.cascade_body(sl[3], sl[4], (e[1][2], e[1][3]), (sl[0], sl[1]))
     iV = xp.stack(xp.broadcast_arrays(*e[3]), axis=-1)[..., 0, :]
-    cam = _WarpCamera(e[0][0][..., 0], xp.reshape(iV, (*iV.shape[:-1], 4, 4)), xp.matmul(P, V))
+    cam = _WarpCamera(e[0][0][..., 0], xp.reshape(iV, (*iV.shape[:-1], 4, 4)), matmul(xp, P, V))
     size = xp.stack(xp.broadcast_arrays(row[57], row[58]), axis=-1)
     ortho = (tuple(row[16:32]), tuple(row[32:48]), size)
     clip, tex, size = warp_cascades(

@@ -40,6 +40,7 @@ from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._frame import LightFrame, stack_matrix
 from shadowmath._math._frustum import volume
 from shadowmath._math._specialize import formulas, scalar_formulas
+from shadowmath._math._vector import matmul
 from shadowmath.lights import Light
 from shadowmath.receivers import Mesh, Triangles
 
@@ -405,4 +406,4 @@ def receiver_texture_matrix(
     require_matrix("receiver_to_world", R)
     checks = Checks(ctx)
     checks.require(all_finite(xp, R, 2), non_finite("receiver_to_world"))
-    return checks.poison(xp.matmul(M, R), 2)
+    return checks.poison(matmul(xp, M, R), 2)

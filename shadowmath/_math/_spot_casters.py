@@ -55,6 +55,7 @@ from types import ModuleType
 from typing import NamedTuple
 
 from shadowmath._boundary._validate import Array
+from shadowmath._math._vector import matmul
 
 
 class Selection(NamedTuple):
@@ -86,13 +87,13 @@ def pyramid_planes(xp: ModuleType, position: Array, axes: Array, t: Array) -> Ar
 
 def local_planes(xp: ModuleType, planes: Array, B: Array | None) -> Array:
     """Planes acting on local points: ``B^T pi`` per plane (rows ``pi^T B``)."""
-    return planes if B is None else xp.matmul(planes, B)
+    return planes if B is None else matmul(xp, planes, B)
 
 
 def plane_values(xp: ModuleType, planes: Array, q: Array) -> Array:
     """``(*batch, N, P)`` the planes' values at points ``q`` ``(*batch, N, 3)``."""
     n = xp.matrix_transpose(planes[..., :3])
-    return xp.matmul(q, n) + planes[..., None, :, 3]
+    return matmul(xp, q, n) + planes[..., None, :, 3]
 
 
 def _tolerance(xp: ModuleType, g: Array, axes: tuple[int, ...], eps: float) -> Array:
@@ -194,8 +195,8 @@ def clip_triangles(
     """
     g = plane_values(xp, planes[..., None, :4, :], corners)  # (*batch, M, 3, 4)
     w, exists = _weights(xp, g)
-    points = xp.matmul(w, corners)  # (*batch, M, 19, 3)
-    values = xp.matmul(w, g)
+    points = matmul(xp, w, corners)  # (*batch, M, 19, 3)
+    values = matmul(xp, w, g)
     tau = _tolerance(xp, g, (-2, -1), eps)[..., None, None]
     inside = exists & xp.all(values >= -tau, axis=-1)
     keep = inside | ~xp.all(xp.isfinite(points), axis=-1)
@@ -268,6 +269,6 @@ def to_local(xp: ModuleType, B: Array | None, p: Array) -> Array:
     det = xp.linalg.det(B)
     ok = xp.isfinite(det) & (det != 0)
     safe = xp.where(ok[..., None, None], B, xp.eye(4, dtype=B.dtype))
-    h = xp.matmul(xp.concatenate([p, xp.ones_like(p[..., :1])], axis=-1),
+    h = matmul(xp, xp.concatenate([p, xp.ones_like(p[..., :1])], axis=-1),
                   xp.matrix_transpose(xp.linalg.inv(safe)))  # fmt: skip
     return h[..., :3] / h[..., 3:]
