@@ -30,10 +30,13 @@ Scherzer's and Filament's general case (derivation in ``docs/lispsm.md``):
 with ``z_0`` the region's nearest view depth, ``d`` its extent along ``u`` and ``gamma``
 the angle between the view and light directions. The warp's strength ``lambda = d / n``
 is that optimum faded to 0 at the threshold, ``lambda_opt = (1 - m / sin gamma) d / n_opt``
-(``m``: :data:`WARP_MIN_SIN`), and capped so that the warped texels are no larger than the
-orthographic ones along the view axis up to the view depth ``z_0 (z_1' / z_0)^0.9``
-(``[z_0, z_1']``: the region's view depths; :func:`_capped`). Trusted inputs only: nothing
-here raises except :func:`check_warp`, on the options.
+(``m``: :data:`WARP_MIN_SIN`), and capped (:func:`_capped`) so that the warped texels are
+no larger than the orthographic ones up to ``t_c = n + kappa d``: ``kappa`` is the larger of
+the view axis's point at view depth ``z_0 (z_1' / z_0)^0.9`` (``[z_0, z_1']``: the region's
+view depths) and the point that keeps the median and the 90th percentile of texel area per
+pixel footprint from growing over the receiver samples, where the rays of a 16 x 16 grid
+over the screen leave the scene box (:func:`_receivers`, :func:`_check`). Trusted inputs
+only: nothing here raises except :func:`check_warp`, on the options.
 """
 
 from __future__ import annotations

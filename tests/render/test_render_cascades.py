@@ -85,7 +85,7 @@ def render(request):
 def shadows(camera, render=render_cascades, **kwargs):
     """Render the scene from ``camera`` (with ``render_cascades`` or ``render_cascades_wgpu``);
     the frame and its counts against the ray caster."""
-    view = CAMERAS[camera] if camera in CAMERAS else STEEP
+    view = {**CAMERAS, "steep": STEEP}[camera]
     kwargs.setdefault("map_size", MAP)
     frame = render(BODIES, SUN, view, PROJECTION, image_size=SIZE, **kwargs)
     scene = DepthScene(BODIES, len(BODIES) - 1, SUN, PROJECTION @ view)
