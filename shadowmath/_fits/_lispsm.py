@@ -83,7 +83,7 @@ WARP_RAYS = 16
 
 #: A sample's weight in a cascade ramps from 0 to 1 over this fraction of the slice's depth
 #: about each end (half outside, half inside), so that the weights move continuously as a
-#: sample crosses a split (and the two cascades' weights add to 1).
+#: sample crosses a split (and, without a blend band, the two cascades' weights add to 1).
 WARP_SAMPLE_RAMP = 0.05
 
 #: The quantile's prior, in samples: ``WARP_PRIOR`` spread evenly over ``[0, 1]`` (it makes
@@ -287,9 +287,10 @@ def _check(xp: Any, F: Any, samples: tuple[Any, Any, Any], lam: Any) -> Any:
     sample ``i`` stays below the unwarped share-``q`` quantile ``Q_q`` of ``rho`` while
     ``A(t_i) <= A_o Q_q / rho_i``; with ``A(t_c) <= A_o`` and ``A ~ t^3`` that holds where
     ``t_i / t_c <= b_i^{1/3}``, ``b_i = Q_q / rho_i``, i.e. (``t = n (1 + lambda alpha)``)
-    ``kappa >= alpha'_i = ((1 + lambda alpha_i) b_i^{-1/3} - 1) / lambda``, taken at the
-    uncapped ``lambda``; ``kappa`` is the larger of the share-``q`` quantiles of ``alpha'``
-    for ``q`` in :data:`WARP_SHARES`.
+    ``kappa >= alpha'_i = ((1 + lambda alpha_i) b_i^{-1/3} - 1) / lambda`` at this round's
+    ``lam`` (``(*b, n)``); ``kappa`` is the largest share-``(q + WARP_SHARE_MARGIN)``
+    quantile of ``alpha'`` over ``q`` in :data:`WARP_SHARES` (``Q_q`` found through
+    ``x = rho / (rho + rho_mean)``, monotone and in ``[0, 1]``, by :func:`_quantile`).
     """
     alpha, w, rho = samples
     total = xp.sum(w, axis=-1, keepdims=True)
