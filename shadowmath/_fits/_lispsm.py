@@ -30,16 +30,21 @@ Scherzer's and Filament's general case (derivation in ``docs/lispsm.md``):
 with ``z_0`` the region's nearest view depth, ``d`` its extent along ``u`` and ``gamma``
 the angle between the view and light directions. The warp's strength ``lambda = d / n``
 is that optimum faded to 0 at the threshold, ``lambda_opt = (1 - m / sin gamma) d / n_opt``
-(``m``: :data:`WARP_MIN_SIN`), and capped so that the warped texels are no larger than the
-orthographic ones along the view axis up to the view depth ``z_0 (z_1' / z_0)^0.9``
-(``[z_0, z_1']``: the region's view depths; :func:`_capped`). Trusted inputs only: nothing
-here raises except :func:`check_warp`, on the options.
+(``m``: :data:`WARP_MIN_SIN`), and capped (:func:`_capped`) so that the warped texels are
+no larger than the orthographic ones up to ``t_c = n + kappa d``: ``kappa`` is the larger of
+the view axis's point at view depth ``z_0 (z_1' / z_0)^0.9`` (``[z_0, z_1']``: the region's
+view depths) and the point that keeps the median and the 90th percentile of texel area per
+pixel footprint from growing over the receiver samples, where the rays of a 16 x 16 grid
+over the screen leave the scene box (:func:`_receivers`, :func:`_check`). Trusted inputs
+only: nothing here raises except :func:`check_warp`, on the options.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from typing import Any, NamedTuple
+
+import numpy as np
 
 from shadowmath._math._frustum import NEAR_FAR_SLACK
 
@@ -57,11 +62,38 @@ WARP_MIN_SIN = 0.02
 #: orthographic map, and the map's rows would lose precision to ``n >> d``.
 WARP_MIN_STRENGTH = 0.01
 
-#: The warped map is no coarser than the orthographic one up to the point of the view
-#: axis at view depth ``z_0 (z_1 / z_0)^WARP_CHECK_DEPTH`` (``[z_0, z_1]``: the cascade's
-#: depths): chosen by the pose sweep of ``benchmarks/bench_cascades.py`` (0.85 lets the
-#: median get coarser in some poses, 1 leaves almost no warp), ``docs/lispsm.md``.
+#: The cap's first check: the warped map is no coarser than the orthographic one up to the
+#: point of the view axis at view depth ``z_0 (z_1 / z_0)^WARP_CHECK_DEPTH`` (``[z_0, z_1]``:
+#: the cascade's depths), ``docs/lispsm.md``.
 WARP_CHECK_DEPTH = 0.9
+
+#: The cap's second check: the quantiles (shares) of the texel area per pixel footprint, over
+#: each cascade's receiver samples (:func:`_receivers`), that the warp must not raise: the
+#: median and the 90th percentile (:func:`_check`).
+WARP_SHARES = (0.5, 0.9)
+
+#: The margin for the samples standing in for the pixels: a quantile ``q`` of
+#: :data:`WARP_SHARES` holds on the share ``q + WARP_SHARE_MARGIN`` of the samples (the
+#: pose sweep's figures vary by about 2 % with the grid's size without it).
+WARP_SHARE_MARGIN = 0.05
+
+#: The receiver samples: one ray through the centre of each cell of a ``G x G`` grid over
+#: the screen (``G = WARP_RAYS``), where the ray leaves the scene box.
+WARP_RAYS = 16
+
+#: A sample's weight in a cascade ramps from 0 to 1 over this fraction of the slice's depth
+#: about each end (half outside, half inside), so that the weights move continuously as a
+#: sample crosses a split (and, without a blend band, the two cascades' weights add to 1).
+WARP_SAMPLE_RAMP = 0.05
+
+#: The quantile's prior, in samples: ``WARP_PRIOR`` spread evenly over ``[0, 1]`` (it makes
+#: the quantile a continuous function of the samples) and as much at 1 (a cascade without
+#: samples is checked at its far end: never coarser anywhere).
+WARP_PRIOR = 0.5
+
+#: Rounds of ``kappa`` (from the samples, at the strength ``lambda``) and ``lambda`` (capped
+#: at ``kappa``): the first takes ``kappa`` at the uncapped strength.
+WARP_ROUNDS = 2
 
 #: Newton steps toward the strongest warp within the cap (:func:`_capped`).
 NEWTON_STEPS = 8
@@ -129,47 +161,174 @@ class _Warp(NamedTuple):
     ok: Any
 
 
-def _warp(xp: Any, F: Any, body: tuple[Any, ...], view: _View, budget: Any) -> _Warp:
+def _warp(
+    xp: Any, F: Any, body: tuple[Any, ...], view: _View, cap: tuple[Any, tuple[Any, ...]]
+) -> _Warp:
     r"""The warp frustum along ``u`` from the body's vertices (light coordinates).
 
-    ``d = max(u . l) - min(u . l)`` over the vertices, ``z_0, z_1'`` their smallest and
-    largest view depths, ``z_1 = z_0 + d sin(gamma)``,
-    ``n_opt = (z_0 + sqrt(z_0 z_1)) / sin(gamma)``; the strength ``lambda = d / n`` is
-    ``(1 - m / sin(gamma)) d / n_opt`` (``m``: :data:`WARP_MIN_SIN`) capped by
-    :func:`_capped` at the view axis's point of depth ``z_0 (z_1' / z_0)^beta``
-    (``beta``: :data:`WARP_CHECK_DEPTH`) with ``budget``, the orthographic texel's area
-    times ``m_x m_y W H`` (``(*b, n)``). Not warped (``ok`` False) where
-    ``lambda <= WARP_MIN_STRENGTH``.
+    ``d = max(u . l) - min(u . l)`` over the vertices, ``z_0`` their smallest view depth,
+    ``z_1 = z_0 + d sin(gamma)``, ``n_opt = (z_0 + sqrt(z_0 z_1)) / sin(gamma)``; the
+    strength ``lambda = d / n`` is ``(1 - m / sin(gamma)) d / n_opt`` (``m``:
+    :data:`WARP_MIN_SIN`) capped by :func:`_capped` at ``t_c = n + kappa d``: ``kappa`` is
+    the larger of the view axis's point (:func:`_axis_check`) and the receiver samples'
+    (:func:`_check`), in :data:`WARP_ROUNDS` rounds. ``cap = (budget, receivers)``: the
+    orthographic texel's area times ``m_x m_y W H`` (``(*b, n)``) and :func:`_receivers`.
+    Not warped (``ok`` False) where ``lambda <= WARP_MIN_STRENGTH``.
     """
     ends, ok2, _, bl = body
-    seen = xp.any(ok2, axis=-1)
     inf = xp.asarray(float("inf"), dtype=ends[0].dtype)
-    tau = view.ux[..., None] * ends[0] + view.uy[..., None] * ends[1]
-    g = view.depth
-    depth = g[0][..., None] * ends[0] + g[1][..., None] * ends[1] + g[2][..., None] * ends[2]
-    depth = depth + g[3][..., None]
+    ux, uy = view.ux[..., None], view.uy[..., None]
+    tau = ux * ends[0] + uy * ends[1]
     tau_lo = xp.min(xp.where(ok2, tau, inf), axis=-1)
-    tau_hi = xp.max(xp.where(ok2, tau, -inf), axis=-1)
+    d = xp.max(xp.where(ok2, tau, -inf), axis=-1) - tau_lo
+    depth = _depth(view, ends)
     z_near = xp.min(xp.where(ok2, depth, inf), axis=-1)
-    z_far = xp.max(xp.where(ok2, depth, -inf), axis=-1)
-    d = tau_hi - tau_lo
-    ok = view.ok & seen & (z_near > 0) & (d > 0)
+    ok = view.ok & xp.any(ok2, axis=-1) & (z_near > 0) & (d > 0)
     one = 1.0 + 0.0 * view.sin
-    tau_lo, d, z_near, z_far = (F.where(ok, v, one) for v in (tau_lo, d, z_near, z_far))
-    # The view axis's point at depth z_c = z_0 (z_1' / z_0)^beta lies at u = u_eye + z_c sin(gamma).
-    z_check = z_near * (z_far / z_near) ** WARP_CHECK_DEPTH
-    check = (view.eye_t + z_check * view.sin - tau_lo) / d
-    check = xp.minimum(xp.maximum(check, 0.0), 1.0)
+    tau_lo, d, z_near = (F.where(ok, v, one) for v in (tau_lo, d, z_near))
     z1 = z_near + d * view.sin
     n_opt = (z_near + F.sqrt(z_near * z1)) / view.sin
     lam = xp.maximum(1.0 - WARP_MIN_SIN / view.sin, 0.0) * d / n_opt
-    s = -view.uy[..., None] * ends[0] + view.ux[..., None] * ends[1] - view.eye_s[..., None]
-    alpha = (tau - tau_lo[..., None]) / d[..., None]
-    lam = _capped(xp, F, (s, alpha, ok2 & ok[..., None]), lam, (budget / d, check))
+    z_far = F.where(ok, xp.max(xp.where(ok2, depth, -inf), axis=-1), one)
+    axis = _axis_check(xp, view, (z_near, z_far), (tau_lo, d))
+    budget, (points, weights, slope) = cap
+    z = _depth(view, points)
+    alpha = (ux * points[0] + uy * points[1] - tau_lo[..., None]) / d[..., None]
+    samples = (alpha, weights, slope / F.where(z > 0, z * z, 1.0 + 0.0 * z))
+    s = -uy * ends[0] + ux * ends[1] - view.eye_s[..., None]
+    vertices = (s, (tau - tau_lo[..., None]) / d[..., None], ok2 & ok[..., None])
+    strongest, check = lam, axis
+    for _ in range(WARP_ROUNDS):
+        check = xp.maximum(_check(xp, F, samples, lam), check)
+        lam = _capped(xp, F, vertices, strongest, (budget / d, check))
     ok = ok & (lam > WARP_MIN_STRENGTH)
     n = d / F.where(ok, lam, one)
     z0 = xp.min(bl[2], axis=-1)
     return _Warp(tau_lo - n, n, n + d, z0, ok)
+
+
+def _depth(view: _View, points: tuple[Any, ...]) -> Any:
+    """The view depth ``g . l + g_3`` of points in light coordinates (``(*b, n, m)`` each)."""
+    g = view.depth
+    out = g[0][..., None] * points[0] + g[1][..., None] * points[1]
+    return out + g[2][..., None] * points[2] + g[3][..., None]
+
+
+def _axis_check(xp: Any, view: _View, depths: tuple[Any, Any], span: tuple[Any, Any]) -> Any:
+    r"""``kappa`` of the view axis's point at depth ``z_c = z_0 (z_1' / z_0)^beta``
+    (``beta``: :data:`WARP_CHECK_DEPTH`, ``depths = (z_0, z_1')``): it lies at
+    ``u . l = u . l_eye + z_c sin(gamma)``, so ``kappa = (u . l - tau_0) / d``, clamped to
+    ``[0, 1]`` (``span = (tau_0, d)``)."""
+    z_near, z_far = depths
+    z_check = z_near * (z_far / z_near) ** WARP_CHECK_DEPTH
+    check = (view.eye_t + z_check * view.sin - span[0]) / span[1]
+    return xp.minimum(xp.maximum(check, 0.0), 1.0)
+
+
+def _receivers(xp: Any, F: Any, body: tuple[Any, ...], a: tuple[Any, ...]) -> tuple[Any, ...]:
+    r"""Where the pixels' rays leave the scene box in each slice: ``(points, weights)``, three
+    ``(*b, n, N)`` light coordinates and ``(*b, n, N)`` weights (``N = G^2``,
+    ``G``: :data:`WARP_RAYS`).
+
+    A ray through the screen point ``(a, b)`` (cell centres of a ``G x G`` grid) meets the
+    slice's near and far faces at the bilinear blends ``p_0, p_1`` of their corners, and
+    ``p(tau) = p_0 + tau (p_1 - p_0)`` spans the slice's depths for ``tau`` in ``[0, 1]``.
+    With the box's half-space values ``g(tau)`` (world ``p = R^T l``), the ray leaves the
+    box at ``tau_out = min g_0 / (g_0 - g_1)`` over the faces it leaves through: a receiver
+    the pixel may see (the ground under a box's floor). Its weight is
+    ``r(tau_out) c``: ``r`` ramps over :data:`WARP_SAMPLE_RAMP` about each end of the
+    slice, ``c = clamp(-10 n . L, 0, 1)`` (``n``: the face's outward normal, ``L``: toward
+    the light) keeps only faces whose receiver the light can reach (not the box's top),
+    and 0 where the ray misses the box.
+    """
+    _, _, sl, bc = body
+    dtype = sl[0].dtype
+    grid = (np.arange(WARP_RAYS) + 0.5) / WARP_RAYS
+    fa, fb = (v.ravel() for v in np.meshgrid(grid, grid))
+    corners = ((1 - fa) * (1 - fb), fa * (1 - fb), (1 - fa) * fb, fa * fb)  # i + 2 j: x, y
+    blend = [xp.asarray(v, dtype=dtype) for v in corners]
+    ends = [[sum(blend[c] * v[..., 4 * e + c, None] for c in range(4)) for v in sl] for e in (0, 1)]
+    ax = [v[..., None] for v in a]
+
+    def world(v: Any) -> list[Any]:
+        return [ax[k] * v[0] + ax[3 + k] * v[1] + ax[6 + k] * v[2] for k in range(3)]
+
+    p0, p1, box = world(ends[0]), world(ends[1]), world(bc)
+    inf = xp.asarray(float("inf"), dtype=dtype)
+    zero = 0.0 * p0[0]
+    t_out, t_in, miss = inf + zero, -inf + zero, zero != zero
+    face, slope = zero, zero + 1.0
+    for k in range(3):
+        lo, hi = xp.min(box[k], axis=-1)[..., None], xp.max(box[k], axis=-1)[..., None]
+        lit = [xp.minimum(xp.maximum(sign * 10.0 * ax[6 + k], 0.0), 1.0) for sign in (-1, 1)]
+        for g0, g1, c in ((p0[k] - lo, p1[k] - lo, lit[0]), (hi - p0[k], hi - p1[k], lit[1])):
+            t = g0 / F.where(g0 != g1, g0 - g1, 1.0 + 0.0 * g0)
+            leaves = (g1 < g0) & (t < t_out)
+            t_out, face = F.where(leaves, t, t_out), F.where(leaves, c + zero, face)
+            cos = xp.abs(ax[6 + k]) + zero
+            slope = F.where(leaves, (g0 - g1) / F.where(cos > 0, cos, 1.0 + zero), slope)
+            t_in = F.where((g1 > g0) & (t > t_in), t, t_in)
+            miss = miss | ((g0 == g1) & (g0 < 0))
+    hit = (t_in <= t_out) & ~miss & (t_out < inf)
+    t_out = F.where(hit, t_out, 0.0 * t_out)
+    r = WARP_SAMPLE_RAMP
+    ramp = xp.minimum(xp.maximum((t_out + 0.5 * r) / r, 0.0), 1.0)
+    ramp = ramp * xp.minimum(xp.maximum((1.0 + 0.5 * r - t_out) / r, 0.0), 1.0)
+    points = [e0 + t_out * (e1 - e0) for e0, e1 in zip(ends[0], ends[1], strict=True)]
+    return points, F.where(hit, ramp * face, 0.0 * ramp), slope
+
+
+def _check(xp: Any, F: Any, samples: tuple[Any, Any, Any], lam: Any) -> Any:
+    r"""``kappa``: where the cap checks the warped texel (``t_c = n + kappa d``), so that the
+    samples' median and 90th percentile of texel area per pixel footprint do not grow.
+
+    ``samples = (alpha, w, rho)``: each receiver sample's ``alpha``, weight and
+    ``rho ~ 1 / (footprint (n . L))`` (the unwarped ratio over the cascade's texel area);
+    sample ``i`` stays below the unwarped share-``q`` quantile ``Q_q`` of ``rho`` while
+    ``A(t_i) <= A_o Q_q / rho_i``; with ``A(t_c) <= A_o`` and ``A ~ t^3`` that holds where
+    ``t_i / t_c <= b_i^{1/3}``, ``b_i = Q_q / rho_i``, i.e. (``t = n (1 + lambda alpha)``)
+    ``kappa >= alpha'_i = ((1 + lambda alpha_i) b_i^{-1/3} - 1) / lambda`` at this round's
+    ``lam`` (``(*b, n)``); ``kappa`` is the largest share-``(q + WARP_SHARE_MARGIN)``
+    quantile of ``alpha'`` over ``q`` in :data:`WARP_SHARES` (``Q_q`` found through
+    ``x = rho / (rho + rho_mean)``, monotone and in ``[0, 1]``, by :func:`_quantile`).
+    """
+    alpha, w, rho = samples
+    total = xp.sum(w, axis=-1, keepdims=True)
+    ref = xp.sum(w * rho, axis=-1, keepdims=True) / F.where(total > 0, total, 1.0 + 0.0 * total)
+    ref = F.where(ref > 0, ref, 1.0 + 0.0 * ref)
+    x = rho / (rho + ref)
+    lv = xp.maximum(lam, 1e-3)[..., None]
+    out = 0.0 * lam
+    for q in WARP_SHARES:
+        xq = _quantile(xp, x, w, q)[..., None]
+        b = F.where(xq < 1, ref * xq / (1.0 - xq), ref * 1e30) / rho
+        a = ((1.0 + lv * alpha) / b ** (1.0 / 3.0) - 1.0) / lv
+        share = min(q + WARP_SHARE_MARGIN, 1.0)
+        out = xp.maximum(out, _quantile(xp, xp.minimum(xp.maximum(a, 0.0), 1.0), w, share))
+    return out
+
+
+def _quantile(xp: Any, alpha: Any, weights: Any, share: float) -> Any:
+    r"""The ``share`` quantile of the weighted samples ``alpha`` (in ``[0, 1]``, last axis)
+    with the prior :data:`WARP_PRIOR` (``m``): ``m`` spread evenly over ``[0, 1]`` and ``m``
+    at 1.
+
+    The distribution function ``Phi(k) = (C(k) + m k) / T`` (``C(k)``: the weight of the
+    samples ``<= k``, ``T = W + 2 m``) rises strictly, so its inverse
+    ``k* = integral_0^1 [Phi(k) < share] dk`` is continuous in the samples and weights;
+    between consecutive sorted samples ``a_j <= k < a_(j+1)`` (``a_0 = 0``, ``a_(N+1) = 1``)
+    ``Phi < share`` where ``k < k_j = (share T - C_j) / m``, so
+    ``k* = sum_j clamp(k_j - a_j, 0, a_(j+1) - a_j)``.
+    """
+    order = xp.argsort(alpha, axis=-1)
+    a = xp.take_along_axis(alpha, order, axis=-1)
+    c = xp.cumsum(xp.take_along_axis(weights, order, axis=-1), axis=-1)
+    zero = 0.0 * a[..., :1]
+    lo, hi = xp.concat([zero, a], axis=-1), xp.concat([a, zero + 1.0], axis=-1)
+    c = xp.concat([zero, c], axis=-1)
+    total = c[..., -1:] + 2.0 * WARP_PRIOR
+    k = (share * total - c) / WARP_PRIOR
+    return xp.sum(xp.minimum(xp.maximum(k - lo, 0.0), hi - lo), axis=-1)
 
 
 def _area(xp: Any, vertices: tuple[Any, Any, Any], lam: Any, check: Any) -> tuple[Any, Any]:
@@ -313,7 +472,8 @@ def warp_cascades(
     """
     view = _view(xp, F, cam, V, a)
     texels = spec.margins[0] * spec.margins[1] * spec.size[0] * spec.size[1]
-    wp = _warp(xp, F, body, view, ortho[2][..., 0] * ortho[2][..., 1] * texels)
+    budget = ortho[2][..., 0] * ortho[2][..., 1] * texels
+    wp = _warp(xp, F, body, view, (budget, _receivers(xp, F, body, a)))
     rows, h, ok = _rows(xp, F, body, view, wp, margins=spec.margins)
     gl = _to_world(rows, a)
     C, TC = api_rows(spec.api, spec.reversed_z)
