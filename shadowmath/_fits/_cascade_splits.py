@@ -93,11 +93,14 @@ def check_count(count: object) -> int:
     return int(count)
 
 
-def check_scheme(scheme: object) -> float | None:
-    """The ``lam`` a scheme fixes (``None``: the practical scheme takes ``lam``)."""
-    if not isinstance(scheme, str) or scheme not in SCHEMES:
-        raise ValueError(f"scheme: expected 'uniform', 'log' or 'practical', got {scheme!r}")
-    return SCHEMES[scheme]
+def check_scheme(scheme: object, *, auto: bool = False) -> float | None:
+    """The ``lam`` a scheme fixes (``None``: the practical scheme, or with ``auto`` the rule
+    ``"auto"``, takes ``lam``)."""
+    names = ("auto", *SCHEMES) if auto else tuple(SCHEMES)
+    if not isinstance(scheme, str) or scheme not in names:
+        listed = ", ".join(repr(n) for n in names[:-1]) + f" or {names[-1]!r}"
+        raise ValueError(f"scheme: expected {listed}, got {scheme!r}")
+    return SCHEMES.get(scheme)
 
 
 def scheme_lam(scheme: object, lam: Any, *, fitted_range: bool) -> Any:
@@ -109,16 +112,14 @@ def scheme_lam(scheme: object, lam: Any, *, fitted_range: bool) -> Any:
         >>> scheme_lam("auto", None, fitted_range=True), scheme_lam("auto", 0.5, fitted_range=True)
         (1.0, 0.5)
     """
-    if isinstance(scheme, str) and scheme == "auto":
-        if lam is not None:
-            return lam
+    fixed = check_scheme(scheme, auto=True)
+    if fixed is not None:
+        return fixed
+    if lam is not None:
+        return lam
+    if scheme == "auto":
         return AUTO_LAM_FITTED if fitted_range else AUTO_LAM_CAMERA
-    if not isinstance(scheme, str) or scheme not in SCHEMES:
-        raise ValueError(
-            f"scheme: expected 'auto', 'uniform', 'log' or 'practical', got {scheme!r}"
-        )
-    fixed = SCHEMES[scheme]
-    return fixed if fixed is not None else PRACTICAL_LAM if lam is None else lam
+    return PRACTICAL_LAM
 
 
 def check_range(checks: Checks, n: Array, f: Array, lm: Array, fixed: float | None) -> None:
