@@ -55,6 +55,10 @@ range), each fitted tight and with ``stable=True`` in every pose; a new option i
 For each, the poses where it is finer than every engine at both statistics, its worst margin
 (the smallest gain over poses, engines and statistics), the geometric mean of its p90 and the
 poses where its p90 is the smallest of the candidates.
+
+**Stability along camera paths** (:mod:`cascade_paths`): stable cascades with ``state=`` along
+paths that climb, dive and turn toward the sun: size changes, split changes, ladder crossings
+and the fractional texel motion per path.
 """
 
 from __future__ import annotations
@@ -96,6 +100,7 @@ from bench_cascades import (
     sun_direction,
     threejs_fit,
 )
+from cascade_paths import path_table
 from speed._timing import Config, Section, table
 
 import shadowmath as sm
@@ -306,7 +311,7 @@ def measured_with_state(**split_options: Any) -> Callable[[Hits], dict[str, Any]
 
 VARIANTS: dict[str, Options] = {
     "λ=0.9": {"lam": 0.9},
-    "λ=0.75 (default)": {},
+    "default: auto, camera's range (λ=0.75)": {},
     "λ=0.6": {"lam": 0.6},
     "λ=0.5": {"lam": 0.5},
     "log": {"scheme": "log"},
@@ -315,15 +320,17 @@ VARIANTS: dict[str, Options] = {
     "λ=0.75, measured range": measured_range(lam=0.75),
     "λ=0.5, measured range": measured_range(lam=0.5),
     "log, measured range": measured_range(scheme="log"),
-    "λ=0.75, visible range": {"depth_range": "visible"},
-    "log, visible range": {"depth_range": "visible", "scheme": "log"},
+    "λ=0.75, visible range": {"depth_range": "visible", "lam": 0.75},
+    "auto, visible range (log)": {"depth_range": "visible"},
     "λ=0.75, visible range, state": visible_with_state(lam=0.75),
-    "log, visible range, state": visible_with_state(scheme="log"),
-    "log, measured range, state": measured_with_state(scheme="log"),
+    "auto, visible range, state (log)": visible_with_state(),
+    "auto, measured range, state (log)": measured_with_state(),
 }
 """Candidate defaults: ``fit_cascades``'s keyword arguments, or a function of the pose's
-receiver pixels returning them (a new option is one line here)."""
-DEFAULT = "λ=0.75 (default)"
+receiver pixels returning them (a new option is one line here). ``scheme="auto"`` (the
+default) is λ = 0.75 over the camera's range and the log scheme over a visible or measured
+range: the rows without ``lam`` or ``scheme`` are its."""
+DEFAULT = "default: auto, camera's range (λ=0.75)"
 LISPSM = "LiSPSM"
 ENGINES: dict[str, Callable[[Scene, F64], Fit]] = {
     "three.js": threejs_fit,
@@ -502,6 +509,7 @@ def measure_all(
 
 def sweep(cfg: Config, section: Section, variants: Mapping[str, Options]) -> str:
     image = TINY_IMAGE if cfg.tiny else IMAGE
+    projection = perspective(FOV_Y, ASPECT, NEAR, FAR)
     results, skipped = measure_all(image, variants)
     uncovered = {name: sum(per[name].uncovered for _, per in results) for name in results[0][1]}
     for name, count in uncovered.items():
@@ -516,7 +524,8 @@ def sweep(cfg: Config, section: Section, variants: Mapping[str, Options]) -> str
         "figure / shadowmath's (> 1: shadowmath finer). Pixels outside the map that serves "
         "them: " + ", ".join(f"{n} {c}" for n, c in uncovered.items()) + ".",
         "",
-        "**(a) Per comparison** (shadowmath's default λ = 0.75):",
+        "**(a) Per comparison** (shadowmath's default: `scheme=\"auto\"` over the camera's "
+        "range, λ = 0.75):",
         "",
         *summary(results, section),
         "",
@@ -530,6 +539,12 @@ def sweep(cfg: Config, section: Section, variants: Mapping[str, Options]) -> str
         "rival's, 🟥 coarser):",
         "",
         *heat_map(results, section),
+        "",
+        "**(d) Stable cascades along camera paths** (`cascade_paths.py`; `stable=True` with "
+        "`state=` carried from frame to frame; a size may change only in a frame where the "
+        "range or a slice's visible half-width crosses a ladder value):",
+        "",
+        *path_table(EXTENTS, projection, cfg.tiny, section.figures),
     ]
     return "\n".join(lines)
 

@@ -111,6 +111,32 @@ def test_a_measured_range_is_clipped_to_the_cameras() -> None:
     np.testing.assert_allclose(c.splits[[0, -1]], [0.5, 200.0], rtol=1e-12)
 
 
+@pytest.mark.parametrize(("height", "pitch"), [(1.7, 0.05), (30.0, 0.5), (100.0, 1.2)])
+def test_the_auto_scheme_cuts_a_fitted_range_into_equal_depth_ratios(
+    height: float, pitch: float
+) -> None:
+    """``scheme="auto"`` (the default) over a visible or measured range is the log scheme:
+    a slice ``[a, b]`` serves pixels whose texel-to-footprint ratio is at most ``b / a``,
+    and the product of the ratios is ``f / n``, so the worst is least when every ratio is
+    ``(f / n)^{1/N}`` (``docs/cascades.md``); over the camera's range, the practical blend
+    with ``lam = 0.75``; a given ``lam`` is the practical scheme's."""
+    view, proj = pose(height, pitch), perspective(1.0, 1.6, 0.1, 400.0)
+    lo, hi = visible(view, proj, BOX)
+    for rng in ("visible", np.array([0.8 * lo + 0.2 * hi, 0.2 * lo + 0.8 * hi])):
+        c = sm.fit_cascades(SUN, view, proj, BOX, 256, depth_range=rng)
+        n, f = c.splits[0], c.splits[-1]
+        np.testing.assert_allclose(c.splits[1:] / c.splits[:-1], (f / n) ** 0.25, rtol=1e-12)
+        blend = sm.fit_cascades(SUN, view, proj, BOX, 256, depth_range=rng, lam=0.75)
+        assert np.max(blend.splits[1:] / blend.splits[:-1]) > (f / n) ** 0.25 * (1 + 1e-9)
+    i = np.arange(5) / 4
+    for kwargs in ({}, {"depth_range": "visible", "lam": 0.75}):
+        c = sm.fit_cascades(SUN, view, proj, BOX, 256, **kwargs)
+        n, f = c.splits[0], c.splits[-1]
+        want = 0.75 * n * (f / n) ** i + 0.25 * (n + (f - n) * i)
+        np.testing.assert_allclose(c.splits, want, rtol=1e-12)
+    assert sm.fit_cascades(SUN, view, proj, BOX, 256).splits[0] == pytest.approx(0.1)
+
+
 def is_ladder(x: np.ndarray) -> np.ndarray:
     k = 4 * np.log2(x)
     return np.abs(k - np.round(k)) < 1e-9
@@ -233,6 +259,7 @@ def test_the_ladder_values() -> None:
     ("kwargs", "message"),
     [
         ({"depth_range": "scene"}, "depth_range: expected 'camera', 'visible'"),
+        ({"scheme": "linear"}, "scheme: expected 'auto', 'uniform', 'log' or 'practical'"),
         ({"depth_range": "visible", "splits": [0.5, 2.0, 9.0]}, "depth_range: custom splits"),
         ({"state": sm.CascadeState(1.0, 9.0, 2.0)}, "state: needs depth_range"),
         ({"depth_range": "visible", "state": (1.0, 9.0)}, "state: expected"),

@@ -26,9 +26,16 @@ from shadowmath._boundary._validate import Array, Checks, all_finite, convert, n
 from shadowmath._math._specialize import formulas
 
 SplitScheme = Literal["uniform", "log", "practical"]
+#: :func:`~shadowmath.fit_cascades`'s schemes: :data:`SplitScheme` and the rule ``"auto"``.
+CascadeScheme = Literal["auto", "uniform", "log", "practical"]
 
 #: The schemes :func:`cascade_splits` knows, and the ``lam`` each implies.
 SCHEMES: dict[str, float | None] = {"uniform": 0.0, "log": 1.0, "practical": None}
+#: The practical scheme's blend when no ``lam`` is given.
+PRACTICAL_LAM = 0.75
+#: ``scheme="auto"``'s blend over the camera's depth range and over a fitted one (visible
+#: or measured): the best of the pose sweep's candidates over each (``docs/cascades.md``).
+AUTO_LAM_CAMERA, AUTO_LAM_FITTED = PRACTICAL_LAM, 1.0
 
 
 def cascade_splits(
@@ -37,7 +44,7 @@ def cascade_splits(
     count: int,
     *,
     scheme: SplitScheme = "practical",
-    lam: Real[ArrayLike, "*#batch"] = 0.75,
+    lam: Real[ArrayLike, "*#batch"] = PRACTICAL_LAM,
 ) -> Float[Array, "*batch {count}+1"]:
     r"""The ``count + 1`` view depths that cut ``[near, far]`` into ``count`` cascades.
 
@@ -45,7 +52,8 @@ def cascade_splits(
 
     ``scheme="uniform"`` is ``lam = 0``, ``"log"`` is ``lam = 1``, ``"practical"``
     takes ``lam`` (0.75 by default; three.js and Babylon.js use 0.5: see
-    ``docs/cascades.md`` for why). Differentiable in
+    ``docs/cascades.md`` for why; :func:`~shadowmath.fit_cascades`'s default
+    ``scheme="auto"`` picks 0.75 or 1 by the depth range it cuts). Differentiable in
     ``near``, ``far`` and ``lam`` (JAX).
 
     Arguments:
@@ -85,11 +93,33 @@ def check_count(count: object) -> int:
     return int(count)
 
 
-def check_scheme(scheme: object) -> float | None:
-    """The ``lam`` a scheme fixes (``None``: the practical scheme takes ``lam``)."""
-    if not isinstance(scheme, str) or scheme not in SCHEMES:
-        raise ValueError(f"scheme: expected 'uniform', 'log' or 'practical', got {scheme!r}")
-    return SCHEMES[scheme]
+def check_scheme(scheme: object, *, auto: bool = False) -> float | None:
+    """The ``lam`` a scheme fixes (``None``: the practical scheme, or with ``auto`` the rule
+    ``"auto"``, takes ``lam``)."""
+    names = ("auto", *SCHEMES) if auto else tuple(SCHEMES)
+    if not isinstance(scheme, str) or scheme not in names:
+        listed = ", ".join(repr(n) for n in names[:-1]) + f" or {names[-1]!r}"
+        raise ValueError(f"scheme: expected {listed}, got {scheme!r}")
+    return SCHEMES.get(scheme)
+
+
+def scheme_lam(scheme: object, lam: Any, *, fitted_range: bool) -> Any:
+    """:func:`~shadowmath.fit_cascades`'s blend: the one ``scheme`` fixes, else ``lam``,
+    else ``"auto"``'s rule (:data:`AUTO_LAM_FITTED` over a visible or measured range,
+    :data:`AUTO_LAM_CAMERA` over the camera's) or the practical scheme's default.
+
+    Example:
+        >>> scheme_lam("auto", None, fitted_range=True), scheme_lam("auto", 0.5, fitted_range=True)
+        (1.0, 0.5)
+    """
+    fixed = check_scheme(scheme, auto=True)
+    if fixed is not None:
+        return fixed
+    if lam is not None:
+        return lam
+    if scheme == "auto":
+        return AUTO_LAM_FITTED if fitted_range else AUTO_LAM_CAMERA
+    return PRACTICAL_LAM
 
 
 def check_range(checks: Checks, n: Array, f: Array, lm: Array, fixed: float | None) -> None:

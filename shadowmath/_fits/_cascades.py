@@ -49,11 +49,7 @@ from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath._math._vector import matmul
 from shadowmath.lights import DirectionalLight
 
-from ._cascade_splits import (
-    SplitScheme,
-    check_count,
-    check_scheme,
-)
+from ._cascade_splits import CascadeScheme, check_count, scheme_lam
 from ._lispsm import check_warp, warp_cascades
 from ._spec import ShadowMapSpec, api_rows, map_spec
 
@@ -157,8 +153,8 @@ def fit_cascades(
     *,
     count: int = 4,
     splits: Real[ArrayLike, "*#batch _"] | None = None,
-    scheme: SplitScheme = "practical",
-    lam: Real[ArrayLike, "*#batch"] = 0.75,
+    scheme: CascadeScheme = "auto",
+    lam: Real[ArrayLike, "*#batch"] | None = None,
     max_distance: Real[ArrayLike, "*#batch"] | None = None,
     overlap: Real[ArrayLike, "*#batch"] = 0.1,
     up: Real[ArrayLike, "*#batch 3"] | None = None,
@@ -221,7 +217,12 @@ def fit_cascades(
         count: the number of cascades (ignored when ``splits`` is given).
         splits: ``(*batch, n + 1)`` custom increasing view depths within the
             camera's range, instead of a scheme.
-        scheme, lam: :func:`cascade_splits`'s scheme and blend.
+        scheme, lam: :func:`cascade_splits`'s scheme (``"uniform"``, ``"log"``,
+            ``"practical"``) and blend (``None``: 0.75), or ``"auto"`` (the default): the
+            practical scheme with ``lam`` if given, else a rule from the pose sweep
+            (``docs/cascades.md``): ``lam = 0.75`` over the camera's range
+            (``depth_range="camera"``), the log scheme (``lam = 1``) over a visible or
+            measured range, whose near end is where the scene starts.
         max_distance: ``(*batch,)`` the shadow distance: the last split (at most
             the camera's far plane).
         overlap: the blend band, a fraction of each cascade's length in ``[0, 1)``.
@@ -297,9 +298,8 @@ def fit_cascades(
         raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
     range_code, measured = _range_option(depth_range, splits is not None, state)
     direction = light.direction if isinstance(light, DirectionalLight) else light
-    fixed = check_scheme(scheme)
+    lam_v = scheme_lam(scheme, lam, fitted_range=range_code != 0)
     n_given = None if splits is not None else check_count(count)
-    lam_v = lam if fixed is None else fixed
     # Python numbers stay Python numbers (the common case): no array conversion per frame.
     plain = all(type(v) in (float, int) for v in (lam_v, overlap)) and (
         max_distance is None or type(max_distance) in (float, int)

@@ -121,8 +121,8 @@ def render_cascades(
     map_size: int | tuple[int, int] = 1024,
     count: int = 4,
     splits: Any = None,
-    scheme: Literal["uniform", "log", "practical"] = "practical",
-    lam: float = 0.5,
+    scheme: Literal["auto", "uniform", "log", "practical"] = "practical",
+    lam: float | None = 0.5,
     max_distance: float | None = None,
     overlap: float = 0.1,
     stable: bool = False,
@@ -169,7 +169,9 @@ def render_cascades(
             its shadow (the maps reach toward the sun only to the box).
         image_size, map_size: the picture's and each cascade's map size in pixels/texels.
         count, splits, scheme, lam, max_distance, overlap, stable, warp, layout: as in
-            :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades).
+            :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades), but
+            the splits default to the practical scheme with ``lam = 0.5`` (three.js's);
+            ``scheme="auto", lam=None`` is ``fit_cascades``'s default.
         pcf_radius: the PCF kernel's radius ``k`` (also the maps' border).
         depth_bias: ``(factor, units)`` of the slope-scaled bias ``b = units r_min +
             factor m`` (:func:`shadowmath.slope_scaled_bias`'s formula, computed per

@@ -89,8 +89,8 @@ def render_cascades_wgpu(
     map_size: int | tuple[int, int] = 1024,
     count: int = 4,
     splits: Any = None,
-    scheme: Literal["uniform", "log", "practical"] = "practical",
-    lam: float = 0.5,
+    scheme: Literal["auto", "uniform", "log", "practical"] = "practical",
+    lam: float | None = 0.5,
     max_distance: float | None = None,
     overlap: float = 0.1,
     stable: bool = False,
@@ -113,7 +113,9 @@ def render_cascades_wgpu(
         view, projection: the camera, in OpenGL's conventions, as in :func:`render_cascades`.
         scene_bounds, image_size, map_size: as in :func:`render_cascades`.
         count, splits, scheme, lam, max_distance, overlap, stable, warp, layout: as in
-            :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades).
+            :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades), but
+            the splits default to the practical scheme with ``lam = 0.5`` (three.js's);
+            ``scheme="auto", lam=None`` is ``fit_cascades``'s default.
         pcf_radius, normal_offset: as in :func:`render_cascades`.
         depth_bias: as in :func:`render_cascades`, ``units`` counting
             :data:`FLOAT_DEPTH_RESOLUTION` (``depth32float`` maps).
