@@ -4,7 +4,10 @@ The scene, cameras and comparison of ``test_render_cascades``; ``sm.fit_cascades
 called by ``render_cascades`` with ``depth_range="visible"`` (alone, stable with the
 slice's sphere, and with stable squares on the ladder from ``CascadeState.initial()``)
 or with the range measured on a first frame (the view depths of its visible points).
-Off the edge band no pixel may differ from the ray caster (OpenGL and WebGPU).
+Off the edge band no pixel may differ from the ray caster (OpenGL and WebGPU); the band
+also holds the lit pixels whose lookup reaches texels of another surface than their own
+plane (``reach_off_plane``: a face's foot on the ground), where the bias, derived for
+planar receivers, guarantees nothing.
 """
 
 from __future__ import annotations
@@ -14,7 +17,8 @@ import pytest
 
 import shadowmath as sm
 
-from .test_render_cascades import CAMERAS, NEAR, render, shadows
+from .depth_scenes import compare
+from .test_render_cascades import CAMERAS, NEAR, reach_off_plane, render, shadows
 
 __all__ = ["render"]  # the fixture: render_cascades (OpenGL) or render_cascades_wgpu
 
@@ -25,14 +29,10 @@ VARIANTS = {
     "measured": {"depth_range": "measured"},
     "measured, stable, state": {"depth_range": "measured", "stable": True, "state": True},
 }
-#: Stable squares with a state from the horizon camera leave 1 acne pixel off the band
-#: (a block's face in cascade 0; the same splits without stable=True leave none): not
-#: tested here until that is understood (docs/cascades.md says so).
-CASES = [(camera, variant) for camera in CAMERAS for variant in VARIANTS
-         if not (camera == "horizon" and "state" in variant)]  # fmt: skip
 
 
-@pytest.mark.parametrize(("camera", "variant"), CASES)
+@pytest.mark.parametrize("variant", list(VARIANTS))
+@pytest.mark.parametrize("camera", list(CAMERAS))
 def test_the_visible_range_agrees_with_the_ray_caster(render, monkeypatch, camera, variant):
     options = dict(VARIANTS[variant])
     stable = options.pop("stable", False)
@@ -50,9 +50,11 @@ def test_the_visible_range_agrees_with_the_ray_caster(render, monkeypatch, camer
         return fits[-1]
 
     monkeypatch.setattr(sm, "fit_cascades", fit_range)
-    frame, _, count = shadows(camera, render, stable=stable)
+    frame, truth, _ = shadows(camera, render, stable=stable)
+    off_plane = reach_off_plane(frame, truth, CAMERAS[camera])
+    count = compare(frame.shadow > 0.5, truth._replace(band=truth.band | off_plane))
     splits = np.asarray(fits[-1].splits)
-    print(f"{camera} {variant}: {count}, splits {np.round(splits, 2)}")
+    print(f"{camera} {variant}: {count}, off plane {off_plane.sum()}, splits {splits.round(2)}")
     assert count.shadowed > 1500
     # The scene's box holds the high camera (the tower behind it is 75 high): its visible
     # range starts at the near plane, and its view spans the last two cascades only.
