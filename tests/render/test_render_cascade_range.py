@@ -9,6 +9,9 @@ range (tight and stable), with ``depth_range="visible"`` (alone, stable with the
 sphere, and with stable squares on the ladder from ``CascadeState.initial()``) or with the
 range measured on a first frame (the view depths of its visible points). Off the edge band
 no pixel may differ from the ray caster (OpenGL and WebGPU).
+The band also holds the lit pixels whose lookup reaches texels of another surface than
+their own plane (``reach_off_plane``: a face's foot on the ground), where the bias, derived
+for planar receivers, guarantees nothing.
 """
 
 from __future__ import annotations
@@ -18,7 +21,8 @@ import pytest
 
 import shadowmath as sm
 
-from .test_render_cascades import CAMERAS, NEAR, render, shadows
+from .depth_scenes import compare
+from .test_render_cascades import CAMERAS, NEAR, reach_off_plane, render, shadows
 
 __all__ = ["render"]  # the fixture: render_cascades (OpenGL) or render_cascades_wgpu
 
@@ -31,17 +35,10 @@ VARIANTS = {
     "measured": {"depth_range": "measured"},
     "measured, stable, state": {"depth_range": "measured", "stable": True, "state": True},
 }
-#: Stable cascades from the horizon camera leave 1 acne pixel off the band (a block's face in
-#: cascade 0; the same splits without stable=True leave none), with a state, with the
-#: sphere over the visible range and over the camera's with lam = 0.75 (the default; with
-#: lam = 0.5, test_render_cascades, none), as does the sphere over the oblique camera's
-#: visible range: the derived minimum bias looks marginal there. Not tested here until
-#: that is understood (docs/cascades.md says so).
-ACNE = {("horizon", v) for v in VARIANTS if "stable" in v} | {("oblique", "visible, stable")}
-CASES = [(camera, v) for camera in CAMERAS for v in VARIANTS if (camera, v) not in ACNE]
 
 
-@pytest.mark.parametrize(("camera", "variant"), CASES)
+@pytest.mark.parametrize("variant", list(VARIANTS))
+@pytest.mark.parametrize("camera", list(CAMERAS))
 def test_the_visible_range_agrees_with_the_ray_caster(render, monkeypatch, camera, variant):
     options = dict(VARIANTS[variant])
     stable = options.pop("stable", False)
@@ -59,14 +56,16 @@ def test_the_visible_range_agrees_with_the_ray_caster(render, monkeypatch, camer
         return fits[-1]
 
     monkeypatch.setattr(sm, "fit_cascades", fit_range)
-    frame, _, count = shadows(camera, render, stable=stable, scheme="auto", lam=None)
+    frame, truth, _ = shadows(camera, render, stable=stable, scheme="auto", lam=None)
+    off_plane = reach_off_plane(frame, truth, CAMERAS[camera])
+    count = compare(frame.shadow > 0.5, truth._replace(band=truth.band | off_plane))
     splits = np.asarray(fits[-1].splits)
     near, far = splits[0], splits[-1]  # the default rule: lam = 0.75 over the camera's range
     lam = 0.75 if "depth_range" not in options else 1.0  # the log scheme over a fitted one
     i = np.arange(5) / 4
     want = lam * near * (far / near) ** i + (1 - lam) * (near + (far - near) * i)
     np.testing.assert_allclose(splits, want, rtol=1e-9)
-    print(f"{camera} {variant}: {count}, splits {np.round(splits, 2)}")
+    print(f"{camera} {variant}: {count}, off plane {off_plane.sum()}, splits {splits.round(2)}")
     assert count.shadowed > 1500
     # The scene's box holds the high cameras (the tower behind them is 75 high): their
     # visible range starts at the near plane, and the log scheme leaves their view (from

@@ -98,6 +98,69 @@ def shadows(camera, render=render_cascades, **kwargs):
     return frame, truth, compare(frame.shadow > 0.5, truth)
 
 
+def reach_off_plane(frame, truth, view, pcf_radius: int = 0) -> np.ndarray:
+    """Lit pixels whose lookup reaches texels where the map holds another surface than the
+    pixel's own plane: there the derived bias guarantees nothing (it is derived for planar
+    receivers, docs/depth-maps.md), and these pixels count as band.
+
+    The shader compares the lifted point ``p + o`` (``sm.normal_offset``) with the texels
+    up to ``c = k + 1/2`` per axis around it, in the cascade serving ``p`` and, in a blend
+    band, the previous one too. The bias ``2c m`` covers the receiver's own plane there; at
+    a crease where a lit face stands on the lit ground (a concave corner) the texels beyond
+    the foot hold the ground, nearer to the sun than the face's plane extended by up to
+    ``c (|dr/dx| + |dr/dy|)`` of the *ground's* slopes, and the lifted point is no higher
+    above the ground than ``p`` (the offset is along the face). For each lit pixel the
+    points of its own plane at the corners ``(s, t) +- c`` texels of that square are cast
+    toward the sun: if one hits a body, the reach leaves the plane (a crease, a shadow's
+    edge).
+    """
+    from shadowmath.groundtruth import segment_hits_triangles
+
+    from .depth_scenes import LIFT
+    from .scenes import world_mesh
+
+    fit, light = frame.cascades, np.append(SUN.direction, 0.0)
+    lit = truth.on & ~truth.shadow & (np.nan_to_num(frame.normal) @ light[:3] > 0)
+    p = frame.position[lit].astype(np.float64)
+    n = frame.normal[lit].astype(np.float64)
+    depth = -(p @ view[2, :3] + view[2, 3])
+    serving = frame.cascade[lit]
+    off = np.zeros(len(p), dtype=bool)
+    for step in (0, 1):  # the serving cascade, and the previous one in its blend band
+        i = serving - step
+        sampled = i >= 0
+        if step:
+            sampled &= depth <= np.asarray(fit.band_end)[np.maximum(i, 0)]
+        M = np.asarray(fit.world_to_texture)[i[sampled]]
+        for x in _reach_corners(M, p[sampled], n[sampled], fit.texture_size, pcf_radius):
+            hit = np.zeros(len(x), dtype=bool)
+            for body in BODIES:
+                hit |= segment_hits_triangles(x + LIFT * n[sampled], light, *world_mesh(body))
+            off[np.flatnonzero(sampled)[hit]] = True
+    mask = np.zeros(lit.shape, dtype=bool)
+    mask[lit] = off
+    return mask
+
+
+def _reach_corners(M, p, n, size, pcf_radius):
+    """``(4, N, 3)``: the points of each plane ``(p, n)`` whose texture coordinates are the
+    lifted point's ``(s, t) +- c`` texels (``c = k + 1/2``), ``M`` ``(N, 4, 4)``."""
+    import shadowmath as sm
+
+    lifted = p + np.asarray(sm.normal_offset(M, p, n, map_size=size, pcf_radius=pcf_radius))
+    h = np.einsum("nij,nj->ni", M, np.append(lifted, np.ones((len(p), 1)), axis=1))
+    st = h[:, :2] / h[:, 3:]
+    plane = np.append(n, -np.sum(n * p, axis=1)[:, None], axis=1)
+    corners = []
+    for corner in ((-1, -1), (-1, 1), (1, -1), (1, 1)):
+        s, t = (st + (pcf_radius + 0.5) * np.asarray(corner) / np.asarray(size)).T
+        # (row_s - s row_q) . (x, 1) = 0, the same for t, and the plane: three equations.
+        rows = np.stack([M[:, 0] - s[:, None] * M[:, 3], M[:, 1] - t[:, None] * M[:, 3], plane],
+                        axis=1)  # fmt: skip
+        corners.append(np.linalg.solve(rows[:, :, :3], -rows[:, :, 3:])[..., 0])
+    return corners
+
+
 def behind_shadow(frame, truth) -> np.ndarray:
     """Ground pixels in the tower-behind-the-camera's shadow (it is the last body)."""
     from shadowmath.groundtruth import segment_hits_triangles
