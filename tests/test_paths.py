@@ -218,3 +218,56 @@ def test_a_batch_sharded_over_two_devices_runs_unchanged() -> None:
     )
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip() == "ok"
+
+
+@DTYPES
+@given(data=st.data())
+def test_bounds_about_a_point_are_the_per_vertex_bounds(dtype: Any, data: st.DataObject) -> None:
+    # One pass keeps the world points' bounds; the bounds about any point o, the reach
+    # and the coordinates' size follow exactly (fl(p - o) is monotone in p).
+    from shadowmath._math._specialize import formulas
+
+    n = data.draw(st.integers(1, 40))
+    values = st.floats(-1e6, 1e6, width=32 if dtype is np.float32 else 64)
+    p = np.asarray(data.draw(st.lists(values, min_size=3 * n, max_size=3 * n)), dtype)
+    p = p.reshape(n, 3)
+    o = np.asarray(data.draw(st.lists(values, min_size=3, max_size=3)), dtype)
+    lo_o, hi_o, reach, coords = formulas(np).bounds_about(
+        tuple(p.min(0)), tuple(p.max(0)), tuple(o)
+    )
+    d = p - o
+    np.testing.assert_array_equal(np.array(lo_o), d.min(0))
+    np.testing.assert_array_equal(np.array(hi_o), d.max(0))
+    assert reach == np.abs(d).max()
+    assert coords == np.abs(p).max()
+
+
+def test_compiled_passes_give_the_per_vertex_bounds_in_any_order() -> None:
+    # The compiled passes keep their bounds and sums in vector lanes (reordered): the
+    # bounds are exact whatever the order, the sums equal to rounding, and a NaN vertex
+    # still reaches the status word.
+    from shadowmath._boundary._status import VERTICES
+
+    loops = _kernels.loops()
+    rng = np.random.default_rng(5)
+    V = (rng.normal(size=(100_003, 3)) * [2.0, 1.0, 0.5] + [1.0, 0.5, 10.0]).astype(np.float32)
+    P = V.astype(np.float64)
+    o, none = (0.25, -0.5, 0.125), (0.0,) * 16
+    sums, lo, hi, status, n = loops.spread((V.reshape(-1), none, False), o)
+    assert (status, n) == (0, len(V))
+    np.testing.assert_array_equal(lo, P.min(0))
+    np.testing.assert_array_equal(hi, P.max(0))
+    np.testing.assert_allclose(sums, (P - o).sum(0), rtol=1e-13)
+    a = tuple(np.linalg.qr(rng.normal(size=(3, 3)))[0].T.ravel().tolist())
+    bounds = loops.light_pass((V.reshape(-1), none, False), o, a, True)
+    q = P - o
+    x, y, z = (
+        q[:, 0] * a[3 * i] + q[:, 1] * a[3 * i + 1] + q[:, 2] * a[3 * i + 2] for i in range(3)
+    )
+    inv = 1.0 / np.where(z > 0, z, 1.0)
+    rx, ry = x * inv, y * inv
+    expected = (rx.max(), rx.min(), ry.max(), ry.min(), z.max(), z.min())
+    assert bounds == expected
+    V[77_777, 1] = np.nan
+    assert loops.spread((V.reshape(-1), none, False), o)[3] & VERTICES
+    assert np.isnan(loops.light_pass((V.reshape(-1), none, False), o, a, True)[2])

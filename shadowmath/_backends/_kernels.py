@@ -117,6 +117,8 @@ def loops() -> SimpleNamespace:
     from shadowmath._math import _fit_entry
     from shadowmath._math._specialize import scalar_primitives, specialize
 
+    from . import _reductions
+
     config: Any = numba_config
     old = config.CACHE_DIR
     config.CACHE_DIR = cache_dir(sources_hash())
@@ -124,6 +126,7 @@ def loops() -> SimpleNamespace:
         jit = numba.njit(cache=True, error_model="numpy")
         primitives = {
             **scalar_primitives(),
+            **_reductions.primitives(),
             "where": jit(_select),
             "rint": np.rint,
             "alloc": jit(_zeros),
@@ -165,7 +168,7 @@ def sphere_support(points: Any) -> Any:
     flat = np.ascontiguousarray(p.reshape(-1, *p.shape[-2:]))
     if available():
         out = np.zeros((len(flat), 5), dtype=np.int32)
-        loops().support_loop(flat, out)
+        loops().support_loop(flat.reshape(len(flat), -1), out)  # rows x0, y0, z0, x1, ...
     else:
         from shadowmath._math._ball_support import support_arrays
 

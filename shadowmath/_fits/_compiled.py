@@ -103,12 +103,16 @@ def run(
 
 
 def operands(shape: tuple[int, ...], a: Inputs) -> tuple[Array, ...]:
-    """The loop's array operands, ``(count or 1, ...)`` each."""
+    """The loop's array operands, ``(count or 1, ...)`` each (the vertices ``(count or 1,
+    3 N)``)."""
     if not shape:  # one entry: no batch axes to flatten
         light, verts = a.light[None], a.verts[None]
     else:
         light = flat_batch(a.light, shape, a.light.shape[-1:])
         verts = flat_batch(a.verts, shape, a.verts.shape[-2:])
+    # Each entry's vertices as one flat row x0, y0, z0, x1, ... (a view of a C-contiguous
+    # array): the loops read them at a stride the compiler knows (:mod:`._vertex_passes`).
+    verts = verts.reshape(len(verts), -1)
     return (
         light,
         verts,

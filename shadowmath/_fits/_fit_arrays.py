@@ -145,23 +145,16 @@ class ArrayPasses:
         xp = self.xp
         return self._e(xp.max(x, axis=-1)), self._e(xp.min(x, axis=-1))
 
-    def _max_abs(self, *vs: Array) -> Array:
-        xp = self.xp
-        out = xp.max(xp.abs(vs[0]), axis=-1)
-        for v in vs[1:]:
-            out = xp.maximum(out, xp.max(xp.abs(v), axis=-1))
-        return self._e(out)
-
     def spread(self, vs: Any, o: tuple[Array, ...]) -> tuple[Any, ...]:
         world, st = vs
         xp = self.xp
-        c = tuple(p - q for p, q in zip(world, self._x(o), strict=True))
-        sums = tuple(self._e(xp.sum(v, axis=-1)) for v in c)
-        (hx, lx), (hy, ly), (hz, lz) = (self._bounds(v) for v in c)
+        sums = tuple(
+            self._e(xp.sum(p - q, axis=-1)) for p, q in zip(world, self._x(o), strict=True)
+        )
+        (hx, lx), (hy, ly), (hz, lz) = (self._bounds(p) for p in world)
         ok = self.Fv.isfinite(sums[0]) & self.Fv.isfinite(sums[1]) & self.Fv.isfinite(sums[2])
         st = st | self.flag(ok, OVERFLOW)
-        reach, coords = self._max_abs(*c), self._max_abs(*world)
-        return sums, (lx, ly, lz), (hx, hy, hz), reach, coords, st, world[0].shape[-1]
+        return sums, (lx, ly, lz), (hx, hy, hz), st, world[0].shape[-1]
 
     def light_pass(self, vs: Any, o: tuple[Array, ...], a: tuple[Array, ...], ratios: bool) -> Any:
         xp = self.xp
@@ -171,7 +164,7 @@ class ArrayPasses:
             inv_z = 1 / xp.where(z > 0, z, xp.ones_like(z))
             x, y = x * inv_z, y * inv_z
         (hx, lx), (hy, ly), (hz, lz) = self._bounds(x), self._bounds(y), self._bounds(z)
-        return (hx, lx, hy, ly, hz, lz), self._max_abs(*c)
+        return hx, lx, hy, ly, hz, lz
 
     def receiver_far(
         self, R: Array, o: tuple[Array, ...], a: tuple[Array, ...], sides: Any, opts: Any

@@ -89,7 +89,7 @@ def support_arrays(points: np.ndarray) -> np.ndarray:
 def _welzl(points: np.ndarray) -> np.ndarray:
     """Welzl's loop (:func:`._loops.support_loop`) on Python floats, entry by entry."""
     out = np.zeros((len(points), 5), dtype=np.int32)
-    scalar_formulas().support_loop(points.tolist(), out)
+    scalar_formulas().support_loop(points.reshape(len(points), -1).tolist(), out)
     return out
 
 

@@ -42,6 +42,7 @@ from shadowmath._boundary._status import (
 )
 
 from ._fit_formulas import (
+    bounds_about,
     box_sides,
     depth_range,
     directional_origin,
@@ -153,7 +154,8 @@ def point_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
     mean (or box centre), or a spot light's axis with its sides clipped to the cone."""
     L, S, U, _, _ = given
     eps = o.eps
-    s, lo, hi, reach, coords, st, n = spread(vs, L)
+    s, p_lo, p_hi, st, n = spread(vs, L)
+    lo, hi, reach, coords = bounds_about(p_lo, p_hi, L)
     if o.spot:
         d = (S[0], S[1], S[2])
         st = st | flag(spot_angle_ok(S[4]), SPOT_ANGLE)
@@ -173,7 +175,7 @@ def point_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
         zx, zy, zz, _ = normalize3(d[0], d[1], d[2])
         zx, zy, zz = to_single(zx), to_single(zy), to_single(zz)
         a = axes_from_z(zx, zy, zz) + (zx, zy, zz)  # noqa: RUF005 (Numba: tuple concatenation)
-    bounds, _ = light_pass(vs, L, a, True)
+    bounds = light_pass(vs, L, a, True)
     hx, lx, hy, ly, zb_max, zb_min = bounds
     if o.spot:
         half_x, half_y, cx, cy, ok_behind, ok_cone, ok_sil = spot_sides(
@@ -204,7 +206,8 @@ def directional_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
     L, _, U, _, _ = given
     eps = o.eps
     zero = 0.0 * L[0]
-    _, lo, hi, _, coords, st, _ = spread(vs, (zero, zero, zero))
+    _, lo, hi, st, _ = spread(vs, (zero, zero, zero))  # the world points' bounds
+    coords = bounds_about(lo, hi, (zero, zero, zero))[3]
     a, ok_light, _, ok_up = fit_axes((-L[0], -L[1], -L[2]), U, o.has_up, coords, eps)
     st = st | flags((ok_light,), 0) | flags((ok_up,), 2)
     if o.stable:  # the minimal enclosing sphere: the shape's, whatever its vertices
@@ -213,7 +216,8 @@ def directional_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
     else:
         sphere = (zero, zero, zero, zero)
         c = (0.5 * (hi[0] + lo[0]), 0.5 * (hi[1] + lo[1]), 0.5 * (hi[2] + lo[2]))
-    bounds, reach = light_pass(vs, c, a, False)
+    bounds = light_pass(vs, c, a, False)
+    reach = bounds_about(lo, hi, c)[2]  # max |p - c|
     hx, lx, hy, ly, zb_max, zb_min = bounds
     if o.stable:
         texels4 = (o.margin_x, o.margin_y, o.texels_x, o.texels_y)

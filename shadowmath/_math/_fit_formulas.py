@@ -37,6 +37,7 @@ from ._formulas import (  # noqa: F401  (names the specialized copies look up)
     frame_axes,
     isfinite,
     light_rows,
+    maximum,
     normalize3,
     projection_rows,
     rolled_axes,
@@ -70,6 +71,26 @@ def to_light(ox: Any, oy: Any, oz: Any, a: tuple[Any, ...]) -> tuple[Any, Any, A
         ox * a[3] + oy * a[4] + oz * a[5],
         ox * a[6] + oy * a[7] + oz * a[8],
     )
+
+
+def bounds_about(lo: tuple[Any, ...], hi: tuple[Any, ...], o: tuple[Any, ...]) -> Any:
+    """The bounds of ``p - o`` from the bounds ``lo <= hi`` of the points ``p`` (3 each),
+    the reach ``max |p - o|`` over the components and the coordinates' size ``max |p|``.
+
+    Exact, not a bound: a rounded difference ``fl(p - o)`` is monotone in ``p``, so
+    its extremes are the differences of the extremes, and over ``[lo, hi]`` the
+    largest ``|v|`` is ``max(hi, -lo)``. So one pass's bounds of ``p`` give them about
+    any point ``o``.
+    """
+    lo_o = (lo[0] - o[0], lo[1] - o[1], lo[2] - o[2])
+    hi_o = (hi[0] - o[0], hi[1] - o[1], hi[2] - o[2])
+    return lo_o, hi_o, _largest(lo_o, hi_o), _largest(lo, hi)
+
+
+def _largest(lo: tuple[Any, ...], hi: tuple[Any, ...]) -> Any:
+    """``max |v|`` over the boxes ``[lo_j, hi_j]``: ``max_j max(hi_j, -lo_j)``."""
+    m = maximum(hi[0], -lo[0])
+    return maximum(maximum(m, maximum(hi[1], -lo[1])), maximum(hi[2], -lo[2]))
 
 
 def fit_axes(
@@ -559,6 +580,8 @@ def safe_box(box: tuple[Any, Any, Any, Any, Any, Any]) -> tuple[Any, Any, Any, A
 FUNCTIONS = (
     "place",
     "to_light",
+    "bounds_about",
+    "_largest",
     "fit_axes",
     "placement_ok",
     "near_clear",

@@ -53,8 +53,8 @@ def planar_loop(plane: Any, light: Any, eps: float, out: Any, status: Any) -> No
 
 
 def support_loop(verts: Any, out: Any) -> None:
-    """The enclosing sphere's support of every entry of ``(count, N, 3)`` world vertices:
-    ``out[i] = (i_0, i_1, i_2, i_3, k)``."""
+    """The enclosing sphere's support of every entry of ``(count, 3 N)`` world vertices
+    (flat rows ``x0, y0, z0, x1, ...``): ``out[i] = (i_0, i_1, i_2, i_3, k)``."""
     none = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for e in range(len(out)):
         sup, k = enclosing_support(verts[e], none, False)
@@ -87,9 +87,9 @@ def fit_loop(operands: Any, opts: Any, out: Any) -> None:
     """Every batch entry's :func:`fit_entry`.
 
     ``operands = (light, verts, placement, recv, ups, near, far)``, each
-    ``(count or 1, ...)`` and read at ``i % len`` (``near``, ``far``: ``(count or
-    1,)``, ignored unless given); ``opts``: the options record (one row of
-    :data:`shadowmath._fits._compiled.OPTIONS`: the fields of
+    ``(count or 1, ...)`` and read at ``i % len`` (``verts``: flat rows of ``3 N``
+    numbers; ``near``, ``far``: ``(count or 1,)``, ignored unless given); ``opts``: the
+    options record (one row of :data:`shadowmath._fits._compiled.OPTIONS`: the fields of
     :class:`._fit_entry.FitOptions`, then the API's rows ``C`` and ``T C``);
     ``out = (rows, mats, status)``: the output blocks.
     """

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import math
+import operator
 import types
 from collections.abc import Callable
 from types import ModuleType
@@ -124,6 +125,9 @@ def scalar_primitives() -> dict[str, Any]:
         "alloc": _zeros_list,
         "flag": _scalar_flag,
         "take_last": _scalar_take,
+        "lower": min,
+        "upper": max,
+        "accumulate": operator.add,
     }
 
 

@@ -1,19 +1,31 @@
 """The fits' passes over the vertices, as loops: the per-entry backend of :mod:`._fit_entry`.
 
 Plain Python over scalars in the subset that Numba compiles (tuples, ``len``,
-``a[i][j]`` indexing, ``math``): :func:`._kernels.loops` compiles them, or they run
+``a[i]`` indexing, ``math``): :func:`._kernels.loops` compiles them, or they run
 on Python floats for one small fit. Each pass reads the vertices once, placing
-each through ``b`` on the fly (``vs = (V, b, has_b)``: one entry's ``(N, 3)``
-vertices, its placement's 16 entries, and whether it has one). The same passes on
-whole arrays are reductions over the last axis
-(:class:`shadowmath._fits._fit_arrays.ArrayPasses`); both call the per-vertex
+each through ``b`` on the fly (``vs = (V, b, has_b)``: one entry's vertices as one
+flat row ``x0, y0, z0, x1, ...`` of ``3 N`` numbers, its placement's 16 entries, and
+whether it has one). The same passes on whole arrays are reductions over the last
+axis (:class:`shadowmath._fits._fit_arrays.ArrayPasses`); both call the per-vertex
 formulas of :mod:`._fit_formulas`. Sums are accumulated in float64 whatever the
 input dtype.
+
+The loops are written so that Numba compiles them to vector instructions: the
+vertices as a flat row (a constant stride of 3 numbers, which the compiler loads as
+interleaved vectors; a 2D array's row stride is known only at run time), no branch
+per vertex, and the running bounds and sums through the primitives ``lower``,
+``upper`` and ``accumulate``: Python's ``min``, ``max`` and ``+`` here, and in the
+compiled loops instructions that may be reordered (a sum in any order, IEEE
+``minimum``/``maximum`` that propagate NaN), which the compiler keeps in vector
+lanes (:mod:`shadowmath._backends._kernels`). So each pass runs near the speed of
+one read of the array.
 """
 
 from __future__ import annotations
 
 import math
+import operator
+from collections.abc import Callable
 from typing import Any
 
 from shadowmath._boundary._status import OVERFLOW, PROJECTIVE, VERTICES
@@ -21,59 +33,64 @@ from shadowmath._boundary._status import OVERFLOW, PROJECTIVE, VERTICES
 from ._fit_formulas import place, receiver_counted, sphere_through, to_light, triangle_far
 from ._formulas import fabs, sqrt  # primitives, rebound by specialize()
 
+# The reductions' steps: primitives, rebound by specialize() (Python's by default).
+lower: Callable[[Any, Any], Any] = min
+upper: Callable[[Any, Any], Any] = max
+accumulate: Callable[[Any, Any], Any] = operator.add
+
 
 def _vertex(V: Any, k: int, b: Any, has_b: bool) -> Any:
-    """Vertex ``k`` in world coordinates and its ``w`` (1 without a placement)."""
-    vx, vy, vz = float(V[k][0]), float(V[k][1]), float(V[k][2])
+    """Vertex ``k`` of a flat row in world coordinates and its ``w`` (1 without a placement)."""
+    vx, vy, vz = float(V[3 * k]), float(V[3 * k + 1]), float(V[3 * k + 2])
     if has_b:
         return place(b, vx, vy, vz)
     return vx, vy, vz, 1.0
 
 
+def count(V: Any) -> int:
+    """The number of vertices in a flat row of ``3 N`` numbers."""
+    return len(V) // 3
+
+
 def spread(vs: Any, o: Any) -> tuple[Any, ...]:
-    """Pass 1 about the point ``o``: sums, bounds of ``p - o``, reach (max ``|p - o|``
-    per axis), coords (max ``|p|``), status (non-finite, projective, overflow), count."""
+    """Pass 1 about the point ``o``: sums of ``p - o``, bounds of the world points ``p``
+    (:func:`._fit_formulas.bounds_about` turns them into the bounds of ``p - o``, the
+    reach and the coordinates' size), status (non-finite, projective, overflow), count."""
     V, b, has_b = vs
-    sx = sy = sz = reach = coords = raw = 0.0
-    lo_x = lo_y = lo_z = math.inf
+    n = count(V)
+    sx = sy = sz = raw = 0.0
+    lo_x = lo_y = lo_z = lo_w = math.inf
     hi_x = hi_y = hi_z = -math.inf
-    st = 0
-    for k in range(len(V)):
-        raw += float(V[k][0]) + float(V[k][1]) + float(V[k][2])
+    for k in range(n):
+        raw = accumulate(raw, float(V[3 * k]) + float(V[3 * k + 1]) + float(V[3 * k + 2]))
         px, py, pz, w = _vertex(V, k, b, has_b)
-        if not w > 0:
-            st |= PROJECTIVE
-        x, y, z = px - o[0], py - o[1], pz - o[2]
-        sx, sy, sz = sx + x, sy + y, sz + z
-        lo_x, lo_y, lo_z = min(lo_x, x), min(lo_y, y), min(lo_z, z)
-        hi_x, hi_y, hi_z = max(hi_x, x), max(hi_y, y), max(hi_z, z)
-        reach = max(reach, abs(x), abs(y), abs(z))
-        coords = max(coords, abs(px), abs(py), abs(pz))
+        lo_w = lower(lo_w, w)
+        sx, sy, sz = accumulate(sx, px - o[0]), accumulate(sy, py - o[1]), accumulate(sz, pz - o[2])
+        lo_x, lo_y, lo_z = lower(lo_x, px), lower(lo_y, py), lower(lo_z, pz)
+        hi_x, hi_y, hi_z = upper(hi_x, px), upper(hi_y, py), upper(hi_z, pz)
+    st = 0 if lo_w > 0 else PROJECTIVE
     if not math.isfinite(raw):
         st |= VERTICES
     elif not (math.isfinite(sx) and math.isfinite(sy) and math.isfinite(sz)):
         st |= OVERFLOW
-    return (sx, sy, sz), (lo_x, lo_y, lo_z), (hi_x, hi_y, hi_z), reach, coords, st, len(V)
+    return (sx, sy, sz), (lo_x, lo_y, lo_z), (hi_x, hi_y, hi_z), st, n
 
 
 def light_pass(vs: Any, o: Any, a: Any, ratios: bool) -> Any:
     """Pass 2: bounds ``(hi_x, lo_x, hi_y, lo_y, hi_z, lo_z)`` of ``x, y`` (or ``x / z,
-    y / z``) and ``z`` in the frame ``a`` about ``o``; reach (max ``|p - o|`` per axis)."""
+    y / z``) and ``z`` in the frame ``a`` about ``o``."""
     V, b, has_b = vs
     hx = hy = hz = -math.inf
     lx = ly = lz = math.inf
-    reach = 0.0
-    for k in range(len(V)):
+    for k in range(count(V)):
         px, py, pz, _ = _vertex(V, k, b, has_b)
-        ox, oy, oz = px - o[0], py - o[1], pz - o[2]
-        x, y, z = to_light(ox, oy, oz, a)
+        x, y, z = to_light(px - o[0], py - o[1], pz - o[2], a)
         if ratios:
             inv_z = 1.0 / z if z > 0 else 1.0
             x, y = x * inv_z, y * inv_z
-        hx, lx, hy, ly = max(hx, x), min(lx, x), max(hy, y), min(ly, y)
-        hz, lz = max(hz, z), min(lz, z)
-        reach = max(reach, abs(ox), abs(oy), abs(oz))
-    return (hx, lx, hy, ly, hz, lz), reach
+        hx, lx, hy, ly = upper(hx, x), lower(lx, x), upper(hy, y), lower(ly, y)
+        hz, lz = upper(hz, z), lower(lz, z)
+    return hx, lx, hy, ly, hz, lz
 
 
 def receiver_far(R: Any, o: Any, a: Any, sides: Any, opts: Any) -> Any:
@@ -115,7 +132,7 @@ _STRIDE = 1000003
 
 def _nth(V: Any, b: Any, has_b: bool, k: int, stride: int) -> Any:
     """The ``k``-th vertex in Welzl's order: its index and world coordinates."""
-    i = (k * stride) % len(V)
+    i = (k * stride) % count(V)
     p = _vertex(V, i, b, has_b)
     return i, (p[0], p[1], p[2])
 
@@ -157,7 +174,7 @@ def enclosing_support(V: Any, b: Any, has_b: bool) -> Any:
     vertices before it. The sphere is unique, so it depends on the point set only:
     not on the order, the tessellation or the orientation.
     """
-    n = len(V)
+    n = count(V)
     stride = _STRIDE if n % _STRIDE != 0 else 1
     sup, k = (0, 0, 0, 0), 1
     ball = _ball(V, b, has_b, sup, k)
@@ -189,6 +206,7 @@ def enclosing_support(V: Any, b: Any, has_b: bool) -> Any:
 
 FUNCTIONS = (
     "_vertex",
+    "count",
     "spread",
     "light_pass",
     "receiver_far",
