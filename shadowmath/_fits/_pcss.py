@@ -79,8 +79,8 @@ class _Map(NamedTuple):
 def pcss_parameters(
     fit: PcssFit,
     *,
-    light_radius: Real[ArrayLike, "*#batch"] | None = None,
-    angular_radius: Real[ArrayLike, "*#batch"] | None = None,
+    light_radius: Real[ArrayLike, "*#lights"] | None = None,
+    angular_radius: Real[ArrayLike, "*#lights"] | None = None,
     map_size: MapSize | ShadowMapSpec | None = None,
     border_texels: int = 0,
     reversed_z: BoolLike | None = None,
@@ -112,8 +112,8 @@ def pcss_parameters(
             :class:`Cascades` (one entry per cascade), :class:`AtlasFit` (one per tile),
             or :class:`CubeDepthRange` (every face alike: give ``map_size`` and the
             ``border_texels`` and ``reversed_z`` of :func:`cube_face_projection`).
-        light_radius: ``(*batch,)`` the radius of a point or spot light (world units).
-        angular_radius: ``(*batch,)`` a sun's angular radius in radians, ``[0, pi/2)``.
+        light_radius: ``(*lights,)`` the radius of a point or spot light (world units).
+        angular_radius: ``(*lights,)`` a sun's angular radius in radians, ``[0, pi/2)``.
         map_size: the map's ``size`` or ``(width, height)`` in texels, or its
             :class:`ShadowMapSpec`: for a :class:`ShadowSetup` or a cube.
         border_texels: a cube face's border ring.
@@ -163,7 +163,9 @@ def pcss_parameters(
         raise ValueError(
             f"reversed_z: the fit's matrices store depth {'without' if rev else 'with'} reversed Z"
         )
-    return PcssParameters(checks.poison(K, 1), checks.poison(near, 0))
+    if checks.invalid is not None:  # near is often a constant, whose 0 * NaN XLA folds to 0
+        near = xp.where(checks.invalid, xp.asarray(math.nan, dtype=ctx.dtype), near)
+    return PcssParameters(checks.poison(K, 1), near)
 
 
 def _terms(ctx: Context, m: _Map, M: Array, R: Array, T: Array) -> tuple[Array, Array]:
