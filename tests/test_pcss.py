@@ -21,6 +21,14 @@ RNG = np.random.default_rng(28)
 APIS: tuple[Any, ...] = ("opengl", "vulkan", "direct3d")
 
 
+@pytest.fixture(autouse=True, params=["floats", "arrays"])
+def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every test on both of the door's paths: a few NumPy maps on Python floats, and
+    whole arrays (what JAX, batches and atlases take)."""
+    if request.param == "arrays":
+        monkeypatch.setattr("shadowmath._fits._pcss._SCALAR_MAPS", 0)
+
+
 def caster_box(rng: np.random.Generator) -> np.ndarray:
     c, h = rng.uniform(-2, 2, 3), rng.uniform(0.3, 1.5, 3)
     return np.array([c + h * [x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
