@@ -8,6 +8,7 @@ texels with ``K |d - d'|`` of the depths the map stores (``r`` of ``world_to_tex
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -21,10 +22,12 @@ RNG = np.random.default_rng(28)
 APIS: tuple[Any, ...] = ("opengl", "vulkan", "direct3d")
 
 
-@pytest.fixture(autouse=True, params=["floats", "arrays"])
+@pytest.fixture(autouse=True, params=["compiled", "floats", "arrays"])
 def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Every test on both of the door's paths: a few NumPy maps on Python floats, and
-    whole arrays (what JAX, batches and atlases take)."""
+    """Every test on each of the door's paths: a few NumPy maps compiled by Numba (where it
+    is installed) or on Python floats, and whole arrays (JAX, batches, atlases)."""
+    if request.param == "floats":
+        monkeypatch.setattr("shadowmath._fits._pcss._kernels", SimpleNamespace(available=bool))
     if request.param == "arrays":
         monkeypatch.setattr("shadowmath._fits._pcss._SCALAR_MAPS", 0)
 
