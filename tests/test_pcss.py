@@ -396,9 +396,24 @@ def test_widened_cascades_hold_the_search_of_their_edges() -> None:
 
 def test_widen_cascades_refuses_stable_and_bad_angles() -> None:
     sun, view, proj, box = camera_scene(0)
-    with pytest.raises(ValueError, match="cascades: stable"):
+    with pytest.raises(ValueError, match="cascades: stable cascades keep their size"):
         sm.widen_cascades(sm.fit_cascades(sun, view, proj, box, 256, stable=True),
                           angular_radius=0.01)  # fmt: skip
     c = sm.fit_cascades(sun, view, proj, box, 256)
     with pytest.raises(ValueError, match="angular_radius: expected radians"):
         sm.widen_cascades(c, angular_radius=-0.01)
+
+
+def test_widen_cascades_derivatives_match_finite_differences() -> None:
+    jax = pytest.importorskip("jax")
+    jnp = jax.numpy
+    from jax.test_util import check_grads
+
+    sun, view, proj, box = camera_scene(2)
+
+    def wide(direction: Any, theta: Any) -> Any:
+        c = sm.fit_cascades(direction, view, proj, box, 512)
+        return sm.widen_cascades(c, angular_radius=theta).world_to_texture
+
+    args = (jnp.asarray(sun), jnp.asarray(0.02))
+    check_grads(wide, args, order=1, modes=("rev",), eps=1e-6, atol=1e-5, rtol=1e-5)
