@@ -417,3 +417,10 @@ def test_widen_cascades_derivatives_match_finite_differences() -> None:
 
     args = (jnp.asarray(sun), jnp.asarray(0.02))
     check_grads(wide, args, order=1, modes=("rev",), eps=1e-6, atol=1e-5, rtol=1e-5)
+
+
+def test_a_cube_range_needs_a_positive_near() -> None:
+    for near, far in ((0.0, 5.0), (2.0, 1.0), (np.nan, 3.0)):
+        with pytest.raises(ValueError, match="fit: a CubeDepthRange needs 0 < near < far"):
+            sm.pcss_parameters(sm.CubeDepthRange(np.array(near), np.array(far)),
+                               light_radius=0.1, map_size=64)  # fmt: skip

@@ -30,7 +30,7 @@ from shadowmath._math._specialize import formulas, scalar_formulas
 from ._atlas_fit import AtlasFit
 from ._cascades import Cascades
 from ._cube_depth import CubeDepthRange
-from ._pcss_maps import Maps, PcssFit, fit_maps, switch
+from ._pcss_maps import BAD_CUBE, Maps, PcssFit, fit_maps, switch
 from ._spec import ShadowMapSpec
 
 __all__ = ["PcssParameters", "PcssWidths", "pcss_parameters", "pcss_widths"]
@@ -244,7 +244,7 @@ def _array_maps(fit: PcssFit, m: Maps, R: Any, theta: Any) -> tuple[Array, Array
         checks.require(xp.all(M[..., 3, :3] == 0, axis=-1), WARPED)
     if isinstance(fit, CubeDepthRange):
         n, f = (ctx.constant(0.0) + v for v in (fit.near, fit.far))
-        checks.require((n > 0) & (f > n), "fit: a CubeDepthRange needs 0 < near < far")
+        checks.require((n > 0) & (f > n), BAD_CUBE)
     K, near = _terms(ctx, m._replace(M=M, toward=toward), R, T)
     if isinstance(fit, AtlasFit):  # a failed light's tiles: near = far = 0
         failed = (fit.near == 0) & (fit.far == 0)

@@ -23,6 +23,8 @@ from ._spec import ShadowMapSpec
 
 PcssFit = ShadowSetup | Cascades | AtlasFit | CubeDepthRange
 
+BAD_CUBE = "fit: a CubeDepthRange needs 0 < near < far"
+
 
 class Maps(NamedTuple):
     """A fit's maps."""
@@ -107,6 +109,8 @@ def _cube_maps(fit: CubeDepthRange, map_size: Any, border_texels: Any, rev: bool
         )
     k = face_scale(map_size, border_texels)
     ctx, (n, f) = convert(near=fit.near, far=fit.far)
+    if not ctx.lazy and not bool(ctx.xp.all((n > 0) & (f > n))):
+        raise ValueError(BAD_CUBE)
     P = _cube.cube_face_projection(ctx.xp, n, f, k, zero_to_one=True, flip_y=False, reversed_z=rev)
     T = ((0.5, 0.0, 0.0, 0.5), (0.0, 0.5, 0.0, 0.5), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
     N = float(map_size)
