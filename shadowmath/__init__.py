@@ -93,6 +93,12 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._fits._cube_depth import cube_depth_range as cube_depth_range
     from ._fits._fitting import FrustumFit as FrustumFit
     from ._fits._fitting import optimize_frustum as optimize_frustum
+    from ._fits._pcss import PcssParameters as PcssParameters
+    from ._fits._pcss import PcssWidths as PcssWidths
+    from ._fits._pcss import pcss_parameters as pcss_parameters
+    from ._fits._pcss import pcss_widths as pcss_widths
+    from ._fits._pcss_room import pcss_border_texels as pcss_border_texels
+    from ._fits._pcss_room import widen_cascades as widen_cascades
     from ._fits._prepared import PreparedFit as PreparedFit
     from ._fits._prepared import ShadowFitter as ShadowFitter
     from ._fits._setup import fit_shadow as fit_shadow
@@ -193,6 +199,16 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "FrustumFit",
         "optimize_frustum",
     ),
+    "._fits._pcss": (
+        "PcssParameters",
+        "PcssWidths",
+        "pcss_parameters",
+        "pcss_widths",
+    ),
+    "._fits._pcss_room": (
+        "pcss_border_texels",
+        "widen_cascades",
+    ),
     "._fits._prepared": (
         "PreparedFit",
         "ShadowFitter",
@@ -275,6 +291,8 @@ __all__ = [
     "LightFrame",
     "Mesh",
     "OrthographicBox",
+    "PcssParameters",
+    "PcssWidths",
     "PointLight",
     "PreparedFit",
     "ShadowAtlas",
@@ -320,6 +338,9 @@ __all__ = [
     "optimize_frustum",
     "pcf",
     "pcf_border_texels",
+    "pcss_border_texels",
+    "pcss_parameters",
+    "pcss_widths",
     "planar_projection",
     "pyramid_to_unit_cube",
     "receiver_projection",
@@ -332,5 +353,6 @@ __all__ = [
     "smooth_frustum",
     "smooth_max",
     "texel_world_size",
+    "widen_cascades",
     "world_to_light",
 ]
