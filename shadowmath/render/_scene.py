@@ -18,6 +18,7 @@ from ._context import image_size as _image_size
 from ._pass_depth import DepthPass
 from ._pass_lit import MAX_LIGHTS, draw_lit, finish, subtract_light
 from ._pass_omni import OmniPass
+from ._pass_pcss import PcssPass
 from ._pass_planar import PlanarPass
 from ._pass_soft import RadiancePass, SoftPass
 from ._pass_texture import TexturePass
@@ -33,7 +34,7 @@ from ._resources import (
 )
 
 #: The shadow systems that draw directional lights (``Light(direction=...)``).
-DIRECTIONAL_METHODS = ("planar", "depth")
+DIRECTIONAL_METHODS = ("planar", "depth", "pcss")
 
 #: The shadow systems by ``method`` name: each takes the options of :func:`render_scene`
 #: it uses (``pcf_radius``, ``depth_bias``) and ignores the others.
@@ -44,6 +45,7 @@ PASSES: dict[str, Callable[[PassOptions], ShadowPass]] = {
     "omni": lambda o: OmniPass(o.depth_bias),
     "soft": lambda o: SoftPass(o.samples, o.seed, o.pcf_radius, o.depth_bias),
     "radiance": lambda o: RadiancePass(o.samples, o.seed),
+    "pcss": lambda o: PcssPass(o.light_size, o.depth_bias),
 }
 
 
@@ -91,7 +93,7 @@ def render_scene(
     *,
     image_size: int | tuple[int, int] = (512, 384),
     map_size: int | tuple[int, int] = 256,
-    method: Literal["texture", "planar", "depth", "omni", "soft", "radiance"] = "texture",
+    method: Literal["texture", "planar", "depth", "omni", "soft", "radiance", "pcss"] = "texture",
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.06, 0.07, 0.09),
     setups: Sequence[Sequence[ShadowSetup]] | None = None,
@@ -99,6 +101,7 @@ def render_scene(
     depth_bias: tuple[float, float] | None = None,
     samples: int = 16,
     seed: int | None = 0,
+    light_size: float = 0.0,
     ctx: moderngl.Context | None = None,
 ) -> Frame:
     r"""Render receivers in the shadows of blockers, the article's passes on the GPU.
@@ -213,7 +216,7 @@ def render_scene(
     """
     if method not in PASSES:
         raise ValueError(f"method: expected one of {', '.join(map(repr, PASSES))}, got {method!r}")
-    shadow_pass = PASSES[method](PassOptions(pcf_radius, depth_bias, samples, seed))
+    shadow_pass = PASSES[method](PassOptions(pcf_radius, depth_bias, samples, seed, light_size))
     if not 1 <= len(lights) <= MAX_LIGHTS:
         raise ValueError(f"lights: expected 1 to {MAX_LIGHTS} lights, got {len(lights)}")
     if not (np.isfinite(ambient) and ambient >= 0):
