@@ -60,7 +60,7 @@ class View(NamedTuple):
 
 #: The whole scene (``top``); the box's corner ``(0, 0.2)`` where the shadow's edge
 #: leaves its foot (``contact``: a pixel about half a texel of the sun's 512 map).
-VIEWS = {"top": View(0.0, 0.0, 3.0, 160), "contact": View(0.08, 0.12, 0.12, 128)}
+VIEWS = {"top": View(0.0, 0.0, 3.0, 160), "contact": View(0.08, 0.1, 0.1, 96)}
 
 FLOOR = Body(*grid((10.0, 10.0)), plane=(0.0, 0.0, 1.0, 0.0))
 #: A unit cube on the floor (contact shadows) and a tall thin pillar (wide penumbrae).
@@ -70,6 +70,8 @@ CASTERS = {
 }
 #: The spot light's map border (texels), wider than its widest search region.
 SPOT_BORDER = MAP // 8
+#: The box's face ``x = 0`` at the ``contact`` view.
+BOX_FACE_X = 0.0
 PLATE_CENTRE = np.array([0.3, -0.2, 1.2])
 
 
