@@ -93,6 +93,10 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._fits._cube_depth import cube_depth_range as cube_depth_range
     from ._fits._fitting import FrustumFit as FrustumFit
     from ._fits._fitting import optimize_frustum as optimize_frustum
+    from ._fits._pcss import PcssParameters as PcssParameters
+    from ._fits._pcss import PcssWidths as PcssWidths
+    from ._fits._pcss import pcss_parameters as pcss_parameters
+    from ._fits._pcss import pcss_widths as pcss_widths
     from ._fits._prepared import PreparedFit as PreparedFit
     from ._fits._prepared import ShadowFitter as ShadowFitter
     from ._fits._setup import fit_shadow as fit_shadow
@@ -161,6 +165,8 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "._api._pcf_lookup": (
         "pcf",
         "pcf_border_texels",
+    "pcss_parameters",
+    "pcss_widths",
     ),
     "._api._planar_projection": ("planar_projection",),
     "._api._shadow_measures": (
@@ -192,6 +198,12 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "._fits._fitting": (
         "FrustumFit",
         "optimize_frustum",
+    ),
+    "._fits._pcss": (
+        "PcssParameters",
+        "PcssWidths",
+        "pcss_parameters",
+        "pcss_widths",
     ),
     "._fits._prepared": (
         "PreparedFit",
@@ -275,6 +287,8 @@ __all__ = [
     "LightFrame",
     "Mesh",
     "OrthographicBox",
+    "PcssParameters",
+    "PcssWidths",
     "PointLight",
     "PreparedFit",
     "ShadowAtlas",

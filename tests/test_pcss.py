@@ -1,0 +1,278 @@
+"""PCSS quantities (:func:`pcss_parameters`) against similar triangles in world space.
+
+Each test puts a light disk (or a sun's cone) beside a blocker point and a receiver plane,
+finds the true penumbra and blocker search region on the world's geometry, maps their
+circles into the map with the fit's ``world_to_texture`` and compares their extent in
+texels with ``K |d - d'|`` of the depths the map stores (``r`` of ``world_to_texture``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+import shadowmath as sm
+
+from .cameras import scene as camera_scene
+
+RNG = np.random.default_rng(28)
+APIS: tuple[Any, ...] = ("opengl", "vulkan", "direct3d")
+
+
+def caster_box(rng: np.random.Generator) -> np.ndarray:
+    c, h = rng.uniform(-2, 2, 3), rng.uniform(0.3, 1.5, 3)
+    return np.array([c + h * [x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+
+
+def homogeneous(M: np.ndarray, p: np.ndarray) -> np.ndarray:
+    return np.asarray(M @ np.r_[p, 1.0])
+
+
+def depth(M: np.ndarray, p: np.ndarray) -> float:
+    h = homogeneous(M, p)
+    return float(h[2] / h[3])
+
+
+def circle_extent(
+    M: np.ndarray, size: tuple[float, float], centre: np.ndarray, radius: float, Z: np.ndarray
+) -> np.ndarray:
+    """Half the extent along ``s`` and ``t``, in texels, of the map's image of the circle of
+    ``radius`` about ``centre`` in the plane perpendicular to ``Z``. On such a plane ``q`` is
+    constant, so ``(s, t)`` is affine there and the image an ellipse: its half-extent along
+    a coordinate is the norm of that coordinate's change along two orthonormal radii."""
+    e1 = np.cross(Z, [0.3, 0.5, 0.8])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(Z, e1)
+
+    def texels(p: np.ndarray) -> np.ndarray:
+        h = homogeneous(M, p)
+        return np.asarray(h[:2] / h[3] * np.asarray(size))
+
+    c = texels(centre)
+    a, b = texels(centre + radius * e1) - c, texels(centre + radius * e2) - c
+    return np.asarray(np.hypot(a, b))
+
+
+def perspective_case(M: np.ndarray, size: Any, L: np.ndarray, Z: np.ndarray, near: float,
+                     p: sm.PcssParameters, R: float, B: np.ndarray, zR: float) -> None:  # fmt: skip
+    """The penumbra of blocker point ``B`` and the search region of a receiver at light depth
+    ``zR`` by similar triangles, against ``K`` through the stored depths."""
+    zB = float((B - L) @ Z)
+    receiver = L + (B - L) * zR / zB  # B's shadow from the light's centre
+    # The disk's points L + rho send B to receiver + rho (1 - zR / zB): a circle about it.
+    true_penumbra = circle_extent(M, size, receiver, R * (zR - zB) / zB, Z)
+    dR, dB = depth(M, receiver), depth(M, B)
+    widths = sm.pcss_widths(p, dR, dB)
+    np.testing.assert_allclose(widths.penumbra, true_penumbra, rtol=1e-9)
+    # The light seen from the receiver, cut by the near plane: a circle about the ray's point.
+    on_near = receiver + (L - receiver) * (zR - near) / zR
+    true_search = circle_extent(M, size, on_near, R * (zR - near) / zR, Z)
+    np.testing.assert_allclose(widths.search, true_search, rtol=1e-9)
+    np.testing.assert_allclose(depth(M, L + near * Z), p.near_depth, atol=1e-12)
+
+
+@pytest.mark.parametrize("api", APIS)
+@pytest.mark.parametrize("reversed_z", [False, True])
+def test_point_light_penumbra_and_search_are_similar_triangles(api: Any, reversed_z: bool) -> None:
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        verts = caster_box(rng)
+        L = rng.uniform(-3, 3, 3) + [0, 9, 0]
+        size = (int(rng.integers(64, 2048)), int(rng.integers(64, 2048)))
+        fit = sm.fit_shadow(L, verts, size, api=api, reversed_z=reversed_z,
+                            border_texels=int(rng.integers(0, 6)))  # fmt: skip
+        R = float(rng.uniform(0.05, 1.0))
+        p = sm.pcss_parameters(fit, light_radius=R, map_size=size)
+        Z = fit.world_to_light[2, :3]
+        B = verts[rng.integers(8)]
+        zR = float((B - L) @ Z) * rng.uniform(1.05, 3)
+        perspective_case(fit.world_to_texture, size, L, Z, float(fit.frustum.near), p, R, B, zR)
+        assert float(p.near_depth) == float(reversed_z)
+
+
+def test_spot_light_off_centre_frustum() -> None:
+    rng = np.random.default_rng(2)
+    verts = caster_box(rng)
+    L = np.array([6.0, 8.0, -1.0])
+    spot = sm.SpotLight(L, np.array([-0.6, -1.0, 0.1]), np.array(0.5))
+    fit = sm.fit_shadow(spot, verts, (640, 480), api="webgpu")
+    p = sm.pcss_parameters(fit, light_radius=0.3, map_size=sm.ShadowMapSpec((640, 480)))
+    Z = fit.world_to_light[2, :3]
+    for B in verts:
+        zB = float((B - L) @ Z)
+        perspective_case(fit.world_to_texture, (640, 480), L, Z, float(fit.frustum.near), p,
+                         0.3, B, 2.5 * zB)  # fmt: skip
+
+
+def orthographic_case(M: np.ndarray, size: Any, Z: np.ndarray, near_point: np.ndarray,
+                      p: Any, theta: float, B: np.ndarray, zR: float) -> None:  # fmt: skip
+    """A sun of angular radius ``theta`` travelling along ``Z``: blocker point ``B``, a
+    receiver plane ``zR`` farther along ``Z``; ``near_point`` a point of the near plane."""
+    receiver = B + zR * Z
+    true_penumbra = circle_extent(M, size, receiver, np.tan(theta) * zR, Z)
+    dR, dB = depth(M, receiver), depth(M, B)
+    widths = sm.pcss_widths(p, dR, dB)
+    np.testing.assert_allclose(widths.penumbra, true_penumbra, rtol=1e-9)
+    to_near = float((receiver - near_point) @ Z)
+    true_search = circle_extent(M, size, receiver - to_near * Z, np.tan(theta) * to_near, Z)
+    np.testing.assert_allclose(widths.search, true_search, rtol=1e-9)
+    np.testing.assert_allclose(depth(M, near_point), p.near_depth, atol=1e-12)
+
+
+@pytest.mark.parametrize("reversed_z", [False, True])
+def test_sun_penumbra_is_the_cone_of_its_angular_radius(reversed_z: bool) -> None:
+    rng = np.random.default_rng(3)
+    for theta in np.radians([0.5, 2.0, 5.0]):
+        verts = caster_box(rng)
+        sun = np.r_[rng.normal(size=3), 0.0]
+        size = (1024, 512)
+        fit = sm.fit_shadow(sun, verts, size, api="vulkan", reversed_z=reversed_z)
+        p = sm.pcss_parameters(fit, angular_radius=theta, map_size=size)
+        Z = -sun[:3] / np.linalg.norm(sun[:3])
+        np.testing.assert_allclose(fit.world_to_light[2, :3], Z, atol=1e-12)
+        light_to_world = np.linalg.inv(fit.world_to_light)
+        near_point = (light_to_world @ [0.0, 0.0, float(fit.frustum.near), 1.0])[:3]
+        B = verts[rng.integers(8)]
+        orthographic_case(fit.world_to_texture, size, Z, near_point, p, theta, B, 1.7)
+
+
+def cascade_points(view: np.ndarray, depth_: float) -> np.ndarray:
+    """The point on the camera's axis at view depth ``depth_``."""
+    inv = np.linalg.inv(view)
+    return (inv @ [0.0, 0.0, -depth_, 1.0])[:3]
+
+
+@pytest.mark.parametrize("layout", ["layers", "atlas"])
+@pytest.mark.parametrize("seed", range(4))
+def test_every_cascade_gives_the_same_world_penumbra(layout: Any, seed: int) -> None:
+    sun, view, proj, box = camera_scene(seed)
+    c = sm.fit_cascades(sun, view, proj, box, 1024, layout=layout, overlap=0.2)
+    theta = np.radians(1.5)
+    p = sm.pcss_parameters(c, angular_radius=theta)
+    Z = -sun / np.linalg.norm(sun)
+    n = c.splits.shape[-1] - 1
+    for i in range(n - 1):  # a receiver in the band where cascades i and i + 1 blend
+        receiver = cascade_points(view, 0.5 * (c.splits[i + 1] + c.band_end[i]))
+        B = receiver - 3.0 * Z
+        world = []
+        for k in (i, i + 1):
+            M = c.world_to_texture[k]
+            one = sm.PcssParameters(p.texels_per_depth[k], p.near_depth[k])
+            world.append(sm.pcss_widths(one, depth(M, receiver), depth(M, B)).penumbra
+                         * c.texel_size[k])  # fmt: skip
+            light_to_world = np.linalg.inv(c.world_to_light[k])
+            near_point = (light_to_world @ [0.0, 0.0, float(c.frustum.near[k]), 1.0])[:3]
+            orthographic_case(M, c.texture_size, Z, near_point, one, theta, B, 3.0)
+        np.testing.assert_allclose(world[0], np.tan(theta) * 3.0, rtol=1e-9)
+        np.testing.assert_allclose(world[1], world[0], rtol=1e-9)
+
+
+@pytest.mark.parametrize("reversed_z", [False, True])
+def test_cube_faces_are_similar_triangles(reversed_z: bool) -> None:
+    rng = np.random.default_rng(4)
+    L = np.array([0.5, 0.2, -0.3])
+    verts = np.concatenate([caster_box(rng) * 0.5 + rng.uniform(-4, 4, 3) for _ in range(4)])
+    N, b = 256, 3
+    rng_ = sm.cube_depth_range(L, verts, map_size=N, border_texels=b)
+    R = 0.2
+    p = sm.pcss_parameters(rng_, light_radius=R, map_size=N, border_texels=b,
+                           reversed_z=reversed_z)  # fmt: skip
+    P = sm.cube_face_projection(rng_.near, rng_.far, map_size=N, border_texels=b,
+                                api="metal", reversed_z=reversed_z)  # fmt: skip
+    T = sm.api_convention(api="metal", reversed_z=reversed_z).clip_to_texture
+    for B in verts:
+        face = int(sm.cube_face(B - L).face)
+        M = T @ P @ sm.cube_face_views(L)[face]
+        Z = -sm.cube_face_views(L)[face][2, :3]  # a view looks down its -z
+        zB = float((B - L) @ Z)
+        perspective_case(M, (N, N), L, Z, float(rng_.near), p, R, B, 1.8 * zB)
+
+
+def test_atlas_tiles_match_their_own_fits() -> None:
+    verts = np.concatenate([caster_box(RNG) for _ in range(3)])
+    lights = [sm.SpotLight(np.array([0.0, 12.0, 1.0]), np.array([0.0, -1.0, 0.0]), np.array(0.7)),
+              sm.PointLight(np.array([0.5, 9.0, 0.0])),
+              sm.DirectionalLight(np.array([0.2, 1.0, 0.3])),
+              sm.PointLight(np.array([8.0, 0.5, 8.0]))]  # fmt: skip
+    a = sm.allocate_atlas([0.5, 0.3, 0.4, 0.2], atlas_size=2048, border_texels=2,
+                          cube=[False, False, False, True])  # fmt: skip
+    fit = sm.fit_atlas(lights, verts, a, api="direct3d", reversed_z=True)
+    R, theta = 0.25, np.radians(2.0)
+    p = sm.pcss_parameters(fit, light_radius=R, angular_radius=theta)
+    assert np.all(p.near_depth == 1.0)
+    for li in range(3):
+        t = a.light_tiles[li, 0]
+        n = int(a.light_size[li])
+        own = sm.fit_shadow(lights[li], verts, n, border_texels=2, api="direct3d",
+                            reversed_z=True)  # fmt: skip
+        kw = {"angular_radius": theta} if li == 2 else {"light_radius": R}
+        ref = sm.pcss_parameters(own, map_size=n, **kw)
+        # the tile's texels are the own map's: the same K
+        np.testing.assert_allclose(p.texels_per_depth[t], ref.texels_per_depth, rtol=1e-9)
+    L = np.array([8.0, 0.5, 8.0])
+    n = int(a.light_size[3])
+    rng_ = sm.cube_depth_range(L, verts, map_size=n, border_texels=2)
+    ref = sm.pcss_parameters(rng_, light_radius=R, map_size=n, border_texels=2, reversed_z=True)
+    for face in range(6):
+        t = a.light_tiles[3, face]
+        np.testing.assert_allclose(p.texels_per_depth[t], ref.texels_per_depth, rtol=1e-9)
+
+
+# --- the door -------------------------------------------------------------------------------
+
+
+def point_fit() -> sm.ShadowSetup:
+    verts = caster_box(np.random.default_rng(5))
+    return sm.fit_shadow([0.0, 9.0, 0.0], verts, 256)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"light_radius": -0.1, "map_size": 256}, "light_radius: expected finite"),
+        ({"light_radius": np.inf, "map_size": 256}, "light_radius: expected finite"),
+        ({"light_radius": 0.1}, "map_size: a ShadowSetup"),
+        ({"angular_radius": 0.1, "map_size": 256}, "angular_radius: the fit has no"),
+        ({"map_size": 256}, "light_radius: a point or spot"),
+        ({"light_radius": 0.1, "map_size": 256, "reversed_z": True}, "reversed_z: the fit's"),
+        ({"light_radius": 0.1, "map_size": 256, "border_texels": 2}, "border_texels: only"),
+    ],
+)
+def test_the_door_names_the_argument(kwargs: dict[str, Any], message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        sm.pcss_parameters(point_fit(), **kwargs)
+
+
+def test_the_door_refuses_suns_and_other_fits() -> None:
+    sun, view, proj, box = camera_scene(0)
+    c = sm.fit_cascades(sun, view, proj, box, 256)
+    with pytest.raises(ValueError, match=r"angular_radius: expected radians in \[0, pi/2\)"):
+        sm.pcss_parameters(c, angular_radius=np.pi / 2)
+    with pytest.raises(ValueError, match="light_radius: the fit has no"):
+        sm.pcss_parameters(c, light_radius=0.1, angular_radius=0.01)
+    with pytest.raises(ValueError, match="map_size: a Cascades records"):
+        sm.pcss_parameters(c, angular_radius=0.01, map_size=256)
+    with pytest.raises(ValueError, match="fit: expected a ShadowSetup"):
+        sm.pcss_parameters(c.frustum, angular_radius=0.01)  # type: ignore[arg-type]
+    sun, view, proj, box = camera_scene(1)  # a pose where the warp applies
+    warped = sm.fit_cascades(sun, view, proj, box, 256, warp="lispsm")
+    assert np.any(warped.world_to_texture[..., 3, :3] != 0)
+    with pytest.raises(ValueError, match="fit: a warped cascade"):
+        sm.pcss_parameters(warped, angular_radius=0.01)
+
+
+def test_an_atlas_of_suns_needs_reversed_z() -> None:
+    verts = caster_box(np.random.default_rng(6))
+    a = sm.allocate_atlas([0.5], atlas_size=512)
+    fit = sm.fit_atlas([sm.DirectionalLight(np.array([0.0, 1.0, 0.0]))], verts, a,
+                       reversed_z=True)  # fmt: skip
+    with pytest.raises(ValueError, match="reversed_z: an atlas of directional"):
+        sm.pcss_parameters(fit, angular_radius=0.01)
+    p = sm.pcss_parameters(fit, angular_radius=0.01, reversed_z=True)
+    t = a.light_tiles[0, 0]
+    M = np.asarray(fit.world_to_texture[t])
+    assert p.near_depth[t] == 1.0
+    down = np.array([0.0, -1.0, 0.0])  # the light's travel: depth falls along it, from 1
+    assert depth(M, verts[0] + down) < depth(M, verts[0])
