@@ -10,7 +10,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath import OrthographicBox, ShadowSetup
+from shadowmath import PcssParameters, ShadowSetup, pcss_parameters, pcss_widths
 
 from ._context import program, set_matrix, set_uniform
 from ._pass_depth import (
@@ -54,29 +54,20 @@ def light_size_option(light_size: object) -> float:
     return size
 
 
-def pcss_uniforms(
+def map_parameters(
     setup: ShadowSetup, light: PreparedLight, light_size: float, map_size: tuple[int, int]
-) -> PcssUniforms:
-    """The shader's ``k`` and ``d_near`` for one map: :func:`shadowmath.pcss_parameters`
-    with the light's radius (a point light) or angular radius in radians (a directional
-    light)."""
-    return _provisional_parameters(setup, light, light_size, map_size)
+) -> PcssParameters:
+    """One map's :func:`shadowmath.pcss_parameters`, with the light's radius (a point
+    light) or angular radius in radians (a directional light)."""
+    if light.directional:
+        return pcss_parameters(setup, angular_radius=light_size, map_size=map_size)
+    return pcss_parameters(setup, light_radius=light_size, map_size=map_size)
 
 
-def _provisional_parameters(
-    setup: ShadowSetup, light: PreparedLight, size: float, map_size: tuple[int, int]
-) -> PcssUniforms:
-    # PROVISIONAL until shadowmath.pcss_parameters lands (branch h-pcss).
-    fr = setup.frustum
-    n, f = float(fr.near), float(fr.far)
-    texels = np.array(map_size, float) * np.array([float(fr.margin_x), float(fr.margin_y)]) / 2
-    if isinstance(fr, OrthographicBox):
-        per = texels / np.array([float(fr.half_width), float(fr.half_height)])
-        k = math.tan(size) * (f - n) * per
-    else:
-        per = texels / np.array([float(fr.rx_max), float(fr.ry_max)])
-        k = size * (f - n) / (f * n) * per
-    return PcssUniforms((float(k[0]), float(k[1])), 0.0)
+def pcss_uniforms(parameters: PcssParameters) -> PcssUniforms:
+    """The shader's ``k`` and ``d_near`` from one map's parameters."""
+    k = np.asarray(parameters.texels_per_depth, dtype=np.float64)
+    return PcssUniforms((float(k[0]), float(k[1])), float(parameters.near_depth))
 
 
 class PcssPass(DepthPass):
@@ -110,7 +101,7 @@ class PcssPass(DepthPass):
         (setup,) = setups
         depth = draw_depth_map(scene, world_to_light_clip(setup), self.bias, back_faces=True)
         depth.compare_func = ""  # plain depths: the search averages them
-        uniforms = pcss_uniforms(setup, light, self.light_size, scene.map_size)
+        uniforms = pcss_uniforms(map_parameters(setup, light, self.light_size, scene.map_size))
         prog = program(scene.ctx, "surface.vert", "pcss_mask.frag")
         set_matrix(prog, "world_to_clip", scene.world_to_clip)
         set_uniform(prog, "depth_map", 0)
@@ -130,12 +121,13 @@ def search_border(
     map_size: tuple[int, int],
     bodies: Bodies,
 ) -> int:
-    """The widest search region ``k |d_R - d_near|`` in texels (rounded up) over the
-    bodies' vertices inside the map's depth range, at most a quarter of the map."""
+    """The widest search region (:func:`shadowmath.pcss_widths`' ``search``) in texels,
+    rounded up, over the bodies' vertices in front of the light, their depths clamped to
+    the map's range; at most a quarter of the map."""
     world = np.concatenate([b.world_vertices() for b in bodies])
     stq = np.c_[world, np.ones(len(world))] @ np.asarray(setup.world_to_texture, np.float64).T
     ahead = stq[:, 3] > 0  # behind a point light: not in its map
     depth = np.clip(stq[ahead, 2] / stq[ahead, 3], 0.0, 1.0)
-    uniforms = pcss_uniforms(setup, light, light_size, map_size)
-    widest = max(uniforms.k) * float(np.max(np.abs(depth - uniforms.d_near), initial=0.0))
-    return int(min(math.ceil(widest) + 1, min(map_size) // 4))
+    parameters = map_parameters(setup, light, light_size, map_size)
+    search = np.asarray(pcss_widths(parameters, depth, depth).search)
+    return int(min(math.ceil(float(np.max(search, initial=0.0))) + 1, min(map_size) // 4))
