@@ -55,13 +55,14 @@ def test_help_is_plain_text_with_every_default(capsys):
         ("--output", "(default: out/shadow.png)"),
         ("--shadow-map-output", "(default: not written)"),
         ("--pcf", "(default: 0, no filtering)"),
-        ("--depth-bias", "(default: 2.5+2K 4, K the --pcf radius)"),
+        ("--depth-bias", "(default: 2.5+2K 4, K the --pcf radius; pcss: 0 1)"),
         ("--area-light", "(default: 1 1 with those methods)"),
         ("--samples", "(default: 16)"),
         ("--seed", "(default: 0)"),
         ("--api", "(default: opengl)"),
         ("--directional", "(default: the point light)"),
         ("--cascade-colors", "(default: not written)"),
+        ("--light-size", "(default: 0.25, a sun 1 degree)"),
     ]:
         assert default in " ".join(entries[option].split()), option
 
@@ -149,6 +150,14 @@ def test_option_combinations(capsys, args, message):
         (["--method", "depth", "--area-light", "1", "1"], "--area-light 1 1: --method depth"),
         (["--area-light", "1", "1"], "--area-light 1 1: --method texture lights from a point"),
         (["--method", "omni", "--samples", "4"], "--samples 4: --method omni"),
+        (["--method", "soft", "--light-size", "1"], "--light-size 1: --method soft does not"),
+        (["--light-size", "1"], "--light-size 1: --method texture does not read it"),
+        (["--method", "pcss", "--light-size", "-1"], "argument --light-size: expected a number"),
+        (
+            ["--method", "pcss", "--directional", "1", "1", "1", "--light-size", "90"],
+            "--light-size 90: a sun's angular radius in degrees must be below 90",
+        ),
+        (["--method", "pcss", "--pcf", "1"], "--pcf 1: --method pcss compares no depths"),
         (["--method", "depth", "--seed", "3"], "--seed 3: --method depth"),
         (
             ["--method", "soft", "--area-light", "0", "1"],
