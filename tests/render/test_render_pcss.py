@@ -26,9 +26,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shadowmath.render import Light, render_scene
+import shadowmath as sm
+import shadowmath.render._pass_cascades as pass_cascades
+from shadowmath.meshes import box, grid
+from shadowmath.render import (
+    Body,
+    Light,
+    look_at,
+    perspective,
+    render_cascades,
+    render_scene,
+)
 
 from . import pcss_scenes as ps
+from .scenes import place
 
 MEAN_BOUND, P90_BOUND = 0.015, 0.05
 LIGHTS = ("spot", "point", "sun 2.0°", "sun 5.0°")
@@ -117,3 +128,62 @@ def test_pcss_options(gl):
         with pytest.raises(ValueError, match="light_size"):
             render_scene([ps.FLOOR], [ps.CASTERS["box"]], [Light((0, 0, 5))], np.eye(4),
                          method="pcss", light_size=bad, ctx=gl)  # fmt: skip
+
+
+# Cascades: a sun of 2° over a long wall running away from the camera; its shadow's far
+# edge (cast by the wall's top, 3 units up) crosses the first split. The penumbra's width
+# on the ground, measured in the 3 units of view depth before the split (cascade 0 only)
+# and after the blend band (cascade 1 only): the same world penumbra on either side with
+# shadowmath's K, a jump with Babylon.js's constant light-size-to-UV ratio.
+SUN_THETA = np.radians(2.0)
+CASCADE_MAP = 512
+
+
+def babylon_parameters(fit, light_size: float, ratio: float = 0.1) -> sm.PcssParameters:
+    """Babylon.js's PCSS for cascades: one light-size-to-UV ratio (its
+    ``contactHardeningLightSizeUVRatio``, 0.1 by default) for every cascade, the filter
+    radius ``ratio (d_R - d_B)`` of the map's width: ``K = ratio W`` texels per unit of
+    stored depth whatever the cascade's depth range and texel size (the search
+    ``ratio W d_R`` texels, ``d_near = 0``)."""
+    n = np.asarray(fit.splits).shape[-1] - 1
+    return sm.PcssParameters(np.full((n, 2), ratio * CASCADE_MAP), np.zeros(n))
+
+
+def wall_scene(gl):
+    ground = Body(*grid((200.0, 200.0)))
+    wall = Body(*box((0.4, 120.0, 3.0)), to_world=place(translation=(1.0, 60.0, 1.5)))
+    view = look_at([-1.0, -2.0, 4.0], [0.0, 30.0, 0.0], [0, 0, 1])
+    frame = render_cascades(
+        [ground, wall], Light(direction=(1.0, 0.15, 1.2)), view,
+        perspective(60.0, 1.0, 0.3, 120.0), image_size=256, map_size=CASCADE_MAP,
+        light_size=SUN_THETA, pcf_radius=8, max_distance=100.0, ctx=gl,
+    )  # fmt: skip
+    return frame, view
+
+
+def penumbra_widths(frame, view) -> tuple[float, float]:
+    """The penumbra's width on the ground (``0.1 < visibility < 0.9``) across the shadow's
+    far edge (``x ~ -1.7``), in world units along ``x``: its share of the ground pixels with
+    ``-2.5 < x < -0.5`` times 2, before the first split and after its blend band."""
+    depth = -(frame.position.astype(np.float64) @ view[2, :3] + view[2, 3])
+    x, vis = frame.position[..., 0], 1.0 - frame.shadow
+    strip = (frame.body == 0) & (x > -2.5) & (x < -0.5)
+    split, band_end = float(frame.cascades.splits[1]), float(frame.cascades.band_end[0])
+    widths = []
+    for side in (strip & (depth > split - 3) & (depth < split),
+                 strip & (depth > band_end) & (depth < band_end + 3)):  # fmt: skip
+        assert side.sum() > 250
+        widths.append(2.0 * float(((vis[side] > 0.1) & (vis[side] < 0.9)).mean()))
+    return widths[0], widths[1]
+
+
+def test_the_penumbra_does_not_jump_at_a_cascade_split(gl, monkeypatch):
+    """Each side's width is a count of pixels whose footprint (about 0.06 units here) is a
+    third of the penumbra, averaged along the edge: it agrees within 15% on either side
+    (measured 0.167 and 0.169). Babylon's constant ratio makes it jump by the ratio of the
+    cascades' K (measured 0.096 to 0.162)."""
+    before, after = penumbra_widths(*wall_scene(gl))
+    assert before > 0.1 and abs(np.log(after / before)) < np.log(1.15), (before, after)
+    monkeypatch.setattr(pass_cascades, "cascade_pcss_parameters", babylon_parameters)
+    jump_before, jump_after = penumbra_widths(*wall_scene(gl))
+    assert abs(np.log(jump_after / jump_before)) > np.log(1.4), (jump_before, jump_after)

@@ -14,6 +14,10 @@ uniform vec4 light;           // (x, y, z, 1) a point light, (x, y, z, 0) a dire
 uniform vec2 k;               // texels per unit of window depth, per axis
 uniform float d_near;         // the window depth of the near plane
 
+float pcss_depth(vec2 uv) {
+    return textureLod(depth_map, uv, 0.0).r;
+}
+
 void main() {
     if (!visible()) discard;
     float q = v_stq.w;
@@ -26,5 +30,6 @@ void main() {
         mask = 0.0;
         return;
     }
-    mask = 1.0 - pcss_lit(depth_map, str, k, d_near, pixel_angle(gl_FragCoord.xy));
+    vec2 size = vec2(textureSize(depth_map, 0));
+    mask = 1.0 - pcss_lit(str, size, k, d_near, 0.0, pixel_angle(gl_FragCoord.xy));
 }
