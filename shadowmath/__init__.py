@@ -165,8 +165,6 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "._api._pcf_lookup": (
         "pcf",
         "pcf_border_texels",
-    "pcss_parameters",
-    "pcss_widths",
     ),
     "._api._planar_projection": ("planar_projection",),
     "._api._shadow_measures": (
@@ -334,6 +332,8 @@ __all__ = [
     "optimize_frustum",
     "pcf",
     "pcf_border_texels",
+    "pcss_parameters",
+    "pcss_widths",
     "planar_projection",
     "pyramid_to_unit_cube",
     "receiver_projection",

@@ -21,6 +21,14 @@ RNG = np.random.default_rng(28)
 APIS: tuple[Any, ...] = ("opengl", "vulkan", "direct3d")
 
 
+@pytest.fixture(autouse=True, params=["floats", "arrays"])
+def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every test on both of the door's paths: a few NumPy maps on Python floats, and
+    whole arrays (what JAX, batches and atlases take)."""
+    if request.param == "arrays":
+        monkeypatch.setattr("shadowmath._fits._pcss._SCALAR_MAPS", 0)
+
+
 def caster_box(rng: np.random.Generator) -> np.ndarray:
     c, h = rng.uniform(-2, 2, 3), rng.uniform(0.3, 1.5, 3)
     return np.array([c + h * [x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
@@ -276,3 +284,56 @@ def test_an_atlas_of_suns_needs_reversed_z() -> None:
     assert p.near_depth[t] == 1.0
     down = np.array([0.0, -1.0, 0.0])  # the light's travel: depth falls along it, from 1
     assert depth(M, verts[0] + down) < depth(M, verts[0])
+
+
+# --- JAX ------------------------------------------------------------------------------------
+
+
+def test_derivatives_match_finite_differences() -> None:
+    jax = pytest.importorskip("jax")
+    jnp = jax.numpy
+    from jax.test_util import check_grads
+
+    verts = jnp.asarray(caster_box(np.random.default_rng(7)))
+
+    def point(light: Any, vertices: Any, radius: Any) -> Any:
+        fit = sm.fit_shadow(light, vertices, 256)
+        return sm.pcss_parameters(fit, light_radius=radius, map_size=256).texels_per_depth
+
+    def sun(direction: Any, theta: Any) -> Any:
+        fit = sm.fit_shadow(sm.DirectionalLight(direction), verts, (256, 128))
+        return sm.pcss_parameters(fit, angular_radius=theta, map_size=(256, 128)).texels_per_depth
+
+    args = (jnp.asarray([0.3, 9.0, -0.2]), verts, jnp.asarray(0.2))
+    check_grads(point, args, order=1, modes=("fwd", "rev"), eps=1e-5, atol=1e-6, rtol=1e-6)
+    args = (jnp.asarray([0.3, 1.0, 0.4]), jnp.asarray(0.03))
+    check_grads(sun, args, order=1, modes=("fwd", "rev"), eps=1e-5, atol=1e-6, rtol=1e-6)
+
+
+def test_cascades_derivatives_match_finite_differences() -> None:
+    jax = pytest.importorskip("jax")
+    jnp = jax.numpy
+    from jax.test_util import check_grads
+
+    sun, view, proj, box = camera_scene(2)
+
+    def K(direction: Any, theta: Any) -> Any:
+        c = sm.fit_cascades(direction, view, proj, box, 512)
+        return sm.pcss_parameters(c, angular_radius=theta).texels_per_depth
+
+    args = (jnp.asarray(sun), jnp.asarray(0.02))
+    check_grads(K, args, order=1, modes=("rev",), eps=1e-6, atol=1e-5, rtol=1e-5)
+
+
+def test_invalid_sizes_are_nan_under_jit() -> None:
+    jax = pytest.importorskip("jax")
+    jnp = jax.numpy
+    fit = sm.fit_shadow(jnp.asarray([0.0, 9.0, 0.0]), jnp.asarray(caster_box(RNG)), 256)
+
+    @jax.jit
+    def run(radius: Any) -> Any:
+        return sm.pcss_parameters(fit, light_radius=radius, map_size=256)
+
+    p = run(jnp.asarray([0.1, -0.1, jnp.inf]))
+    assert np.all(np.isfinite(p.texels_per_depth[0])) and np.isfinite(p.near_depth[0])
+    assert np.all(np.isnan(p.texels_per_depth[1:])) and np.all(np.isnan(p.near_depth[1:]))

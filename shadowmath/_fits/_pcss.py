@@ -1,8 +1,9 @@
 r"""Percentage-closer soft shadows from every fit: :func:`pcss_parameters`, :func:`pcss_widths`.
 
-The door reads each fit's map (its ``world_to_texture`` and texture size), checks the
-light's size, and runs the cores of :mod:`shadowmath._math._pcss`; ``docs/pcss.md``
-derives them.
+The door reads each fit's maps (:mod:`._pcss_maps`: ``world_to_texture`` and the texture's
+size), checks the light's size, and runs the formulas of :mod:`shadowmath._math._pcss`: on
+Python floats for a few NumPy maps (one light's map, its cascades), on whole arrays
+otherwise. ``docs/pcss.md`` derives them.
 """
 
 from __future__ import annotations
@@ -12,8 +13,6 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from shadowmath._api._adaptive_frustum import texel_counts
-from shadowmath._api._cube_faces import face_scale
 from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, MapSize, Real
 from shadowmath._boundary._validate import (
     Array,
@@ -21,21 +20,31 @@ from shadowmath._boundary._validate import (
     Context,
     batch_shape,
     convert,
+    is_tracer,
     non_finite,
 )
-from shadowmath._math import _cube
-from shadowmath._math._frustum import OrthographicBox
-from shadowmath._math._pcss import kernel_widths, orthographic_terms, perspective_terms
+from shadowmath._math._pcss import (
+    SCALAR,
+    array_ops,
+    kernel_widths,
+    orthographic_terms,
+    perspective_terms,
+)
 
 from ._atlas_fit import AtlasFit
 from ._cascades import Cascades
 from ._cube_depth import CubeDepthRange
-from ._shadow_setup import ShadowSetup
+from ._pcss_maps import Maps, PcssFit, fit_maps, switch
 from ._spec import ShadowMapSpec
 
 __all__ = ["PcssParameters", "PcssWidths", "pcss_parameters", "pcss_widths"]
 
-PcssFit = ShadowSetup | Cascades | AtlasFit | CubeDepthRange
+BAD_RADIUS = "light_radius: expected finite values >= 0"
+BAD_ANGLE = "angular_radius: expected radians in [0, pi/2)"
+WARPED = "fit: a warped cascade (warp='lispsm') has no constant K"
+
+#: At most this many NumPy maps run on Python floats (about 2 us a map).
+_SCALAR_MAPS = 8
 
 
 class PcssParameters(NamedTuple):
@@ -66,21 +75,11 @@ class PcssWidths(NamedTuple):
     penumbra: Float[Array, "*batch 2"]
 
 
-class _Map(NamedTuple):
-    """A fit's maps as the cores read them."""
-
-    M: Array
-    size: tuple[float, float]
-    perspective: Any  # a Python bool, or an (*b,) NumPy bool array (an atlas's tiles)
-    toward: Array | None  # the light's travel (orthographic maps), or None: see reversed
-    reversed: bool = False  # an orthographic map's reversed Z where toward is None
-
-
 def pcss_parameters(
     fit: PcssFit,
     *,
-    light_radius: Real[ArrayLike, "*#batch"] | None = None,
-    angular_radius: Real[ArrayLike, "*#batch"] | None = None,
+    light_radius: Real[ArrayLike, "*#lights"] | None = None,
+    angular_radius: Real[ArrayLike, "*#lights"] | None = None,
     map_size: MapSize | ShadowMapSpec | None = None,
     border_texels: int = 0,
     reversed_z: BoolLike | None = None,
@@ -112,8 +111,8 @@ def pcss_parameters(
             :class:`Cascades` (one entry per cascade), :class:`AtlasFit` (one per tile),
             or :class:`CubeDepthRange` (every face alike: give ``map_size`` and the
             ``border_texels`` and ``reversed_z`` of :func:`cube_face_projection`).
-        light_radius: ``(*batch,)`` the radius of a point or spot light (world units).
-        angular_radius: ``(*batch,)`` a sun's angular radius in radians, ``[0, pi/2)``.
+        light_radius: ``(*lights,)`` the radius of a point or spot light (world units).
+        angular_radius: ``(*lights,)`` a sun's angular radius in radians, ``[0, pi/2)``.
         map_size: the map's ``size`` or ``(width, height)`` in texels, or its
             :class:`ShadowMapSpec`: for a :class:`ShadowSetup` or a cube.
         border_texels: a cube face's border ring.
@@ -141,142 +140,28 @@ def pcss_parameters(
         >>> p.texels_per_depth.shape, float(p.near_depth)
         ((2,), 0.0)
     """
-    rev = _switch(reversed_z)
-    m = _maps(fit, map_size, border_texels, rev)
-    ctx, (M, R, theta) = convert(fit=m.M, light_radius=light_radius, angular_radius=angular_radius)
-    xp = ctx.xp
-    checks = Checks(ctx)
-    R, T = _sizes(ctx, checks, m, R, theta, isinstance(fit, Cascades))
-    shape = batch_shape(tuple(M.shape[:-2]), tuple(R.shape), tuple(T.shape),
-                        names=("fit", "light_radius", "angular_radius"))  # fmt: skip
-    M = xp.broadcast_to(M, (*shape, 4, 4))
-    R, T = xp.broadcast_to(R, shape), xp.broadcast_to(T, shape)
-    if isinstance(fit, Cascades):
-        flat = xp.all(M[..., 3, :3] == 0, axis=-1)
-        checks.require(flat, "fit: a warped cascade (warp='lispsm') has no constant K")
-    K, near = _terms(ctx, m, M, R, T)
-    if isinstance(fit, AtlasFit):  # a failed light's tiles: near = far = 0
-        failed = (fit.near == 0) & (fit.far == 0)
-        nan = xp.asarray(math.nan, dtype=ctx.dtype)
-        K, near = xp.where(failed[..., None], nan, K), xp.where(failed, nan, near)
-    if rev is not None and not ctx.lazy and bool(np.any(np.asarray(near) == float(not rev))):
+    rev = switch(reversed_z)
+    m = fit_maps(fit, map_size, border_texels, rev)
+    _require_sizes(m, light_radius, angular_radius)
+    cascades = isinstance(fit, Cascades)
+    if _few(m, light_radius, angular_radius):
+        K, near = _scalar_maps(m, light_radius, angular_radius, cascades)
+    else:
+        K, near = _array_maps(fit, m, light_radius, angular_radius)
+    if rev is not None and not is_tracer(near) and bool(np.any(np.asarray(near) == float(not rev))):
         raise ValueError(
             f"reversed_z: the fit's matrices store depth {'without' if rev else 'with'} reversed Z"
         )
-    return PcssParameters(checks.poison(K, 1), checks.poison(near, 0))
+    return PcssParameters(K, near)
 
 
-def _terms(ctx: Context, m: _Map, M: Array, R: Array, T: Array) -> tuple[Array, Array]:
-    """``(K, d_near)`` of every map: perspective, orthographic, or an atlas's mix (each
-    core on the other kind's tiles reads a harmless stand-in: no warning, finite
-    gradients)."""
-    xp = ctx.xp
-    if m.perspective is True:
-        return perspective_terms(xp, M, m.size, R)
-    persp = None if m.perspective is False else xp.asarray(m.perspective)
-    M_o = M if persp is None else xp.where(persp[..., None, None], ctx.constant(_BOX), M)
-    # without the light's travel, the one that puts d_near at reversed_z
-    toward = -M_o[..., 2, :3] if m.reversed else M_o[..., 2, :3]
-    toward = toward if m.toward is None else xp.broadcast_to(m.toward, toward.shape)
-    K, near = orthographic_terms(xp, M_o, m.size, xp.tan(T), toward)
-    if persp is None:
-        return K, near
-    M_p = xp.where(persp[..., None, None], M, ctx.constant(_PYRAMID))
-    K_p, near_p = perspective_terms(xp, M_p, m.size, R)
-    return xp.where(persp[..., None], K_p, K), xp.where(persp, near_p, near)
-
-
-#: Stand-ins for the other kind's tiles: a 90-degree frustum and a unit box.
-_PYRAMID = ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, -1.0), (0.0, 0.0, 1.0, 0.0))
-_BOX = ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
-
-
-def _switch(reversed_z: object) -> bool | None:
-    if reversed_z is None or isinstance(reversed_z, bool | np.bool_):
-        return None if reversed_z is None else bool(reversed_z)
-    raise ValueError(f"reversed_z: expected True, False or None, got {reversed_z!r}")
-
-
-def _texels(map_size: object, what: str) -> tuple[int, int]:
-    """``(W, H)`` of a ``map_size`` or a spec's, which ``what`` does not record."""
-    if map_size is None:
-        raise ValueError(
-            f"map_size: {what} does not record its texel counts: give the fit's map_size"
-        )
-    if isinstance(map_size, ShadowMapSpec):
-        return map_size.size
-    return texel_counts("map_size", map_size)
-
-
-def _maps(fit: object, map_size: Any, border_texels: Any, rev: bool | None) -> _Map:
-    """The maps of ``fit``: their ``world_to_texture``, texture size and kind."""
-    if not isinstance(fit, CubeDepthRange) and border_texels != 0:
-        raise ValueError(
-            "border_texels: only a CubeDepthRange takes it (the other fits' matrices hold "
-            "their borders)"
-        )
-    if isinstance(fit, ShadowSetup):
-        size = _texels(map_size, "a ShadowSetup")
-        if not isinstance(fit.frustum, OrthographicBox):
-            return _Map(fit.world_to_texture, size, True, None)
-        return _Map(fit.world_to_texture, size, False, fit.world_to_light[..., 2, :3])
-    if isinstance(fit, Cascades | AtlasFit) and map_size is not None:
-        raise ValueError(f"map_size: a {type(fit).__name__} records its texture size: leave it out")
-    if isinstance(fit, Cascades):
-        return _Map(fit.world_to_texture, fit.texture_size, False, fit.world_to_light[..., 2, :3])
-    if isinstance(fit, AtlasFit):
-        return _atlas_maps(fit, rev)
-    if isinstance(fit, CubeDepthRange):
-        return _cube_maps(fit, map_size, border_texels, bool(rev))
-    raise ValueError(
-        "fit: expected a ShadowSetup, Cascades, AtlasFit or CubeDepthRange, "
-        f"got {type(fit).__name__}"
-    )
-
-
-def _atlas_maps(fit: AtlasFit, rev: bool | None) -> _Map:
-    """An atlas's tiles: perspective where ``q`` varies; ``reversed_z`` given or read from
-    its perspective tiles (``beta > 0`` reversed), needed for its directional ones."""
-    M = np.asarray(fit.world_to_texture)
-    persp = np.any(M[:, 3, :3] != 0, axis=-1)
-    fitted = ~((np.asarray(fit.near) == 0) & (np.asarray(fit.far) == 0))
-    if rev is None and bool(np.any(~persp & fitted)):
-        shown = persp & fitted
-        if not shown.any():
-            raise ValueError(
-                "reversed_z: an atlas of directional lights only does not show its depth "
-                "direction: give fit_atlas's reversed_z"
-            )
-        _, near = perspective_terms(np, M[shown], (1.0, 1.0), np.ones(int(shown.sum())))
-        rev = bool(near[0] == 1)
-    return _Map(fit.world_to_texture, fit.texture_size, persp, None, bool(rev))
-
-
-def _cube_maps(fit: CubeDepthRange, map_size: Any, border_texels: Any, rev: bool) -> _Map:
-    """A cube face's ``world_to_texture`` (every face has the same ``K``): face ``+x``
-    of a light at the origin, depth in ``[0, 1]``."""
-    if map_size is None:
-        raise ValueError(
-            "map_size: a CubeDepthRange does not record its texel counts: give the faces' map_size"
-        )
-    k = face_scale(map_size, border_texels)
-    ctx, (n, f) = convert(near=fit.near, far=fit.far)
-    xp = ctx.xp
-    P = _cube.cube_face_projection(xp, n, f, k, zero_to_one=True, flip_y=False, reversed_z=rev)
-    T = ctx.constant(
-        ((0.5, 0.0, 0.0, 0.5), (0.0, 0.5, 0.0, 0.5), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
-    )
-    N = float(map_size)
-    return _Map(T @ P, (N, N), True, None)
-
-
-def _sizes(
-    ctx: Context, checks: Checks, m: _Map, R: Array | None, theta: Array | None, cascades: bool
-) -> tuple[Array, Array]:
-    """The light's radius and the sun's angular radius, checked (zero where not used)."""
-    xp = ctx.xp
-    persp = np.asarray(m.perspective)
-    needs = (bool(persp.any()), not bool(persp.all()))
+def _require_sizes(m: Maps, R: Any, theta: Any) -> None:
+    """The size each map's light needs is given, and no other."""
+    persp = m.perspective
+    if isinstance(persp, bool):
+        needs = (persp, not persp)
+    else:
+        needs = (bool(persp.any()), not bool(persp.all()))
     named = (
         ("light_radius", R, needs[0], "a point or spot light's", "angular_radius"),
         ("angular_radius", theta, needs[1], "a directional light's", "light_radius"),
@@ -287,14 +172,118 @@ def _sizes(
     for name, given, need, kind, _ in named:
         if given is None and need:
             raise ValueError(f"{name}: {kind} map needs it")
-    if R is not None:
-        checks.require(xp.isfinite(R) & (R >= 0), "light_radius: expected finite values >= 0")
-    if theta is not None:
-        ok = xp.isfinite(theta) & (theta >= 0) & (theta < math.pi / 2)
-        checks.require(ok, "angular_radius: expected radians in [0, pi/2)")
-        theta = theta[..., None] if cascades else theta
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+        value, bool | np.bool_
+    )
+
+
+def _few(m: Maps, R: Any, theta: Any) -> bool:
+    """A few NumPy maps of one kind and sizes given as numbers: the Python-float path."""
+    M = m.M
+    return (
+        type(M) is np.ndarray
+        and M.dtype in (np.float32, np.float64)
+        and M.size <= 16 * _SCALAR_MAPS
+        and isinstance(m.perspective, bool)
+        and (m.toward is None or type(m.toward) is np.ndarray)
+        and all(v is None or _number(v) for v in (R, theta))
+    )
+
+
+def _scalar_maps(m: Maps, R: Any, theta: Any, cascades: bool) -> tuple[Array, Array]:
+    """``(K, d_near)`` one map at a time on Python floats; raises what the checks would."""
+    r = 0.0 if R is None else float(R)
+    if not (math.isfinite(r) and r >= 0):
+        raise ValueError(BAD_RADIUS)
+    a = 0.0 if theta is None else float(theta)
+    if not (math.isfinite(a) and 0 <= a < math.pi / 2):
+        raise ValueError(BAD_ANGLE)
+    tangent = math.tan(a)
+    batch = m.M.shape[:-2]
+    rows = m.M.reshape(-1, 16).tolist()
+    if m.perspective:
+        out = [perspective_terms(SCALAR, e, m.size, r) for e in rows]
+    else:
+        toward = m.toward if m.toward is None or m.toward.shape[:-1] == batch else (
+            np.broadcast_to(m.toward, (*batch, 3)))  # fmt: skip
+        sign = -1.0 if m.reversed else 1.0
+        travel = [[sign * v for v in e[8:11]] for e in rows] if toward is None else (
+            toward.reshape(-1, 3).tolist())  # fmt: skip
+        if cascades and any(e[12] != 0 or e[13] != 0 or e[14] != 0 for e in rows):
+            raise ValueError(WARPED)
+        out = [
+            orthographic_terms(SCALAR, e, m.size, tangent, t)
+            for e, t in zip(rows, travel, strict=True)
+        ]
+    values = np.array(out, dtype=m.M.dtype).reshape(*batch, 3)
+    return values[..., :2], values[..., 2]
+
+
+def _array_maps(fit: PcssFit, m: Maps, R: Any, theta: Any) -> tuple[Array, Array]:
+    """``(K, d_near)`` on whole arrays (JAX, batches, an atlas); invalid entries NaN."""
+    ctx, (M, toward, R, theta) = convert(
+        fit=m.M, toward=m.toward, light_radius=R, angular_radius=theta
+    )
+    xp = ctx.xp
+    checks = Checks(ctx)
     zero = ctx.constant(0.0)
-    return (zero if R is None else R), (zero if theta is None else theta)
+    if R is not None:
+        checks.require(xp.isfinite(R) & (R >= 0), BAD_RADIUS)
+    if theta is not None:
+        checks.require(xp.isfinite(theta) & (theta >= 0) & (theta < math.pi / 2), BAD_ANGLE)
+        theta = theta[..., None] if isinstance(fit, Cascades) else theta
+    R, T = (zero if R is None else R), (zero if theta is None else theta)
+    shape = batch_shape(tuple(M.shape[:-2]), tuple(R.shape), tuple(T.shape),
+                        names=("fit", "light_radius", "angular_radius"))  # fmt: skip
+    M = xp.broadcast_to(M, (*shape, 4, 4))
+    R, T = xp.broadcast_to(R, shape), xp.broadcast_to(T, shape)
+    if isinstance(fit, Cascades):
+        checks.require(xp.all(M[..., 3, :3] == 0, axis=-1), WARPED)
+    if isinstance(fit, CubeDepthRange):
+        n, f = (ctx.constant(0.0) + v for v in (fit.near, fit.far))
+        checks.require((n > 0) & (f > n), "fit: a CubeDepthRange needs 0 < near < far")
+    K, near = _terms(ctx, m._replace(M=M, toward=toward), R, T)
+    if isinstance(fit, AtlasFit):  # a failed light's tiles: near = far = 0
+        failed = (fit.near == 0) & (fit.far == 0)
+        nan = xp.asarray(math.nan, dtype=ctx.dtype)
+        K, near = xp.where(failed[..., None], nan, K), xp.where(failed, nan, near)
+    if checks.invalid is not None:  # near is often a constant, whose 0 * NaN XLA folds to 0
+        near = xp.where(checks.invalid, xp.asarray(math.nan, dtype=ctx.dtype), near)
+    return checks.poison(K, 1), near
+
+
+def _entries(A: Array) -> tuple[Array, ...]:
+    return tuple(A[..., i // 4, i % 4] for i in range(16))
+
+
+def _terms(ctx: Context, m: Maps, R: Array, T: Array) -> tuple[Array, Array]:
+    """``(K, d_near)`` of every map: perspective, orthographic, or an atlas's mix (each
+    formula on the other kind's tiles reads a harmless stand-in: no warning, finite
+    gradients)."""
+    xp, M = ctx.xp, m.M
+    ops = array_ops(xp, ctx.dtype)
+    if m.perspective is True:
+        Ks, Kt, near = perspective_terms(ops, _entries(M), m.size, R)
+        return xp.stack((Ks, Kt), axis=-1), near
+    persp = None if m.perspective is False else xp.asarray(m.perspective)
+    M_o = M if persp is None else xp.where(persp[..., None, None], ctx.constant(_BOX), M)
+    sign = -1.0 if m.reversed else 1.0  # without the travel: d_near at reversed_z
+    toward = [sign * M_o[..., 2, c] for c in range(3)] if m.toward is None else [
+        m.toward[..., c] for c in range(3)]  # fmt: skip
+    Ks, Kt, near = orthographic_terms(ops, _entries(M_o), m.size, xp.tan(T), toward)
+    if persp is not None:
+        M_p = xp.where(persp[..., None, None], M, ctx.constant(_PYRAMID))
+        ps, pt, pn = perspective_terms(ops, _entries(M_p), m.size, R)
+        Ks, Kt, near = (xp.where(persp, a, b) for a, b in ((ps, Ks), (pt, Kt), (pn, near)))
+    return xp.stack((Ks, Kt), axis=-1), near
+
+
+#: Stand-ins for the other kind's tiles: a 90-degree frustum and a unit box.
+_PYRAMID = ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, -1.0), (0.0, 0.0, 1.0, 0.0))
+_BOX = ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
 
 
 def pcss_widths(

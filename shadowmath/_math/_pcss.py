@@ -15,62 +15,71 @@ in texels per axis, ``K`` read from the map's ``world_to_texture`` ``M`` (rows
   ``Z = m_3 / |m_3|``): ``r = alpha + beta / q``, ``beta = m_{2,3} - (m_2 . Z) m_{3,3} /
   lambda``; a light disk of radius ``R`` facing ``Z`` spreads a blocker point at depth
   ``z_B`` over a disk of ``R (1/z_B - 1/z_R)`` tan units on a receiver at ``z_R``, and
-  ``s`` moves ``|m_0 - (m_0 . Z) Z| / lambda`` per tan unit, so
-  ``K_s = R W |m_0 - (m_0 . Z) Z| / |beta|``;
+  ``s`` moves ``|m_0 x Z| / lambda`` per tan unit, so ``K_s = R W |m_0 x Z| / |beta|``;
 * **orthographic** (``q`` constant): ``r`` is affine in the light depth along
   ``Z = m_2 / |m_2|``; a sun of angular radius ``theta`` spreads a point over
-  ``tan(theta) |z_R - z_B|`` world units, so ``K_s = tan(theta) W |m_0 - (m_0 . Z) Z| / |m_2|``.
+  ``tan(theta) |z_R - z_B|`` world units, so ``K_s = tan(theta) W |m_0 x Z| / |m_2|``.
 
 (``K_t`` likewise with ``m_1`` and ``H``; vectors are the rows' first three entries.)
 """
 
 from __future__ import annotations
 
-from types import ModuleType
+import math
+from collections.abc import Sequence
+from types import ModuleType, SimpleNamespace
+from typing import Any
 
 from shadowmath._boundary._validate import Array
 
-from ._vector import dot
+#: The primitives of the formulas below on Python floats (one map at a time: the door's
+#: path for a few NumPy maps); :func:`array_ops` gives them on whole arrays.
+SCALAR = SimpleNamespace(sqrt=math.sqrt, abs=abs, tan=math.tan, flag=float)
 
 
-def _across(xp: ModuleType, row: Array, Z: Array) -> Array:
-    """``|row - (row . Z) Z|``: the row's rate across the unit axis ``Z``, ``(*b,)``."""
-    r = row[..., :3]
-    side = r - dot(xp, r, Z)[..., None] * Z
-    return xp.sqrt(dot(xp, side, side))
+def array_ops(xp: ModuleType, dtype: Any) -> SimpleNamespace:
+    """The primitives on ``xp``'s arrays (``flag``: a boolean array as 0 and 1)."""
+    return SimpleNamespace(sqrt=xp.sqrt, abs=xp.abs, tan=xp.tan, flag=lambda b: xp.astype(b, dtype))
 
 
-def _rates(xp: ModuleType, M: Array, size: tuple[float, float], Z: Array) -> Array:
-    """``(W |m_0 across Z|, H |m_1 across Z|)`` as ``(*b, 2)``."""
-    return xp.stack(
-        (size[0] * _across(xp, M[..., 0, :], Z), size[1] * _across(xp, M[..., 1, :], Z)), axis=-1
-    )
+def _unit(ops: Any, x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any]:
+    """``(x, y, z) / length`` and the length."""
+    n = ops.sqrt(x * x + y * y + z * z)
+    return x / n, y / n, z / n, n
+
+
+def _across(ops: Any, m: Any, i: int, Z: Sequence[Any]) -> Any:
+    """``|r x Z|`` of the row ``r = m[i : i + 3]``: its rate across the unit axis ``Z``
+    (``|r - (r . Z) Z|`` without its cancellation)."""
+    x, y, z = m[i], m[i + 1], m[i + 2]
+    cx, cy, cz = y * Z[2] - z * Z[1], z * Z[0] - x * Z[2], x * Z[1] - y * Z[0]
+    return ops.sqrt(cx * cx + cy * cy + cz * cz)
 
 
 def perspective_terms(
-    xp: ModuleType, M: Array, size: tuple[float, float], radius: Array
-) -> tuple[Array, Array]:
-    """``(K (*b, 2), d_near (*b,))`` of perspective maps ``M (*b, 4, 4)`` for lights of
-    radius ``radius (*b,)``; ``d_near`` is 0 where depth grows away from the light, else 1."""
-    g = M[..., 3, :3]
-    lam = xp.sqrt(dot(xp, g, g))
-    Z = g / lam[..., None]
-    beta = M[..., 2, 3] - dot(xp, M[..., 2, :3], Z) * M[..., 3, 3] / lam
-    K = radius[..., None] * _rates(xp, M, size, Z) / xp.abs(beta)[..., None]
-    return K, xp.astype(beta > 0, M.dtype)
+    ops: Any, m: Any, size: tuple[float, float], radius: Any
+) -> tuple[Any, Any, Any]:
+    """``(K_s, K_t, d_near)`` of a perspective map's 16 row-major entries ``m`` (scalars
+    or arrays) for a light of radius ``radius``; ``d_near`` is 0 where depth grows away
+    from the light, else 1."""
+    *Z, lam = _unit(ops, m[12], m[13], m[14])
+    beta = m[11] - (m[8] * Z[0] + m[9] * Z[1] + m[10] * Z[2]) * m[15] / lam
+    scale = radius / ops.abs(beta)
+    return (scale * size[0] * _across(ops, m, 0, Z), scale * size[1] * _across(ops, m, 4, Z),
+            ops.flag(beta > 0))  # fmt: skip
 
 
 def orthographic_terms(
-    xp: ModuleType, M: Array, size: tuple[float, float], tangent: Array, toward: Array
-) -> tuple[Array, Array]:
-    """``(K (*b, 2), d_near (*b,))`` of orthographic maps ``M (*b, 4, 4)`` for suns of
-    angular radius ``atan(tangent)`` (``(*b,)``) whose light travels along ``toward (*b, 3)``
-    (any length); ``d_near`` is 0 where depth grows along ``toward``, else 1."""
-    g = M[..., 2, :3]
-    mu = xp.sqrt(dot(xp, g, g))
-    Z = g / mu[..., None]
-    K = tangent[..., None] * _rates(xp, M, size, Z) / mu[..., None]
-    return K, xp.astype(dot(xp, g, toward) < 0, M.dtype)
+    ops: Any, m: Any, size: tuple[float, float], tangent: Any, toward: Any
+) -> tuple[Any, Any, Any]:
+    """``(K_s, K_t, d_near)`` of an orthographic map's entries ``m`` for a sun of angular
+    radius ``atan(tangent)`` whose light travels along ``toward`` (3 entries, any length);
+    ``d_near`` is 0 where depth grows along ``toward``, else 1."""
+    *Z, mu = _unit(ops, m[8], m[9], m[10])
+    scale = tangent / mu
+    going = m[8] * toward[0] + m[9] * toward[1] + m[10] * toward[2]
+    return (scale * size[0] * _across(ops, m, 0, Z), scale * size[1] * _across(ops, m, 4, Z),
+            ops.flag(going < 0))  # fmt: skip
 
 
 def kernel_widths(

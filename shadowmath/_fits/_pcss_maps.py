@@ -1,0 +1,108 @@
+"""The maps of each fit as :mod:`shadowmath._math._pcss` reads them (for
+:func:`~shadowmath._fits._pcss.pcss_parameters`): ``world_to_texture``, the texture's size
+in texels, perspective or not, and the light's travel of an orthographic map."""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from shadowmath._api._adaptive_frustum import texel_counts
+from shadowmath._api._cube_faces import face_scale
+from shadowmath._boundary._validate import Array, convert
+from shadowmath._math import _cube
+from shadowmath._math._frustum import OrthographicBox
+from shadowmath._math._pcss import SCALAR, perspective_terms
+
+from ._atlas_fit import AtlasFit
+from ._cascades import Cascades
+from ._cube_depth import CubeDepthRange
+from ._shadow_setup import ShadowSetup
+from ._spec import ShadowMapSpec
+
+PcssFit = ShadowSetup | Cascades | AtlasFit | CubeDepthRange
+
+
+class Maps(NamedTuple):
+    """A fit's maps."""
+
+    M: Array  # (*maps, 4, 4) world_to_texture
+    size: tuple[float, float]  # the texture's texels: (s, t) in [0, 1] span them
+    perspective: Any  # a Python bool, or an (*maps,) NumPy bool array (an atlas's tiles)
+    toward: Array | None  # (*maps, 3) the light's travel (orthographic maps) or None:
+    reversed: bool = False  # then an orthographic map's depth direction is this
+
+
+def switch(reversed_z: object) -> bool | None:
+    """``reversed_z`` as given: None, True or False."""
+    if reversed_z is None or isinstance(reversed_z, bool | np.bool_):
+        return None if reversed_z is None else bool(reversed_z)
+    raise ValueError(f"reversed_z: expected True, False or None, got {reversed_z!r}")
+
+
+def _texels(map_size: object, what: str) -> tuple[int, int]:
+    """``(W, H)`` of a ``map_size`` or a spec's, which ``what`` does not record."""
+    if map_size is None:
+        raise ValueError(f"map_size: {what} does not record its texel counts: give its map_size")
+    if isinstance(map_size, ShadowMapSpec):
+        return map_size.size
+    return texel_counts("map_size", map_size)
+
+
+def fit_maps(fit: object, map_size: Any, border_texels: Any, rev: bool | None) -> Maps:
+    """The maps of ``fit``, its arguments checked."""
+    if not isinstance(fit, CubeDepthRange) and border_texels != 0:
+        raise ValueError(
+            "border_texels: only a CubeDepthRange takes it (the other fits' matrices hold "
+            "their borders)"
+        )
+    if isinstance(fit, ShadowSetup):
+        size = _texels(map_size, "a ShadowSetup")
+        if not isinstance(fit.frustum, OrthographicBox):
+            return Maps(fit.world_to_texture, size, True, None)
+        return Maps(fit.world_to_texture, size, False, fit.world_to_light[..., 2, :3])
+    if isinstance(fit, Cascades | AtlasFit) and map_size is not None:
+        raise ValueError(f"map_size: a {type(fit).__name__} records its texture size: leave it out")
+    if isinstance(fit, Cascades):
+        return Maps(fit.world_to_texture, fit.texture_size, False, fit.world_to_light[..., 2, :3])
+    if isinstance(fit, AtlasFit):
+        return _atlas_maps(fit, rev)
+    if isinstance(fit, CubeDepthRange):
+        return _cube_maps(fit, map_size, border_texels, bool(rev))
+    raise ValueError(
+        "fit: expected a ShadowSetup, Cascades, AtlasFit or CubeDepthRange, "
+        f"got {type(fit).__name__}"
+    )
+
+
+def _atlas_maps(fit: AtlasFit, rev: bool | None) -> Maps:
+    """An atlas's tiles: perspective where ``q`` varies; ``reversed_z`` given or read from
+    a perspective tile (its ``d_near``), needed for the directional ones."""
+    M = np.asarray(fit.world_to_texture)
+    persp = np.any(M[:, 3, :3] != 0, axis=-1)
+    fitted = ~((np.asarray(fit.near) == 0) & (np.asarray(fit.far) == 0))
+    if rev is None and bool(np.any(~persp & fitted)):
+        shown = np.flatnonzero(persp & fitted)
+        if not shown.size:
+            raise ValueError(
+                "reversed_z: an atlas of directional lights only does not show its depth "
+                "direction: give fit_atlas's reversed_z"
+            )
+        rev = perspective_terms(SCALAR, M[shown[0]].reshape(16).tolist(), (1.0, 1.0), 1.0)[2] == 1
+    return Maps(fit.world_to_texture, fit.texture_size, persp, None, bool(rev))
+
+
+def _cube_maps(fit: CubeDepthRange, map_size: Any, border_texels: Any, rev: bool) -> Maps:
+    """A cube face's ``world_to_texture`` (every face has the same ``K``): a face of a
+    light at the origin, looking down its view's ``-z``, depth in ``[0, 1]``."""
+    if map_size is None:
+        raise ValueError(
+            "map_size: a CubeDepthRange does not record its texel counts: give the faces' map_size"
+        )
+    k = face_scale(map_size, border_texels)
+    ctx, (n, f) = convert(near=fit.near, far=fit.far)
+    P = _cube.cube_face_projection(ctx.xp, n, f, k, zero_to_one=True, flip_y=False, reversed_z=rev)
+    T = ((0.5, 0.0, 0.0, 0.5), (0.0, 0.5, 0.0, 0.5), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+    N = float(map_size)
+    return Maps(ctx.constant(T) @ P, (N, N), True, None)
