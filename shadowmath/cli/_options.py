@@ -36,6 +36,7 @@ METHODS: tuple[Method, ...] = (
 DEPTH_BIAS_METHODS = ("depth", "omni", "soft", "pcss", "cascades", "atlas")
 PCF_METHODS = ("depth", "soft", "cascades", "atlas")
 AREA_LIGHT_METHODS = ("soft", "radiance")
+LIGHT_SIZE_METHODS = ("pcss", "cascades")
 DIRECTIONAL_METHODS = ("planar", "depth", "pcss", "cascades")
 MAP_OUTPUT_METHODS = ("texture", "depth", "omni", "pcss", "atlas")
 APIS = ("opengl", "webgpu")
@@ -116,7 +117,8 @@ shadow systems (--method):
             blocker) seen from near the ground toward the horizon: four
             cascaded depth maps fitted to the camera (fit_cascades; --pcf,
             --depth-bias, --directional for the sun, --map-size per cascade,
-            --cascade-colors FILE.png for the cascades coloured)
+            --cascade-colors FILE.png for the cascades coloured, --light-size
+            DEGREES for PCSS in every cascade)
   atlas     many lights (--lights N, default {DEFAULT_ATLAS_LIGHTS}: point lights with cube
             maps, spots and suns) over a ground with blocks, their shadow maps
             tiles of one atlas (allocate_atlas, fit_atlas; --map-size is the
@@ -420,8 +422,9 @@ def _add_light_size_argument(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="SIZE",
         help="the light's radius (world units), or with --directional the sun's angular "
-        "radius in degrees (below 90); --method pcss only (default: "
-        f"{DEFAULT_LIGHT_RADIUS:g}, a sun {DEFAULT_SUN_DEGREES:g} degree)",
+        "radius in degrees (below 90); --method pcss, or cascades (the sun's: PCSS in "
+        f"every cascade) (default: {DEFAULT_LIGHT_RADIUS:g}, a sun {DEFAULT_SUN_DEGREES:g} "
+        "degree; cascades: 0, hard shadows)",
     )
 
 
@@ -597,12 +600,14 @@ def _check_method_options(args: argparse.Namespace) -> None:
             f"--depth-bias {shown(args.depth_bias)}: --method {method} draws no depth "
             "map; the bias applies to --method depth, omni, soft, pcss, cascades or atlas"
         )
-    if args.light_size is not None and method != "pcss":
+    if args.light_size is not None and method not in LIGHT_SIZE_METHODS:
         raise OptionError(
             f"--light-size {shown(args.light_size)}: --method {method} does not read it; "
-            "the light's size applies to --method pcss (soft and radiance take --area-light)"
+            "the light's size applies to --method pcss and cascades (soft and radiance "
+            "take --area-light)"
         )
-    if args.light_size is not None and args.directional is not None and args.light_size >= 90:
+    sun = args.directional is not None or method == "cascades"
+    if args.light_size is not None and sun and args.light_size >= 90:
         raise OptionError(
             f"--light-size {shown(args.light_size)}: a sun's angular radius in degrees "
             "must be below 90"
@@ -694,8 +699,9 @@ class Options:
         map_output: the shadow map's resolved path, or None.
         cascade_output: ``--cascade-colors``'s resolved path, or None.
         lights: ``--lights``, the atlas's light count (read by atlas only).
-        light_size: ``--light-size`` as ``render_scene`` takes it: the radius, or a
-            sun's angular radius in radians (read by pcss only).
+        light_size: ``--light-size`` as ``render_scene`` and ``render_cascades`` take
+            it: the radius, or a sun's angular radius in radians (read by pcss and
+            cascades only).
         default_output: ``--output`` was not given: create its folder if missing.
     """
 
@@ -818,7 +824,9 @@ def resolve_options(args: argparse.Namespace) -> Options:
 
 
 def _light_size_of(args: argparse.Namespace, directional: bool) -> float:
-    """``--light-size`` or its default, a sun's degrees in radians."""
+    """``--light-size`` or its default (none for cascades), a sun's degrees in radians."""
+    if args.method == "cascades":
+        return 0.0 if args.light_size is None else math.radians(args.light_size)
     if directional:
         degrees = DEFAULT_SUN_DEGREES if args.light_size is None else args.light_size
         return math.radians(degrees)
