@@ -24,7 +24,8 @@ does not.
 * :func:`render_cascades`: a sun's cascaded shadow maps fitted to the camera
   (:func:`shadowmath.fit_cascades`), drawn as layers of a texture array or tiles of an
   atlas; the camera-view pass picks the cascade by view depth and blends across the
-  bands; optionally a second picture coloured by cascade.
+  bands; optionally a second picture coloured by cascade; with ``light_size`` (the sun's
+  angular radius) percentage-closer soft shadows in every cascade.
 * :func:`render_atlas`: many point (cube-mapped), spot and directional lights whose
   shadow maps share one atlas (:func:`shadowmath.allocate_atlas`,
   :func:`shadowmath.fit_atlas`), each light's shadow mask and the picture lit by all.
