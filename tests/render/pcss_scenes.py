@@ -59,7 +59,7 @@ class View(NamedTuple):
 
 
 #: The whole scene (``top``); the box's corner ``(0, 0.2)`` where the shadow's edge
-#: leaves its foot (``contact``: a pixel about half a texel of the sun's 512 map).
+#: leaves its foot (``contact``: a pixel about two thirds of a texel of the suns' 512 maps).
 VIEWS = {"top": View(0.0, 0.0, 3.0, 160), "contact": View(0.08, 0.1, 0.1, 96)}
 
 FLOOR = Body(*grid((10.0, 10.0)), plane=(0.0, 0.0, 1.0, 0.0))

@@ -86,12 +86,12 @@ def test_casters_with_depth_stay_near_the_truth(gl, scene, light):
 
 @pytest.mark.parametrize("light", ["sun 2.0°", "sun 5.0°"])
 def test_the_shadow_hardens_where_the_box_touches_the_floor(gl, light):
-    """The box's corner where the edge of its shadow leaves its foot, a pixel about half a
-    texel: the transition ``0.1 < visibility < 0.9`` across that edge, measured down each
-    column of pixels at a distance ``s`` from the box's face (the truth's width grows
-    from zero in proportion to ``s``). One to four texels from the face PCSS's is at most
-    two texels wider than the truth's; thirty to forty-five texels out it is at least three
-    times what it is there."""
+    """The box's corner where the edge of its shadow leaves its foot, a pixel about two
+    thirds of a texel: the transition ``0.1 < visibility < 0.9`` across that edge,
+    measured down each column of pixels at a distance ``s`` from the box's face (the
+    truth's width grows from zero in proportion to ``s``). One to four texels from the face
+    PCSS's is at most two texels wider than the truth's; thirty to forty-five texels out
+    it is at least three times what it is there."""
     view = ps.VIEWS["contact"]
     frame = ps.render("box", light, view="contact", ctx=gl)
     c = ps.compare(frame, "box", light, "contact")
@@ -124,6 +124,9 @@ def test_pcss_options(gl):
     # nearest the sun (the top's, the -x and the +y face's), nor anything as near
     stq = np.asarray(setup.world_to_texture) @ [-1.0, 0.2, 1.0, 1.0]
     assert (depth == 1.0).mean() > 0.2 and depth.min() > stq[2] / stq[3]
+    with pytest.raises(ValueError, match="light_size"):
+        render_cascades([ps.FLOOR], Light(direction=(0, 0, 1)), np.eye(4),
+                        perspective(60.0, 1.0, 0.1, 10.0), light_size=-0.01, ctx=gl)  # fmt: skip
     for bad in (-0.1, float("nan"), "big", True):
         with pytest.raises(ValueError, match="light_size"):
             render_scene([ps.FLOOR], [ps.CASTERS["box"]], [Light((0, 0, 5))], np.eye(4),
