@@ -97,6 +97,8 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._fits._pcss import PcssWidths as PcssWidths
     from ._fits._pcss import pcss_parameters as pcss_parameters
     from ._fits._pcss import pcss_widths as pcss_widths
+    from ._fits._pcss_room import pcss_border_texels as pcss_border_texels
+    from ._fits._pcss_room import widen_cascades as widen_cascades
     from ._fits._prepared import PreparedFit as PreparedFit
     from ._fits._prepared import ShadowFitter as ShadowFitter
     from ._fits._setup import fit_shadow as fit_shadow
@@ -153,6 +155,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "normal_offset",
         "slope_scaled_bias",
         "texel_world_size",
+    "widen_cascades",
     ),
     "._api._light_frame": (
         "helper_axis",
@@ -202,6 +205,10 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "PcssWidths",
         "pcss_parameters",
         "pcss_widths",
+    ),
+    "._fits._pcss_room": (
+        "pcss_border_texels",
+        "widen_cascades",
     ),
     "._fits._prepared": (
         "PreparedFit",
@@ -332,6 +339,7 @@ __all__ = [
     "optimize_frustum",
     "pcf",
     "pcf_border_texels",
+    "pcss_border_texels",
     "pcss_parameters",
     "pcss_widths",
     "planar_projection",
@@ -346,5 +354,6 @@ __all__ = [
     "smooth_frustum",
     "smooth_max",
     "texel_world_size",
+    "widen_cascades",
     "world_to_light",
 ]

@@ -337,3 +337,65 @@ def test_invalid_sizes_are_nan_under_jit() -> None:
     p = run(jnp.asarray([0.1, -0.1, jnp.inf]))
     assert np.all(np.isfinite(p.texels_per_depth[0])) and np.isfinite(p.near_depth[0])
     assert np.all(np.isnan(p.texels_per_depth[1:])) and np.all(np.isnan(p.near_depth[1:]))
+
+
+# --- room for the kernel --------------------------------------------------------------------
+
+
+def test_a_refit_with_the_border_holds_the_widest_search() -> None:
+    rng = np.random.default_rng(8)
+    verts, L, R = caster_box(rng), np.array([0.5, 7.0, -0.3]), 0.4
+    p = sm.pcss_parameters(sm.fit_shadow(L, verts, 512), light_radius=R, map_size=512)
+    b = sm.pcss_border_texels(p)
+    fit = sm.fit_shadow(L, verts, 512, border_texels=b)
+    q = sm.pcss_parameters(fit, light_radius=R, map_size=512)
+    assert np.all(q.texels_per_depth <= p.texels_per_depth)
+    # the widest search: a receiver on the far plane at the inner edge's corner
+    fr = fit.frustum
+    light_to_world = np.linalg.inv(fit.world_to_light)
+    far = float(fr.far)
+    corner = (light_to_world @ [float(fr.rx_max) * far, float(fr.ry_max) * far, far, 1.0])[:3]
+    Z, near = fit.world_to_light[2, :3], float(fr.near)
+    on_near = corner + (L - corner) * (far - near) / far
+    reach = circle_extent(fit.world_to_texture, (512, 512), on_near, R * (far - near) / far, Z)
+    h = homogeneous(fit.world_to_texture, on_near)
+    centre = h[:2] / h[3] * 512
+    assert np.all(centre + reach <= 512 - 0.5) and np.all(centre - reach >= 0.5)
+    assert b >= np.ceil(q.texels_per_depth.max())
+
+
+def test_widened_cascades_hold_the_search_of_their_edges() -> None:
+    sun, view, proj, box = camera_scene(3)
+    theta = np.radians(2.0)
+    c = sm.fit_cascades(sun, view, proj, box, 1024, border_texels=2)
+    wide = sm.widen_cascades(c, angular_radius=theta)
+    Z = -sun / np.linalg.norm(sun)
+    p, q = (sm.pcss_parameters(x, angular_radius=theta) for x in (c, wide))
+    # the same world widths; the same depths
+    np.testing.assert_allclose(p.texels_per_depth * c.texel_size,
+                               q.texels_per_depth * wide.texel_size, rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(wide.world_to_texture[..., 2, :], c.world_to_texture[..., 2, :])
+    for k in range(c.splits.shape[-1] - 1):
+        fr = c.frustum
+        to_world = np.linalg.inv(c.world_to_light[k])
+        x = float(fr.center_x[k] + fr.half_width[k])
+        y = float(fr.center_y[k] - fr.half_height[k])
+        edge = (to_world @ [x, y, float(fr.far[k]), 1.0])[:3]  # a corner of the old box
+        depth_span = float(fr.far[k] - fr.near[k])
+        on_near = edge - depth_span * Z
+        for fit, inside in ((c, False), (wide, True)):
+            M = fit.world_to_texture[k]
+            reach = circle_extent(M, (1024, 1024), on_near, np.tan(theta) * depth_span, Z)
+            centre = homogeneous(M, on_near)[:2] * 1024
+            held = np.all(centre + reach <= 1022 + 1e-6) and np.all(centre - reach >= 2 - 1e-6)
+            assert held == inside
+
+
+def test_widen_cascades_refuses_stable_and_bad_angles() -> None:
+    sun, view, proj, box = camera_scene(0)
+    with pytest.raises(ValueError, match="cascades: stable"):
+        sm.widen_cascades(sm.fit_cascades(sun, view, proj, box, 256, stable=True),
+                          angular_radius=0.01)  # fmt: skip
+    c = sm.fit_cascades(sun, view, proj, box, 256)
+    with pytest.raises(ValueError, match="angular_radius: expected radians"):
+        sm.widen_cascades(c, angular_radius=-0.01)

@@ -1,6 +1,6 @@
 """1. Single calls: ``fit_shadow``, ``planar_projection``, a cube map's matrices, a receiver's
-texture matrix, eager JAX, ``import shadowmath`` and the first fit in a fresh process (every
-option of ``fit_shadow`` is in ``options``)."""
+texture matrix, PCSS's quantities, eager JAX, ``import shadowmath`` and the first fit in a fresh
+process (every option of ``fit_shadow`` is in ``options``)."""
 
 from __future__ import annotations
 
@@ -141,6 +141,34 @@ def cube_rows(cfg: Config, light: np.ndarray) -> list[Row]:
     ]
 
 
+def pcss_rows(cfg: Config, setup: sm.ShadowSetup) -> list[Row]:
+    """PCSS's quantities per frame (issue 28, ≤ 10 µs): ``pcss_parameters`` of one 2D map and
+    of a sun's four cascades, NumPy float64 (the cascades fitted once, outside the timing)."""
+    view = np.eye(4)
+    view[:3, 3] = [0.0, -2.0, -5.0]  # a camera 2 above the ground, looking down -z
+    f = 1 / np.tan(0.5)
+    proj = np.array([[f, 0, 0, 0], [0, f, 0, 0], [0, 0, -1.002, -0.2002], [0, 0, -1, 0]])
+    box = np.array([[-60.0, -0.5, -120.0], [60.0, 15.0, 10.0]])
+    cascades = sm.fit_cascades(SUN[:3], view, proj, box, 2048, count=4)
+    reps, fast = cfg.repeats(7), cfg.min_time
+    cases = (
+        ("a point light's 2D map (fit_shadow)",
+         partial(sm.pcss_parameters, setup, light_radius=0.2, map_size=MAP_SIZE)),
+        ("a sun's 4 cascades (fit_cascades)",
+         partial(sm.pcss_parameters, cascades, angular_radius=0.0047)),
+    )  # fmt: skip
+    return [
+        Row(
+            f"pcss_parameters of {label}, NumPy float64",
+            measure(call, repeats=reps, min_time=fast),
+            target="≤ 10 µs",
+            limit=10e-6,
+            limit_on="seconds",
+        )
+        for label, call in cases
+    ]
+
+
 def _full_door_row(cfg: Config, light: np.ndarray, verts: np.ndarray, base: Timing) -> Row:
     """A call whose arguments are of a kind not seen before: the whole door (conversion,
     kinds, shapes, static key) runs, as on the first call of each kind."""
@@ -234,6 +262,7 @@ def run(cfg: Config) -> Section:
 
     # A receiver's texture matrix from a fitted setup, against the plain product.
     setup = sm.fit_shadow(light8[0], box8[0], MAP_SIZE)
+    rows.extend(pcss_rows(cfg, setup))
     placement = np.eye(4)
     placement[:3, 3] = [0.0, -1.0, 0.0]
     base = measure(lambda: setup.world_to_texture @ placement, repeats=reps, min_time=fast)

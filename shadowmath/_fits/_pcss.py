@@ -174,10 +174,8 @@ def _require_sizes(m: Maps, R: Any, theta: Any) -> None:
             raise ValueError(f"{name}: {kind} map needs it")
 
 
-def _number(value: Any) -> bool:
-    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
-        value, bool | np.bool_
-    )
+#: The sizes the Python-float path takes as they are (no bool: it is an int).
+_NUMBERS = (float, int, np.float64, np.float32, np.int64, type(None))
 
 
 def _few(m: Maps, R: Any, theta: Any) -> bool:
@@ -185,11 +183,12 @@ def _few(m: Maps, R: Any, theta: Any) -> bool:
     M = m.M
     return (
         type(M) is np.ndarray
-        and M.dtype in (np.float32, np.float64)
+        and M.dtype.char in "fd"
         and M.size <= 16 * _SCALAR_MAPS
-        and isinstance(m.perspective, bool)
+        and type(m.perspective) is bool
         and (m.toward is None or type(m.toward) is np.ndarray)
-        and all(v is None or _number(v) for v in (R, theta))
+        and type(R) in _NUMBERS
+        and type(theta) in _NUMBERS
     )
 
 

@@ -45,6 +45,8 @@ def _texels(map_size: object, what: str) -> tuple[int, int]:
     """``(W, H)`` of a ``map_size`` or a spec's, which ``what`` does not record."""
     if map_size is None:
         raise ValueError(f"map_size: {what} does not record its texel counts: give its map_size")
+    if type(map_size) is int and map_size > 0:  # the common case, without the checks' cost
+        return map_size, map_size
     if isinstance(map_size, ShadowMapSpec):
         return map_size.size
     return texel_counts("map_size", map_size)
