@@ -169,7 +169,9 @@ def render_cascades(
        ``K_i |r - d_near_i|`` texels and filters over ``K_i (r - d_B)``
        (:func:`shadowmath.pcss_parameters` of the cascades: the same world penumbra in
        every cascade, so none jumps at a split), Vogel disks rotated per pixel, taps
-       clamped to the tile, the constant bias only.
+       clamped to the tile, the constant bias only; unless ``stable``, the boxes are
+       widened first (:func:`shadowmath.widen_cascades`) so that they hold every
+       blocker of their receivers' search.
 
     Arguments:
         bodies: every body casts and receives.
@@ -231,6 +233,8 @@ def render_cascades(
     scene = prepare_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options
     )
+    if options.light_size > 0 and not stable:
+        scene = scene._replace(fit=sm.widen_cascades(scene.fit, angular_radius=options.light_size))
     size = _image_size("image_size", image_size)
     texels = _image_size("map_size", map_size)
     gl = resolve_context(ctx)

@@ -10,7 +10,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath import PcssParameters, ShadowSetup, pcss_parameters, pcss_widths
+from shadowmath import PcssParameters, ShadowSetup, pcss_border_texels, pcss_parameters
 
 from ._context import program, set_matrix, set_uniform
 from ._pass_depth import (
@@ -74,10 +74,10 @@ class PcssPass(DepthPass):
     """``method="pcss"``: percentage-closer soft shadows from one depth map per light.
 
     The map holds every body's faces turned from the light (:func:`draw_depths`'s
-    ``back_faces``), with a border that holds the widest search region (the fit is
-    drawn again with it); the mask pass searches for blockers over
-    ``k |d_R - d_near|`` texels and filters over ``k (d_R - d_B)``
-    (``pcss_mask.frag``).
+    ``back_faces``), with a border that holds the widest search region
+    (:func:`shadowmath.pcss_border_texels`; the fit is drawn again with it); the mask
+    pass searches for blockers over ``k |d_R - d_near|`` texels and filters over
+    ``k (d_R - d_B)`` (``pcss_mask.frag``).
     """
 
     def __init__(self, light_size: float, bias: tuple[float, float] | None = None) -> None:
@@ -88,11 +88,13 @@ class PcssPass(DepthPass):
     def fit(
         self, receivers: Bodies, blockers: Bodies, light: PreparedLight, map_size: tuple[int, int]
     ) -> tuple[ShadowSetup, ...]:
-        """:func:`fit_depth` with a border of the widest search region over the bodies'
-        depths in the first fit (the border narrows ``k``: the region only shrinks)."""
+        """:func:`fit_depth` refitted with :func:`shadowmath.pcss_border_texels` of the
+        first fit's parameters (the border narrows ``k``: it still holds), at most a
+        quarter of the map."""
         (point,) = self.light_points(light)
         first = fit_depth(receivers, blockers, point, map_size)
-        border = search_border(first, light, self.light_size, map_size, [*receivers, *blockers])
+        border = pcss_border_texels(map_parameters(first, light, self.light_size, map_size))
+        border = min(border, min(map_size) // 4)
         return (fit_depth(receivers, blockers, point, map_size, border),)
 
     def draw_mask(
@@ -112,22 +114,3 @@ class PcssPass(DepthPass):
         depth.use(location=0)
         draw_receiving(scene, prog, np.asarray(setup.world_to_texture, dtype=np.float64))
         return (read_depth(depth),)
-
-
-def search_border(
-    setup: ShadowSetup,
-    light: PreparedLight,
-    light_size: float,
-    map_size: tuple[int, int],
-    bodies: Bodies,
-) -> int:
-    """The widest search region (:func:`shadowmath.pcss_widths`' ``search``) in texels,
-    rounded up, over the bodies' vertices in front of the light, their depths clamped to
-    the map's range; at most a quarter of the map."""
-    world = np.concatenate([b.world_vertices() for b in bodies])
-    stq = np.c_[world, np.ones(len(world))] @ np.asarray(setup.world_to_texture, np.float64).T
-    ahead = stq[:, 3] > 0  # behind a point light: not in its map
-    depth = np.clip(stq[ahead, 2] / stq[ahead, 3], 0.0, 1.0)
-    parameters = map_parameters(setup, light, light_size, map_size)
-    search = np.asarray(pcss_widths(parameters, depth, depth).search)
-    return int(min(math.ceil(float(np.max(search, initial=0.0))) + 1, min(map_size) // 4))

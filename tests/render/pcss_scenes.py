@@ -68,8 +68,6 @@ CASTERS = {
     "box": Body(*box((1.0, 1.0, 1.0)), to_world=place(translation=(-0.5, -0.3, 0.5))),
     "pillar": Body(*box((0.4, 0.4, 2.5)), to_world=place(translation=(-1.0, -0.6, 1.25))),
 }
-#: The spot light's map border (texels), wider than its widest search region.
-SPOT_BORDER = MAP // 8
 #: The box's face ``x = 0`` at the ``contact`` view.
 BOX_FACE_X = 0.0
 PLATE_CENTRE = np.array([0.3, -0.2, 1.2])
@@ -137,13 +135,15 @@ def render(
     size = case.size if light_size is None else light_size
     lamp = Light(direction=case.where) if case.kind == "sun" else Light(case.where)
     setups = None
-    if case.kind == "spot":
-        corners = np.concatenate([w[t] for w, t in map(world_mesh, (FLOOR, body))])
+    if case.kind == "spot":  # as a renderer fits a spot: refit with the kernel's border
         v, _ = world_mesh(body)
-        receivers = sm.Triangles(corners)
-        spot = spot_light(case)
-        border = SPOT_BORDER
-        setups = [[sm.fit_shadow(spot, v, map_size, receivers=receivers, border_texels=border)]]
+        corners = sm.Triangles(np.concatenate([w[t] for w, t in map(world_mesh, (FLOOR, body))]))
+        fit = sm.fit_shadow(spot_light(case), v, map_size, receivers=corners)
+        p = sm.pcss_parameters(fit, light_radius=size, map_size=map_size)
+        border = sm.pcss_border_texels(p)
+        setups = [
+            [sm.fit_shadow(spot_light(case), v, map_size, receivers=corners, border_texels=border)]
+        ]
     return render_scene(
         [FLOOR], [body], [lamp], VIEWS[view].world_to_clip(), image_size=VIEWS[view].pixels,
         map_size=map_size,

@@ -184,9 +184,9 @@ def test_the_penumbra_does_not_jump_at_a_cascade_split(gl, monkeypatch):
     """Each side's width is a count of pixels whose footprint (about 0.06 units here) is a
     third of the penumbra, averaged along the edge: it agrees within 15% on either side
     (measured 0.167 and 0.169). Babylon's constant ratio makes it jump by the ratio of the
-    cascades' K (measured 0.096 to 0.162)."""
+    cascades' K (measured 0.132 to 0.188, by 1.43)."""
     before, after = penumbra_widths(*wall_scene(gl))
     assert before > 0.1 and abs(np.log(after / before)) < np.log(1.15), (before, after)
     monkeypatch.setattr(pass_cascades, "cascade_pcss_parameters", babylon_parameters)
     jump_before, jump_after = penumbra_widths(*wall_scene(gl))
-    assert abs(np.log(jump_after / jump_before)) > np.log(1.4), (jump_before, jump_after)
+    assert abs(np.log(jump_after / jump_before)) > np.log(1.25), (jump_before, jump_after)
