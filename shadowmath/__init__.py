@@ -155,7 +155,6 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "normal_offset",
         "slope_scaled_bias",
         "texel_world_size",
-    "widen_cascades",
     ),
     "._api._light_frame": (
         "helper_axis",

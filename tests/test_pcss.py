@@ -8,6 +8,7 @@ texels with ``K |d - d'|`` of the depths the map stores (``r`` of ``world_to_tex
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -21,10 +22,12 @@ RNG = np.random.default_rng(28)
 APIS: tuple[Any, ...] = ("opengl", "vulkan", "direct3d")
 
 
-@pytest.fixture(autouse=True, params=["floats", "arrays"])
+@pytest.fixture(autouse=True, params=["compiled", "floats", "arrays"])
 def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Every test on both of the door's paths: a few NumPy maps on Python floats, and
-    whole arrays (what JAX, batches and atlases take)."""
+    """Every test on each of the door's paths: a few NumPy maps compiled by Numba (where it
+    is installed) or on Python floats, and whole arrays (JAX, batches, atlases)."""
+    if request.param == "floats":
+        monkeypatch.setattr("shadowmath._fits._pcss._kernels", SimpleNamespace(available=bool))
     if request.param == "arrays":
         monkeypatch.setattr("shadowmath._fits._pcss._SCALAR_MAPS", 0)
 
@@ -393,9 +396,31 @@ def test_widened_cascades_hold_the_search_of_their_edges() -> None:
 
 def test_widen_cascades_refuses_stable_and_bad_angles() -> None:
     sun, view, proj, box = camera_scene(0)
-    with pytest.raises(ValueError, match="cascades: stable"):
+    with pytest.raises(ValueError, match="cascades: stable cascades keep their size"):
         sm.widen_cascades(sm.fit_cascades(sun, view, proj, box, 256, stable=True),
                           angular_radius=0.01)  # fmt: skip
     c = sm.fit_cascades(sun, view, proj, box, 256)
     with pytest.raises(ValueError, match="angular_radius: expected radians"):
         sm.widen_cascades(c, angular_radius=-0.01)
+
+
+def test_widen_cascades_derivatives_match_finite_differences() -> None:
+    jax = pytest.importorskip("jax")
+    jnp = jax.numpy
+    from jax.test_util import check_grads
+
+    sun, view, proj, box = camera_scene(2)
+
+    def wide(direction: Any, theta: Any) -> Any:
+        c = sm.fit_cascades(direction, view, proj, box, 512)
+        return sm.widen_cascades(c, angular_radius=theta).world_to_texture
+
+    args = (jnp.asarray(sun), jnp.asarray(0.02))
+    check_grads(wide, args, order=1, modes=("rev",), eps=1e-6, atol=1e-5, rtol=1e-5)
+
+
+def test_a_cube_range_needs_a_positive_near() -> None:
+    for near, far in ((0.0, 5.0), (2.0, 1.0), (np.nan, 3.0)):
+        with pytest.raises(ValueError, match="fit: a CubeDepthRange needs 0 < near < far"):
+            sm.pcss_parameters(sm.CubeDepthRange(np.array(near), np.array(far)),
+                               light_radius=0.1, map_size=64)  # fmt: skip

@@ -13,6 +13,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._backends import _kernels
 from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, MapSize, Real
 from shadowmath._boundary._validate import (
     Array,
@@ -23,18 +24,13 @@ from shadowmath._boundary._validate import (
     is_tracer,
     non_finite,
 )
-from shadowmath._math._pcss import (
-    SCALAR,
-    array_ops,
-    kernel_widths,
-    orthographic_terms,
-    perspective_terms,
-)
+from shadowmath._math._pcss import kernel_widths
+from shadowmath._math._specialize import formulas, scalar_formulas
 
 from ._atlas_fit import AtlasFit
 from ._cascades import Cascades
 from ._cube_depth import CubeDepthRange
-from ._pcss_maps import Maps, PcssFit, fit_maps, switch
+from ._pcss_maps import BAD_CUBE, Maps, PcssFit, fit_maps, switch
 from ._spec import ShadowMapSpec
 
 __all__ = ["PcssParameters", "PcssWidths", "pcss_parameters", "pcss_widths"]
@@ -143,7 +139,7 @@ def pcss_parameters(
     rev = switch(reversed_z)
     m = fit_maps(fit, map_size, border_texels, rev)
     _require_sizes(m, light_radius, angular_radius)
-    cascades = isinstance(fit, Cascades)
+    cascades = type(fit) is Cascades
     if _few(m, light_radius, angular_radius):
         K, near = _scalar_maps(m, light_radius, angular_radius, cascades)
     else:
@@ -193,32 +189,37 @@ def _few(m: Maps, R: Any, theta: Any) -> bool:
 
 
 def _scalar_maps(m: Maps, R: Any, theta: Any, cascades: bool) -> tuple[Array, Array]:
-    """``(K, d_near)`` one map at a time on Python floats; raises what the checks would."""
+    """``(K, d_near)`` of a few NumPy maps, compiled by Numba (float64, the ``fast`` extra)
+    or one map at a time on Python floats; raises what the checks would."""
     r = 0.0 if R is None else float(R)
     if not (math.isfinite(r) and r >= 0):
         raise ValueError(BAD_RADIUS)
     a = 0.0 if theta is None else float(theta)
     if not (math.isfinite(a) and 0 <= a < math.pi / 2):
         raise ValueError(BAD_ANGLE)
-    tangent = math.tan(a)
-    batch = m.M.shape[:-2]
-    rows = m.M.reshape(-1, 16).tolist()
-    if m.perspective:
-        out = [perspective_terms(SCALAR, e, m.size, r) for e in rows]
+    M, w, h = m.M, float(m.size[0]), float(m.size[1])
+    batch = M.shape[:-2]
+    spread = r if m.perspective else math.tan(a)
+    toward = _NO_TRAVEL
+    if not m.perspective:  # the frame's Z: a view of world_to_light, batch as the maps'
+        t: Any = m.toward  # given with every orthographic map of this path
+        toward = (t if t.shape[:-1] == batch else np.broadcast_to(t, (*batch, 3))).reshape(-1, 3)
+    if M.dtype == np.float64 and _kernels.available():
+        out = np.empty((*batch, 3))
+        rows = M.reshape(-1, 16)
+        bad = _kernels.loops().pcss_loop(rows, (w, h), spread, toward, out.reshape(-1, 3))
     else:
-        toward = m.toward if m.toward is None or m.toward.shape[:-1] == batch else (
-            np.broadcast_to(m.toward, (*batch, 3)))  # fmt: skip
-        sign = -1.0 if m.reversed else 1.0
-        travel = [[sign * v for v in e[8:11]] for e in rows] if toward is None else (
-            toward.reshape(-1, 3).tolist())  # fmt: skip
-        if cascades and any(e[12] != 0 or e[13] != 0 or e[14] != 0 for e in rows):
-            raise ValueError(WARPED)
-        out = [
-            orthographic_terms(SCALAR, e, m.size, tangent, t)
-            for e, t in zip(rows, travel, strict=True)
-        ]
-    values = np.array(out, dtype=m.M.dtype).reshape(*batch, 3)
-    return values[..., :2], values[..., 2]
+        F = scalar_formulas()
+        out = np.empty((*batch, 3), dtype=M.dtype)
+        bad = F.pcss_loop(M.reshape(-1, 16).tolist(), (w, h), spread, toward.tolist(),
+                          out.reshape(-1, 3))  # fmt: skip
+    if cascades and bad:
+        raise ValueError(WARPED)
+    return out[..., :2], out[..., 2]
+
+
+#: ``toward`` of perspective maps in :func:`~shadowmath._math._pcss.pcss_loop`.
+_NO_TRAVEL = np.zeros((0, 3))
 
 
 def _array_maps(fit: PcssFit, m: Maps, R: Any, theta: Any) -> tuple[Array, Array]:
@@ -243,7 +244,7 @@ def _array_maps(fit: PcssFit, m: Maps, R: Any, theta: Any) -> tuple[Array, Array
         checks.require(xp.all(M[..., 3, :3] == 0, axis=-1), WARPED)
     if isinstance(fit, CubeDepthRange):
         n, f = (ctx.constant(0.0) + v for v in (fit.near, fit.far))
-        checks.require((n > 0) & (f > n), "fit: a CubeDepthRange needs 0 < near < far")
+        checks.require((n > 0) & (f > n), BAD_CUBE)
     K, near = _terms(ctx, m._replace(M=M, toward=toward), R, T)
     if isinstance(fit, AtlasFit):  # a failed light's tiles: near = far = 0
         failed = (fit.near == 0) & (fit.far == 0)
@@ -262,22 +263,22 @@ def _terms(ctx: Context, m: Maps, R: Array, T: Array) -> tuple[Array, Array]:
     """``(K, d_near)`` of every map: perspective, orthographic, or an atlas's mix (each
     formula on the other kind's tiles reads a harmless stand-in: no warning, finite
     gradients)."""
-    xp, M = ctx.xp, m.M
-    ops = array_ops(xp, ctx.dtype)
+    xp, M, F = ctx.xp, m.M, formulas(ctx.xp)
+    w, h = float(m.size[0]), float(m.size[1])
     if m.perspective is True:
-        Ks, Kt, near = perspective_terms(ops, _entries(M), m.size, R)
-        return xp.stack((Ks, Kt), axis=-1), near
+        Ks, Kt, near = F.pcss_perspective(_entries(M), w, h, R)
+        return xp.stack((Ks, Kt), axis=-1), xp.asarray(near, dtype=ctx.dtype)
     persp = None if m.perspective is False else xp.asarray(m.perspective)
     M_o = M if persp is None else xp.where(persp[..., None, None], ctx.constant(_BOX), M)
     sign = -1.0 if m.reversed else 1.0  # without the travel: d_near at reversed_z
-    toward = [sign * M_o[..., 2, c] for c in range(3)] if m.toward is None else [
-        m.toward[..., c] for c in range(3)]  # fmt: skip
-    Ks, Kt, near = orthographic_terms(ops, _entries(M_o), m.size, xp.tan(T), toward)
+    toward = (sign * M_o[..., 2, 0], sign * M_o[..., 2, 1], sign * M_o[..., 2, 2]) if (
+        m.toward is None) else (m.toward[..., 0], m.toward[..., 1], m.toward[..., 2])  # fmt: skip
+    Ks, Kt, near = F.pcss_orthographic(_entries(M_o), w, h, xp.tan(T), toward)
     if persp is not None:
         M_p = xp.where(persp[..., None, None], M, ctx.constant(_PYRAMID))
-        ps, pt, pn = perspective_terms(ops, _entries(M_p), m.size, R)
+        ps, pt, pn = F.pcss_perspective(_entries(M_p), w, h, R)
         Ks, Kt, near = (xp.where(persp, a, b) for a, b in ((ps, Ks), (pt, Kt), (pn, near)))
-    return xp.stack((Ks, Kt), axis=-1), near
+    return xp.stack((Ks, Kt), axis=-1), xp.asarray(near, dtype=ctx.dtype)
 
 
 #: Stand-ins for the other kind's tiles: a 90-degree frustum and a unit box.

@@ -13,7 +13,7 @@ from shadowmath._api._cube_faces import face_scale
 from shadowmath._boundary._validate import Array, convert
 from shadowmath._math import _cube
 from shadowmath._math._frustum import OrthographicBox
-from shadowmath._math._pcss import SCALAR, perspective_terms
+from shadowmath._math._specialize import scalar_formulas
 
 from ._atlas_fit import AtlasFit
 from ._cascades import Cascades
@@ -22,6 +22,8 @@ from ._shadow_setup import ShadowSetup
 from ._spec import ShadowMapSpec
 
 PcssFit = ShadowSetup | Cascades | AtlasFit | CubeDepthRange
+
+BAD_CUBE = "fit: a CubeDepthRange needs 0 < near < far"
 
 
 class Maps(NamedTuple):
@@ -54,27 +56,29 @@ def _texels(map_size: object, what: str) -> tuple[int, int]:
 
 def fit_maps(fit: object, map_size: Any, border_texels: Any, rev: bool | None) -> Maps:
     """The maps of ``fit``, its arguments checked."""
-    if not isinstance(fit, CubeDepthRange) and border_texels != 0:
+    kind = type(fit)  # the four are NamedTuples: their exact types, without isinstance's cost
+    if kind is not CubeDepthRange and border_texels != 0:
         raise ValueError(
             "border_texels: only a CubeDepthRange takes it (the other fits' matrices hold "
             "their borders)"
         )
-    if isinstance(fit, ShadowSetup):
+    if kind is ShadowSetup:
+        setup: Any = fit
         size = _texels(map_size, "a ShadowSetup")
-        if not isinstance(fit.frustum, OrthographicBox):
-            return Maps(fit.world_to_texture, size, True, None)
-        return Maps(fit.world_to_texture, size, False, fit.world_to_light[..., 2, :3])
-    if isinstance(fit, Cascades | AtlasFit) and map_size is not None:
-        raise ValueError(f"map_size: a {type(fit).__name__} records its texture size: leave it out")
-    if isinstance(fit, Cascades):
-        return Maps(fit.world_to_texture, fit.texture_size, False, fit.world_to_light[..., 2, :3])
-    if isinstance(fit, AtlasFit):
-        return _atlas_maps(fit, rev)
-    if isinstance(fit, CubeDepthRange):
-        return _cube_maps(fit, map_size, border_texels, bool(rev))
+        if type(setup.frustum) is not OrthographicBox:
+            return Maps(setup.world_to_texture, size, True, None)
+        return Maps(setup.world_to_texture, size, False, setup.world_to_light[..., 2, :3])
+    if kind in (Cascades, AtlasFit) and map_size is not None:
+        raise ValueError(f"map_size: a {kind.__name__} records its texture size: leave it out")
+    if kind is Cascades:
+        c: Any = fit
+        return Maps(c.world_to_texture, c.texture_size, False, c.world_to_light[..., 2, :3])
+    if kind is AtlasFit:
+        return _atlas_maps(fit, rev)  # type: ignore[arg-type]
+    if kind is CubeDepthRange:
+        return _cube_maps(fit, map_size, border_texels, bool(rev))  # type: ignore[arg-type]
     raise ValueError(
-        "fit: expected a ShadowSetup, Cascades, AtlasFit or CubeDepthRange, "
-        f"got {type(fit).__name__}"
+        f"fit: expected a ShadowSetup, Cascades, AtlasFit or CubeDepthRange, got {kind.__name__}"
     )
 
 
@@ -91,7 +95,8 @@ def _atlas_maps(fit: AtlasFit, rev: bool | None) -> Maps:
                 "reversed_z: an atlas of directional lights only does not show its depth "
                 "direction: give fit_atlas's reversed_z"
             )
-        rev = perspective_terms(SCALAR, M[shown[0]].reshape(16).tolist(), (1.0, 1.0), 1.0)[2] == 1
+        row = M[shown[0]].reshape(16).tolist()
+        rev = scalar_formulas().pcss_perspective(row, 1.0, 1.0, 1.0)[2] == 1
     return Maps(fit.world_to_texture, fit.texture_size, persp, None, bool(rev))
 
 
@@ -104,6 +109,8 @@ def _cube_maps(fit: CubeDepthRange, map_size: Any, border_texels: Any, rev: bool
         )
     k = face_scale(map_size, border_texels)
     ctx, (n, f) = convert(near=fit.near, far=fit.far)
+    if not ctx.lazy and not bool(ctx.xp.all((n > 0) & (f > n))):
+        raise ValueError(BAD_CUBE)
     P = _cube.cube_face_projection(ctx.xp, n, f, k, zero_to_one=True, flip_y=False, reversed_z=rev)
     T = ((0.5, 0.0, 0.0, 0.5), (0.0, 0.5, 0.0, 0.5), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
     N = float(map_size)

@@ -78,7 +78,8 @@ def widen_cascades(cascades: Cascades, *, angular_radius: Real[ArrayLike, "*#bat
 
     texel sizes ``/ k``; depths, splits and tiles unchanged (the depth range already starts
     at the scene's corner nearest the light). Draw and sample the result as the original.
-    Refused for stable cascades (their fixed, snapped squares would shimmer) and warped ones.
+    Refused for stable cascades (their fixed, snapped squares would shimmer: NaN under JAX
+    transformations) and warped ones.
 
     Arguments:
         cascades: :func:`fit_cascades`' result, not ``stable``, no ``warp``.
@@ -103,14 +104,14 @@ def widen_cascades(cascades: Cascades, *, angular_radius: Real[ArrayLike, "*#bat
     """
     if not isinstance(cascades, Cascades):
         raise ValueError(f"cascades: expected Cascades, got {type(cascades).__name__}")
-    if np.any(np.isfinite(np.asarray(cascades.state.half_width))):
-        raise ValueError("cascades: stable cascades keep their size; fit them without stable")
-    ctx, (clip, tex, theta) = convert(
+    ctx, (clip, tex, theta, stable) = convert(
         world_to_clip=cascades.world_to_clip,
         world_to_texture=cascades.world_to_texture,
         angular_radius=angular_radius,
+        half_width=cascades.state.half_width,
     )
     xp, checks = ctx.xp, Checks(ctx)
+    checks.require(~xp.isfinite(stable), "cascades: stable cascades keep their size (refit)")
     checks.require(xp.isfinite(theta) & (theta >= 0) & (theta < math.pi / 2), BAD_ANGLE)
     if not ctx.lazy and not bool(xp.all(tex[..., 3, :3] == 0)):
         raise ValueError("cascades: warped cascades (warp='lispsm') are not boxes")

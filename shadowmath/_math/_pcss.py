@@ -21,65 +21,73 @@ in texels per axis, ``K`` read from the map's ``world_to_texture`` ``M`` (rows
   ``tan(theta) |z_R - z_B|`` world units, so ``K_s = tan(theta) W |m_0 x Z| / |m_2|``.
 
 (``K_t`` likewise with ``m_1`` and ``H``; vectors are the rows' first three entries.)
+
+Written with the primitives of :mod:`._specialize` (``where``, ``sqrt``, ``fabs``): the door
+runs them on whole arrays, on Python floats, or compiled by Numba (:func:`pcss_loop`).
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
-from types import ModuleType, SimpleNamespace
+from types import ModuleType
 from typing import Any
 
 from shadowmath._boundary._validate import Array
 
-#: The primitives of the formulas below on Python floats (one map at a time: the door's
-#: path for a few NumPy maps); :func:`array_ops` gives them on whole arrays.
-SCALAR = SimpleNamespace(sqrt=math.sqrt, abs=abs, tan=math.tan, flag=float)
+from ._formulas import fabs, normalize3, sqrt, where
 
 
-def array_ops(xp: ModuleType, dtype: Any) -> SimpleNamespace:
-    """The primitives on ``xp``'s arrays (``flag``: a boolean array as 0 and 1)."""
-    return SimpleNamespace(sqrt=xp.sqrt, abs=xp.abs, tan=xp.tan, flag=lambda b: xp.astype(b, dtype))
-
-
-def _unit(ops: Any, x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any]:
-    """``(x, y, z) / length`` and the length."""
-    n = ops.sqrt(x * x + y * y + z * z)
-    return x / n, y / n, z / n, n
-
-
-def _across(ops: Any, m: Any, i: int, Z: Sequence[Any]) -> Any:
+def pcss_across(m: Any, i: int, Zx: Any, Zy: Any, Zz: Any) -> Any:
     """``|r x Z|`` of the row ``r = m[i : i + 3]``: its rate across the unit axis ``Z``
     (``|r - (r . Z) Z|`` without its cancellation)."""
     x, y, z = m[i], m[i + 1], m[i + 2]
-    cx, cy, cz = y * Z[2] - z * Z[1], z * Z[0] - x * Z[2], x * Z[1] - y * Z[0]
-    return ops.sqrt(cx * cx + cy * cy + cz * cz)
+    cx, cy, cz = y * Zz - z * Zy, z * Zx - x * Zz, x * Zy - y * Zx
+    return sqrt(cx * cx + cy * cy + cz * cz)
 
 
-def perspective_terms(
-    ops: Any, m: Any, size: tuple[float, float], radius: Any
-) -> tuple[Any, Any, Any]:
+def pcss_perspective(m: Any, w: Any, h: Any, radius: Any) -> tuple[Any, Any, Any]:
     """``(K_s, K_t, d_near)`` of a perspective map's 16 row-major entries ``m`` (scalars
-    or arrays) for a light of radius ``radius``; ``d_near`` is 0 where depth grows away
-    from the light, else 1."""
-    *Z, lam = _unit(ops, m[12], m[13], m[14])
-    beta = m[11] - (m[8] * Z[0] + m[9] * Z[1] + m[10] * Z[2]) * m[15] / lam
-    scale = radius / ops.abs(beta)
-    return (scale * size[0] * _across(ops, m, 0, Z), scale * size[1] * _across(ops, m, 4, Z),
-            ops.flag(beta > 0))  # fmt: skip
+    or arrays) and texture of ``w x h`` texels, for a light of radius ``radius``;
+    ``d_near`` is 0 where depth grows away from the light, else 1."""
+    Zx, Zy, Zz, lam = normalize3(m[12], m[13], m[14])
+    beta = m[11] - (m[8] * Zx + m[9] * Zy + m[10] * Zz) * m[15] / lam
+    scale = radius / fabs(beta)
+    s = scale * w * pcss_across(m, 0, Zx, Zy, Zz)
+    return s, scale * h * pcss_across(m, 4, Zx, Zy, Zz), where(beta > 0, 1.0, 0.0)
 
 
-def orthographic_terms(
-    ops: Any, m: Any, size: tuple[float, float], tangent: Any, toward: Any
+def pcss_orthographic(
+    m: Any, w: Any, h: Any, tangent: Any, toward: tuple[Any, Any, Any]
 ) -> tuple[Any, Any, Any]:
     """``(K_s, K_t, d_near)`` of an orthographic map's entries ``m`` for a sun of angular
-    radius ``atan(tangent)`` whose light travels along ``toward`` (3 entries, any length);
-    ``d_near`` is 0 where depth grows along ``toward``, else 1."""
-    *Z, mu = _unit(ops, m[8], m[9], m[10])
+    radius ``atan(tangent)`` whose light travels along ``toward`` (any length); ``d_near``
+    is 0 where depth grows along ``toward``, else 1."""
+    Zx, Zy, Zz, mu = normalize3(m[8], m[9], m[10])
     scale = tangent / mu
     going = m[8] * toward[0] + m[9] * toward[1] + m[10] * toward[2]
-    return (scale * size[0] * _across(ops, m, 0, Z), scale * size[1] * _across(ops, m, 4, Z),
-            ops.flag(going < 0))  # fmt: skip
+    s = scale * w * pcss_across(m, 0, Zx, Zy, Zz)
+    return s, scale * h * pcss_across(m, 4, Zx, Zy, Zz), where(going < 0, 1.0, 0.0)
+
+
+def pcss_loop(rows: Any, size: Any, spread: Any, toward: Any, out: Any) -> int:
+    """The maps ``rows (n, 16)`` of a texture of ``size = (w, h)`` texels into ``out (n, 3)``
+    (``K_s, K_t, d_near``): perspective for ``toward`` of shape ``(0, 3)`` (``spread`` the
+    light's radius), else orthographic along ``toward (n, 3)`` (``spread = tan(theta)``).
+    Returns how many orthographic maps are not (a varying ``q``: a warped cascade)."""
+    bad = 0
+    for i in range(len(rows)):
+        m = rows[i]
+        if len(toward) == 0:
+            a, b, c = pcss_perspective(m, size[0], size[1], spread)
+        else:
+            if m[12] != 0 or m[13] != 0 or m[14] != 0:
+                bad += 1
+            t = (toward[i][0], toward[i][1], toward[i][2])
+            a, b, c = pcss_orthographic(m, size[0], size[1], spread, t)
+        out[i, 0], out[i, 1], out[i, 2] = a, b, c
+    return bad
+
+
+FUNCTIONS = ("pcss_across", "pcss_perspective", "pcss_orthographic", "pcss_loop")
 
 
 def kernel_widths(

@@ -28,6 +28,7 @@ from . import (
     _fit_formulas,
     _formulas,
     _loops,
+    _pcss,
     _rows,
     _vertex_passes,
 )
@@ -42,6 +43,7 @@ _MODULES = (
     (_rows, _rows.FUNCTIONS),
     (_cascade_steps, _cascade_steps.FUNCTIONS),
     (_cascade_bounds, _cascade_bounds.FUNCTIONS),
+    (_pcss, _pcss.FUNCTIONS),
 )
 
 
