@@ -55,13 +55,14 @@ def test_help_is_plain_text_with_every_default(capsys):
         ("--output", "(default: out/shadow.png)"),
         ("--shadow-map-output", "(default: not written)"),
         ("--pcf", "(default: 0, no filtering)"),
-        ("--depth-bias", "(default: 2.5+2K 4, K the --pcf radius)"),
+        ("--depth-bias", "(default: 2.5+2K 4, K the --pcf radius; pcss: 0 1)"),
         ("--area-light", "(default: 1 1 with those methods)"),
         ("--samples", "(default: 16)"),
         ("--seed", "(default: 0)"),
         ("--api", "(default: opengl)"),
         ("--directional", "(default: the point light)"),
         ("--cascade-colors", "(default: not written)"),
+        ("--light-size", "(default: 0.25, a sun 1 degree; cascades: 0, hard shadows)"),
     ]:
         assert default in " ".join(entries[option].split()), option
 
@@ -149,6 +150,18 @@ def test_option_combinations(capsys, args, message):
         (["--method", "depth", "--area-light", "1", "1"], "--area-light 1 1: --method depth"),
         (["--area-light", "1", "1"], "--area-light 1 1: --method texture lights from a point"),
         (["--method", "omni", "--samples", "4"], "--samples 4: --method omni"),
+        (["--method", "soft", "--light-size", "1"], "--light-size 1: --method soft does not"),
+        (["--light-size", "1"], "--light-size 1: --method texture does not read it"),
+        (
+            ["--method", "cascades", "--light-size", "95"],
+            "--light-size 95: a sun's angular radius in degrees must be below 90",
+        ),
+        (["--method", "pcss", "--light-size", "-1"], "argument --light-size: expected a number"),
+        (
+            ["--method", "pcss", "--directional", "1", "1", "1", "--light-size", "90"],
+            "--light-size 90: a sun's angular radius in degrees must be below 90",
+        ),
+        (["--method", "pcss", "--pcf", "1"], "--pcf 1: --method pcss compares no depths"),
         (["--method", "depth", "--seed", "3"], "--seed 3: --method depth"),
         (
             ["--method", "soft", "--area-light", "0", "1"],
@@ -842,6 +855,28 @@ def test_cascades_demo_writes_the_picture_and_its_cascades(capsys, tmp_path):
         part = printed.split(f"world_to_clip[{i}] (cascade {i}'s depth map) =\n")[1]
         last = part.splitlines()[3]
         assert np.allclose(np.array(last.strip(" []").split(), dtype=float), [0, 0, 0, 1])
+
+
+@pytest.mark.usefixtures("gl")
+def test_cascades_demo_draws_pcss_with_a_light_size(capsys, tmp_path, monkeypatch):
+    """--light-size DEGREES with --method cascades: render_cascades' PCSS of that sun."""
+    import shadowmath.render
+
+    seen = {}
+    real = shadowmath.render.render_cascades
+
+    def recording(*args, **kwargs):
+        seen.update(kwargs)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(shadowmath.render, "render_cascades", recording)
+    args = ["--method", "cascades", "--size", "64", "48", "--map-size", "128"]
+    assert main([*args, "--light-size", "2", "--output", str(tmp_path / "c.png")]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert "percentage-closer soft shadows of angular radius 2 degrees" in first
+    assert seen["light_size"] == pytest.approx(np.radians(2.0))
+    assert main([*args, "--output", str(tmp_path / "c.png")]) == 0
+    assert seen["light_size"] == 0.0 and "percentage-closer" not in capsys.readouterr().out
 
 
 # ---- --method atlas: many lights sharing one shadow atlas -----------------------------------

@@ -686,7 +686,7 @@ def fit_light(options: Options, geometry: Geometry) -> LightFit:
     """
     method, light, edges = options.method, options.light, geometry.edges
     setup = no_map_setup()
-    if method in ("texture", "depth") and not options.directional:
+    if method in ("texture", "depth", "pcss") and not options.directional:
         setup = fit_in_front(
             options, geometry, light, option=options.light_option, what="this light"
         )

@@ -96,7 +96,8 @@ def draw_cascades(options: Options) -> Callable[[], None]:
             bodies, Light(direction=options.light), view, projection,
             image_size=options.image_size, map_size=options.map_size, pcf_radius=options.pcf,
             depth_bias=options.bias, cascade_colors=options.cascade_output is not None,
-            ambient=AMBIENT, background=BACKGROUND, ctx=device.ctx,
+            ambient=AMBIENT, background=BACKGROUND, light_size=options.light_size,
+            ctx=device.ctx,
         )  # fmt: skip
     except moderngl.Error as err:
         raise UnavailableError(f"OpenGL failed to render the cascades: {err}") from None
@@ -122,11 +123,15 @@ def summary(options: Options) -> str:
     width, height = options.image_size
     map_w, map_h = options.map_texels
     sun = tuple(float(c) for c in options.light)
+    soft = ""
+    if options.light_size > 0:
+        degrees = np.degrees(options.light_size)
+        soft = f", percentage-closer soft shadows of angular radius {degrees:g} degrees"
     return (
         f"a {width}x{height} PNG, a 200x200 ground with towers and a {options.mesh} under a sun "
         f"toward {sun}, seen from near the ground toward the horizon, cascaded shadow maps "
         f"(4 cascades of {map_w}x{map_h}, PCF radius {options.pcf}, depth bias "
-        f"{options.bias[0]:g} {options.bias[1]:g}) drawn with OpenGL"
+        f"{options.bias[0]:g} {options.bias[1]:g}{soft}) drawn with OpenGL"
     )
 
 

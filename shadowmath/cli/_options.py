@@ -11,6 +11,7 @@ other layers read the resulting :class:`Options`.
 from __future__ import annotations
 
 import argparse
+import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -24,17 +25,20 @@ import shadowmath as sm
 from shadowmath import meshes
 
 #: A shadow system of ``--method`` (the ``method`` of ``render_scene``).
-Method = Literal["texture", "planar", "depth", "omni", "soft", "radiance", "cascades", "atlas"]
+Method = Literal[
+    "texture", "planar", "depth", "omni", "soft", "radiance", "pcss", "cascades", "atlas"
+]
 
 #: ``--method``'s shadow systems, and the options that apply to each.
 METHODS: tuple[Method, ...] = (
-    "texture", "planar", "depth", "omni", "soft", "radiance", "cascades", "atlas",
+    "texture", "planar", "depth", "omni", "soft", "radiance", "pcss", "cascades", "atlas",
 )  # fmt: skip
-DEPTH_BIAS_METHODS = ("depth", "omni", "soft", "cascades", "atlas")
+DEPTH_BIAS_METHODS = ("depth", "omni", "soft", "pcss", "cascades", "atlas")
 PCF_METHODS = ("depth", "soft", "cascades", "atlas")
 AREA_LIGHT_METHODS = ("soft", "radiance")
-DIRECTIONAL_METHODS = ("planar", "depth", "cascades")
-MAP_OUTPUT_METHODS = ("texture", "depth", "omni", "atlas")
+LIGHT_SIZE_METHODS = ("pcss", "cascades")
+DIRECTIONAL_METHODS = ("planar", "depth", "pcss", "cascades")
+MAP_OUTPUT_METHODS = ("texture", "depth", "omni", "pcss", "atlas")
 APIS = ("opengl", "webgpu")
 
 DEFAULT_LIGHT = (-2.2, 3.6, 6.0)
@@ -56,6 +60,12 @@ DEFAULT_SAMPLES = 16
 DEFAULT_SEED = 0
 #: The renderer's default polygon offset of a depth map, ``(2.5 + 2 k, 4)`` for PCF radius k.
 DEFAULT_DEPTH_BIAS = (2.5, 4.0)
+#: ``--method pcss``'s: the renderer's ``PCSS_POLYGON_OFFSET`` (a map of back faces).
+DEFAULT_PCSS_BIAS = (0.0, 1.0)
+#: ``--light-size``'s defaults: a point light's radius (world units), a sun's angular
+#: radius (degrees).
+DEFAULT_LIGHT_RADIUS = 0.25
+DEFAULT_SUN_DEGREES = 1.0
 #: The empty border of ``fit_shadow``'s map (its default ``border_texels``): a
 #: ``--map-size`` must leave room inside it, the rule of :func:`shadowmath.border_margin`.
 MAP_BORDER_TEXELS = 1
@@ -99,18 +109,23 @@ shadow systems (--method):
             the depth-map shadows of its samples (--pcf, --depth-bias)
   radiance  an area light: Heckbert and Herf's radiance texture per receiver
             (pyramid_to_unit_cube), accumulated over the samples
+  pcss      percentage-closer soft shadows in one pass: a blocker search and a
+            filter as wide as the light (--light-size), the blockers' and the
+            receiver's depths make the penumbra (pcss_parameters; --depth-bias,
+            --directional for a sun)
   cascades  a sun over a large scene (a 200 x 200 ground, towers, the
             blocker) seen from near the ground toward the horizon: four
             cascaded depth maps fitted to the camera (fit_cascades; --pcf,
             --depth-bias, --directional for the sun, --map-size per cascade,
-            --cascade-colors FILE.png for the cascades coloured)
+            --cascade-colors FILE.png for the cascades coloured, --light-size
+            DEGREES for PCSS in every cascade)
   atlas     many lights (--lights N, default {DEFAULT_ATLAS_LIGHTS}: point lights with cube
             maps, spots and suns) over a ground with blocks, their shadow maps
             tiles of one atlas (allocate_atlas, fit_atlas; --map-size is the
             atlas's, a power of two, default {DEFAULT_ATLAS_SIZE}; --pcf,
             --depth-bias; --shadow-map-output writes the atlas)
   --directional X Y Z replaces the point light with a directional one
-  (parallel rays, an orthographic depth map) for planar and depth.
+  (parallel rays, an orthographic depth map) for planar, depth and pcss.
   An option that does not apply to the chosen system is refused.
 
 output files:
@@ -127,6 +142,8 @@ examples:
   python -m shadowmath --method depth --api webgpu
   python -m shadowmath --method depth --directional -1 2 1.5
   python -m shadowmath --method soft --area-light 1.5 1 --samples 64
+  python -m shadowmath --method pcss --light-size 0.4
+  python -m shadowmath --method pcss --directional -1 2 1.5 --light-size 2
   python -m shadowmath --method cascades --cascade-colors out/cascades.png
   python -m shadowmath --method atlas --lights 48 --shadow-map-output out/atlas.png"""
 
@@ -254,6 +271,14 @@ def positive_float(text: str) -> float:
     return value
 
 
+def non_negative_float(text: str) -> float:
+    """``--light-size``: a finite number ``>= 0``."""
+    value = finite_float(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The demo's parser (``prog`` ``python -m shadowmath``), its options in help order."""
     parser = argparse.ArgumentParser(
@@ -266,6 +291,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scene_arguments(parser)
     _add_map_arguments(parser)
     _add_area_light_arguments(parser)
+    _add_light_size_argument(parser)
     _add_output_arguments(parser)
     return parser
 
@@ -297,8 +323,8 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
         metavar=("X", "Y", "Z"),
         default=None,
         help="a directional light instead of --light (parallel rays, like sunlight): the "
-        "direction toward the light, with y > 0 and z > 0; --method planar, depth or "
-        "cascades only (the sun of cascades: y > 0 only; default for cascades: "
+        "direction toward the light, with y > 0 and z > 0; --method planar, depth, pcss "
+        "or cascades only (the sun of cascades: y > 0 only; default for cascades: "
         f"{shown(DEFAULT_SUN)}) "
         "(default: the point light)",
     )
@@ -307,7 +333,7 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
         choices=METHODS,
         default="texture",
         help="the shadow system, one of texture, planar, depth, omni, soft, radiance, "
-        "cascades, atlas (see 'shadow systems' below) (default: texture)",
+        "pcss, cascades, atlas (see 'shadow systems' below) (default: texture)",
     )
     parser.add_argument(
         "--lights",
@@ -349,10 +375,10 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="the depth map's polygon offset against shadow acne, glPolygonOffset(FACTOR, "
         "UNITS): FACTOR times each caster triangle's depth slope plus UNITS depth steps; "
-        "--method depth, omni, soft, cascades or atlas (WebGPU rounds UNITS to an integer; "
-        "cascades apply the same FACTOR and UNITS to each receiver's slope in the shader) "
-        f"(default: {DEFAULT_DEPTH_BIAS[0]:g}+2K {DEFAULT_DEPTH_BIAS[1]:g}, "
-        "K the --pcf radius)",
+        "--method depth, omni, soft, pcss, cascades or atlas (WebGPU rounds UNITS to an "
+        "integer; cascades apply the same FACTOR and UNITS to each receiver's slope in the "
+        f"shader) (default: {DEFAULT_DEPTH_BIAS[0]:g}+2K {DEFAULT_DEPTH_BIAS[1]:g}, "
+        f"K the --pcf radius; pcss: {shown(DEFAULT_PCSS_BIAS)})",
     )
 
 
@@ -388,6 +414,20 @@ def _add_area_light_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_light_size_argument(parser: argparse.ArgumentParser) -> None:
+    """``--light-size``."""
+    parser.add_argument(
+        "--light-size",
+        type=non_negative_float,
+        default=None,
+        metavar="SIZE",
+        help="the light's radius (world units), or with --directional the sun's angular "
+        "radius in degrees (below 90); --method pcss, or cascades (the sun's: PCSS in "
+        f"every cascade) (default: {DEFAULT_LIGHT_RADIUS:g}, a sun {DEFAULT_SUN_DEGREES:g} "
+        "degree; cascades: 0, hard shadows)",
+    )
+
+
 def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
     """``--api``, ``--size``, ``--output`` and ``--shadow-map-output``."""
     parser.add_argument(
@@ -420,7 +460,7 @@ def _add_output_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="FILE.png",
         help="also write the shadow map, t upward: the silhouette (texture), the depth "
-        "map (depth; near dark, far light, white where nothing was drawn) or the six "
+        "map (depth, pcss; near dark, far light, white where nothing was drawn) or the six "
         "cube faces +X -X +Y -Y +Z -Z side by side (omni); its folder must exist "
         "(default: not written)",
     )
@@ -452,7 +492,8 @@ def check_combinations(args: argparse.Namespace) -> None:
 
 
 def _check_directional(args: argparse.Namespace) -> None:
-    """``--directional``: not with ``--light``, only for planar and depth, only on OpenGL."""
+    """``--directional``: not with ``--light``, only for planar, depth and pcss (and the
+    cascades' sun), only on OpenGL."""
     if args.directional is None:
         return
     given = f"--directional {shown(args.directional)}"
@@ -461,7 +502,7 @@ def _check_directional(args: argparse.Namespace) -> None:
     if args.method not in DIRECTIONAL_METHODS:
         raise OptionError(
             f"{given}: --method {args.method} takes a point light; directional lights "
-            "are drawn by --method planar, depth or cascades"
+            "are drawn by --method planar, depth, pcss or cascades"
         )
     if args.api == "webgpu":
         raise OptionError(
@@ -557,7 +598,19 @@ def _check_method_options(args: argparse.Namespace) -> None:
     if args.depth_bias is not None and method not in DEPTH_BIAS_METHODS:
         raise OptionError(
             f"--depth-bias {shown(args.depth_bias)}: --method {method} draws no depth "
-            "map; the bias applies to --method depth, omni, soft, cascades or atlas"
+            "map; the bias applies to --method depth, omni, soft, pcss, cascades or atlas"
+        )
+    if args.light_size is not None and method not in LIGHT_SIZE_METHODS:
+        raise OptionError(
+            f"--light-size {shown(args.light_size)}: --method {method} does not read it; "
+            "the light's size applies to --method pcss and cascades (soft and radiance "
+            "take --area-light)"
+        )
+    sun = args.directional is not None or method == "cascades"
+    if args.light_size is not None and sun and args.light_size >= 90:
+        raise OptionError(
+            f"--light-size {shown(args.light_size)}: a sun's angular radius in degrees "
+            "must be below 90"
         )
     for option, value in (
         ("--area-light", args.area_light),
@@ -646,6 +699,9 @@ class Options:
         map_output: the shadow map's resolved path, or None.
         cascade_output: ``--cascade-colors``'s resolved path, or None.
         lights: ``--lights``, the atlas's light count (read by atlas only).
+        light_size: ``--light-size`` as ``render_scene`` and ``render_cascades`` take
+            it: the radius, or a sun's angular radius in radians (read by pcss and
+            cascades only).
         default_output: ``--output`` was not given: create its folder if missing.
     """
 
@@ -666,6 +722,7 @@ class Options:
     cascade_output: Path | None
     default_output: bool
     lights: int = DEFAULT_ATLAS_LIGHTS
+    light_size: float = 0.0
 
     @property
     def map_texels(self) -> tuple[int, int]:
@@ -717,6 +774,8 @@ def resolve_options(args: argparse.Namespace) -> Options:
         if args.depth_bias is None
         else (float(args.depth_bias[0]), float(args.depth_bias[1]))
     )
+    if args.method == "pcss" and args.depth_bias is None:
+        bias = DEFAULT_PCSS_BIAS
     area_w, area_h = args.area_light or DEFAULT_AREA_LIGHT
     check_combinations(args)
     output = png_path("--output", args.output or DEFAULT_OUTPUT, create=args.output is None)
@@ -760,4 +819,15 @@ def resolve_options(args: argparse.Namespace) -> Options:
         cascade_output=cascade_output,
         default_output=args.output is None,
         lights=DEFAULT_ATLAS_LIGHTS if args.lights is None else args.lights,
+        light_size=_light_size_of(args, directional),
     )
+
+
+def _light_size_of(args: argparse.Namespace, directional: bool) -> float:
+    """``--light-size`` or its default (none for cascades), a sun's degrees in radians."""
+    if args.method == "cascades":
+        return 0.0 if args.light_size is None else math.radians(args.light_size)
+    if directional:
+        degrees = DEFAULT_SUN_DEGREES if args.light_size is None else args.light_size
+        return math.radians(degrees)
+    return DEFAULT_LIGHT_RADIUS if args.light_size is None else float(args.light_size)

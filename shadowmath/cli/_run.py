@@ -234,6 +234,7 @@ def _render_opengl(
             depth_bias=options.bias if method in DEPTH_BIAS_METHODS else None,
             samples=options.samples,
             seed=options.seed,
+            light_size=options.light_size,
             ctx=ctx,
         )
     except moderngl.Error as err:
@@ -263,7 +264,7 @@ def _gl_map_picture(options: Options, frame: Frame) -> NDArray[Any] | None:
     """The shadow map to save, ``t`` upward: a GL map's row 0 is ``t = 0``, its bottom."""
     if options.method == "texture":
         return frame.shadow_maps[0][0][::-1]
-    if options.method == "depth":
+    if options.method in ("depth", "pcss"):
         return depth_picture(frame.shadow_maps[0][0][::-1])
     if options.method == "omni":
         faces = np.stack(frame.shadow_maps[0])[:, ::-1]
@@ -345,6 +346,8 @@ def write_outputs(options: Options, rendered: Rendered) -> None:
             "white where nothing was drawn",
             "omni": f"the six {map_w}x{map_h} cube faces +X -X +Y -Y +Z -Z, t upward, "
             "near dark, far light",
+            "pcss": f"the {map_w}x{map_h} depth map of the faces turned from the light, "
+            "t upward, near dark, far light, white where nothing was drawn",
         }[options.method]
         print(f"wrote {options.map_output}: {what}")
 
@@ -383,7 +386,16 @@ def _drawn(options: Options, adapter: str) -> str:
         f"({map_w}x{map_h}, PCF radius {pcf}, {bias}; seed {seed})",
         "radiance": f"soft shadows, Heckbert and Herf's radiance textures ({map_w}x{map_h} "
         f"per receiver) accumulated over {samples} samples (seed {seed})",
+        "pcss": f"percentage-closer soft shadows of {_light_size(options)} from a depth map "
+        f"of the faces turned from the light ({map_w}x{map_h}{orthographic}, {bias})",
     }[options.method]
+
+
+def _light_size(options: Options) -> str:
+    """``--light-size`` in words: ``radius 0.25`` or ``angular radius 1 degree``."""
+    if options.directional:
+        return f"angular radius {np.degrees(options.light_size):g} degrees"
+    return f"radius {options.light_size:g}"
 
 
 def print_matrix(name: str, matrix: Any) -> None:
@@ -406,6 +418,9 @@ def print_matrices(options: Options, scene: Scene, fit: LightFit, rendered: Rend
         print_matrix("world_to_texture (pass 2, the receivers)", setup.world_to_texture)
     elif method == "depth":
         _print_depth_matrices(options, rendered)
+    elif method == "pcss":
+        _print_depth_matrices(options, rendered)
+        _print_pcss_parameters(options, rendered)
     elif method == "omni":
         _print_omni_matrices(options, scene)
     elif fit.points is not None and fit.edges is not None:
@@ -435,6 +450,20 @@ def _print_depth_matrices(options: Options, rendered: Rendered) -> None:
             "gl_clip_to_clip (api_convention(api='webgpu'), applied to both)",
             sm.api_convention(api="webgpu").gl_clip_to_clip,
         )
+
+
+def _print_pcss_parameters(options: Options, rendered: Rendered) -> None:
+    """pcss_parameters of the map: texels per unit of stored depth and the near depth."""
+    (setup,) = rendered.setups
+    if options.directional:
+        p = sm.pcss_parameters(setup, angular_radius=options.light_size, map_size=options.map_size)
+    else:
+        p = sm.pcss_parameters(setup, light_radius=options.light_size, map_size=options.map_size)
+    print_matrix(
+        "pcss_parameters: K (texels per unit of depth along s, t), then d_near "
+        "(search = K |d_R - d_near|, penumbra = K (d_R - d_B))",
+        np.append(np.asarray(p.texels_per_depth), np.asarray(p.near_depth)),
+    )
 
 
 def _print_omni_matrices(options: Options, scene: Scene) -> None:

@@ -16,14 +16,16 @@ does not.
   Williams' shadow z-buffer, ``method="omni"`` a point light's cube depth map
   sampled with ``samplerCubeShadow``; ``method="soft"`` and ``"radiance"`` average
   the hard shadows of an area light's samples (seed 003's depth maps, Heckbert and
-  Herf's radiance textures).
+  Herf's radiance textures); ``method="pcss"`` is percentage-closer soft shadows of a
+  light of ``light_size``, with :func:`shadowmath.pcss_parameters`' quantities.
   Lights are points (``Light(position)``), area lights (``edge_u``, ``edge_v``) or,
-  for ``method="planar"`` and ``"depth"``, directional (``Light(direction=...)``,
+  for ``method="planar"``, ``"depth"`` and ``"pcss"``, directional (``Light(direction=...)``,
   the homogeneous ``(x, y, z, 0)``: parallel rays, an orthographic depth map).
 * :func:`render_cascades`: a sun's cascaded shadow maps fitted to the camera
   (:func:`shadowmath.fit_cascades`), drawn as layers of a texture array or tiles of an
   atlas; the camera-view pass picks the cascade by view depth and blends across the
-  bands; optionally a second picture coloured by cascade.
+  bands; optionally a second picture coloured by cascade; with ``light_size`` (the sun's
+  angular radius) percentage-closer soft shadows in every cascade.
 * :func:`render_atlas`: many point (cube-mapped), spot and directional lights whose
   shadow maps share one atlas (:func:`shadowmath.allocate_atlas`,
   :func:`shadowmath.fit_atlas`), each light's shadow mask and the picture lit by all.
@@ -49,6 +51,7 @@ from ._pass_cascades import MAX_CASCADES as MAX_CASCADES
 from ._pass_cascades import CascadeFrame as CascadeFrame
 from ._pass_cascades import render_cascades as render_cascades
 from ._pass_lit import MAX_LIGHTS as MAX_LIGHTS
+from ._pass_pcss import PCSS_POLYGON_OFFSET as PCSS_POLYGON_OFFSET
 from ._pass_planar import PLANAR_POLYGON_OFFSET as PLANAR_POLYGON_OFFSET
 from ._pass_soft import radiance_texture as radiance_texture
 from ._resources import Body as Body
@@ -64,6 +67,7 @@ __all__ = [
     "DEBIAN_PACKAGES",
     "MAX_CASCADES",
     "MAX_LIGHTS",
+    "PCSS_POLYGON_OFFSET",
     "PLANAR_POLYGON_OFFSET",
     "AtlasFrame",
     "Body",

@@ -31,8 +31,14 @@ from ._context import (
     uniform,
 )
 from ._context import image_size as _image_size
-from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
+from ._pass_depth import (
+    begin_depth_pass,
+    cull_faces_toward_light,
+    depth_bias_option,
+    pcf_radius_option,
+)
 from ._pass_lit import draw_lit, finish, subtract_light
+from ._pass_pcss import light_size_option
 from ._resources import (
     Body,
     GpuScene,
@@ -108,6 +114,7 @@ class CascadeOptions(NamedTuple):
     ambient: float
     background: tuple[float, float, float]
     cascade_colors: bool
+    light_size: float = 0.0
 
 
 def render_cascades(
@@ -134,6 +141,7 @@ def render_cascades(
     cascade_colors: bool = False,
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.06, 0.07, 0.09),
+    light_size: float = 0.0,
     ctx: moderngl.Context | None = None,
 ) -> CascadeFrame:
     r"""Render bodies under a sun with cascaded shadow maps fitted to the camera.
@@ -155,6 +163,15 @@ def render_cascades(
        ``(band_end[i-1] - d) / (band_end[i-1] - splits[i])``; then the subtractive pass.
        With ``cascade_colors`` a second picture multiplies each pixel by its
        cascade's colour (mixed the same way across the bands).
+       With ``light_size > 0`` (the sun's angular radius) the shadow is
+       percentage-closer soft shadows instead: the maps hold the faces turned from the
+       sun, and in cascade ``i`` each point searches for blockers over
+       ``K_i |r - d_near_i|`` texels and filters over ``K_i (r - d_B)``
+       (:func:`shadowmath.pcss_parameters` of the cascades: the same world penumbra in
+       every cascade, so none jumps at a split), Vogel disks rotated per pixel, taps
+       clamped to the tile, the constant bias only; unless ``stable``, the boxes are
+       widened first (:func:`shadowmath.widen_cascades`) so that they hold every
+       blocker of their receivers' search.
 
     Arguments:
         bodies: every body casts and receives.
@@ -181,6 +198,7 @@ def render_cascades(
             per fragment in the shader; :data:`NORMAL_OFFSET` by default, 0 for none).
         cascade_colors: also render the cascade-coloured picture.
         ambient, background: shading as in :func:`render_scene`.
+        light_size: the sun's angular radius in radians, ``>= 0``: PCSS when ``> 0``.
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
 
     Returns:
@@ -207,7 +225,7 @@ def render_cascades(
     options = cascade_options(
         layout=layout, pcf_radius=pcf_radius, depth_bias=depth_bias,
         normal_offset=normal_offset, ambient=ambient, background=background,
-        cascade_colors=cascade_colors,
+        cascade_colors=cascade_colors, light_size=light_size,
     )  # fmt: skip
     fit_options = {
         "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
@@ -217,6 +235,8 @@ def render_cascades(
     scene = prepare_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options
     )
+    if options.light_size > 0 and not stable:
+        scene = scene._replace(fit=sm.widen_cascades(scene.fit, angular_radius=options.light_size))
     size = _image_size("image_size", image_size)
     texels = _image_size("map_size", map_size)
     gl = resolve_context(ctx)
@@ -244,6 +264,7 @@ def cascade_options(
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.0, 0.0, 0.0),
     cascade_colors: bool = False,
+    light_size: float = 0.0,
 ) -> CascadeOptions:
     """The options of a cascades pass, checked; ``depth_bias`` defaults to ``(2 k + 1, 2)``,
     :func:`shadowmath.slope_scaled_bias`'s derived minimum for a box PCF of radius ``k``."""
@@ -256,7 +277,7 @@ def cascade_options(
         raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
     bias = (2 * k + 1.0, 2.0) if depth_bias is None else depth_bias_option(depth_bias, k)
     return CascadeOptions(layout, k, bias, float(normal_offset), float(ambient), background,
-                          cascade_colors)  # fmt: skip
+                          cascade_colors, light_size_option(light_size))  # fmt: skip
 
 
 def prepare_cascades(
@@ -306,7 +327,8 @@ def _draw(
     """The maps, the lit pass, the mask and subtractive passes, the debug tint; read back."""
     (sun,) = scene.lights
     draw_lit(scene, options.ambient, options.background)
-    depths = draw_cascade_maps(scene, fit, options.layout == "atlas")
+    atlas = options.layout == "atlas"
+    depths = draw_cascade_maps(scene, fit, atlas, back_faces=options.light_size > 0)
     maps = _depth_array(scene.ctx, depths)
     try:
         scene.clear_mask()
@@ -354,10 +376,13 @@ def cascade_index(
     return np.where(valid, index, -1).astype(np.int32)
 
 
-def draw_cascade_maps(scene: GpuScene, fit: sm.Cascades, atlas: bool) -> NDArray[np.float32]:
+def draw_cascade_maps(
+    scene: GpuScene, fit: sm.Cascades, atlas: bool, *, back_faces: bool = False
+) -> NDArray[np.float32]:
     """Every body's depth into each cascade's map: ``(n, h, w)`` layers, or ``(1, H, W)``
     the atlas (each cascade in its viewport), window depths, row 0 ``t = 0``; each layer
-    ``fit.texture_size``; no polygon offset (``cascades.frag`` biases each receiver)."""
+    ``fit.texture_size``; no polygon offset (``cascades.frag`` biases each receiver);
+    ``back_faces``: only the faces turned from the sun (:func:`cull_faces_toward_light`)."""
     gl = scene.ctx
     ports = np.asarray(fit.viewports, dtype=np.int64)
     clip = np.asarray(fit.world_to_clip, dtype=np.float64)
@@ -374,12 +399,15 @@ def draw_cascade_maps(scene: GpuScene, fit: sm.Cascades, atlas: bool) -> NDArray
                 x, y, w, h = (int(c) for c in ports[i])
                 fbo.viewport = (x, y, w, h)
                 for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
+                    if back_faces:
+                        cull_faces_toward_light(gl, clip[i] @ body.to_world)
                     set_matrix(prog, "body_to_clip", clip[i] @ body.to_world)
                     mesh.render(prog)
             data = np.frombuffer(tex.read(alignment=1), dtype=np.float32)
             layers.append(data.reshape(size[1], size[0]).copy())
         finally:
             gl.polygon_offset = (0.0, 0.0)
+            gl.disable(moderngl.CULL_FACE)
             fbo.release()
             tex.release()
     return np.stack(layers)
@@ -432,8 +460,28 @@ def _shade(
     set_uniform(prog, "constant_bias", options.bias[1] * DEPTH_RESOLUTION)
     set_uniform(prog, "mode", mode)
     uniform(prog, "colors").write(colors.astype(np.float32).tobytes())
+    _set_pcss(prog, fit, options.light_size)
     maps.use(location=0)
     for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
         set_matrix(prog, "body_to_world", body.to_world)
         scene.bind_record(prog, i)
         mesh.render(prog)
+
+
+def cascade_pcss_parameters(fit: sm.Cascades, light_size: float) -> sm.PcssParameters:
+    """The cascades' :func:`shadowmath.pcss_parameters` for a sun of angular radius
+    ``light_size``: ``(n, 2)`` texels per unit of stored depth and ``(n,)`` near depths."""
+    return sm.pcss_parameters(fit, angular_radius=light_size)
+
+
+def _set_pcss(prog: moderngl.Program, fit: sm.Cascades, light_size: float) -> None:
+    """The PCSS uniforms: ``pcss`` on where ``light_size > 0``, each cascade's ``K`` and
+    near depth (:func:`cascade_pcss_parameters`), padded to :data:`MAX_CASCADES`."""
+    set_uniform(prog, "pcss", int(light_size > 0))
+    n = int(np.asarray(fit.splits).shape[-1]) - 1
+    k, near = np.zeros((MAX_CASCADES, 2)), np.zeros(MAX_CASCADES)
+    if light_size > 0:
+        p = cascade_pcss_parameters(fit, light_size)
+        k[:n], near[:n] = np.asarray(p.texels_per_depth), np.asarray(p.near_depth)
+    uniform(prog, "pcss_k").write(k.astype(np.float32).tobytes())
+    uniform(prog, "pcss_near").write(near.astype(np.float32).tobytes())

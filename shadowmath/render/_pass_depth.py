@@ -118,30 +118,55 @@ def draw_depths(
     fbo: moderngl.Framebuffer,
     world_to_clip: NDArray[np.float64],
     bias: tuple[float, float],
+    *,
+    back_faces: bool = False,
 ) -> None:
     """Every body's depth through ``world_to_clip`` into the whole of ``fbo``
-    (:func:`begin_depth_pass`: cleared first), the polygon offset reset after."""
+    (:func:`begin_depth_pass`: cleared first), the polygon offset reset after.
+
+    ``back_faces``: draw only the faces turned from the light
+    (:func:`cull_faces_toward_light`), so each texel holds the surface of a closed
+    caster nearest the receivers behind it."""
     gl = scene.ctx
     prog = program(gl, "depth_map.vert", "depth_map.frag")
     fbo.viewport = (0, 0, *fbo.size)
     try:
         begin_depth_pass(gl, fbo, bias)
         for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
-            set_matrix(prog, "body_to_clip", world_to_clip @ body.to_world)
+            body_to_clip = world_to_clip @ body.to_world
+            if back_faces:
+                cull_faces_toward_light(gl, body_to_clip)
+            set_matrix(prog, "body_to_clip", body_to_clip)
             mesh.render(prog)
     finally:
         gl.polygon_offset = (0.0, 0.0)
+        gl.disable(moderngl.CULL_FACE)
+        gl.cull_face = "back"
+
+
+def cull_faces_toward_light(gl: moderngl.Context, body_to_clip: NDArray[np.float64]) -> None:
+    """Cull the faces whose outside (counter-clockwise side) faces the light: GL's front
+    faces where ``body_to_clip`` reverses orientation (``det < 0``, as a camera's
+    projection does: the Jacobian of ``p -> (M p)_xyz / (M p)_w`` is ``det M / w^4``),
+    its back faces where it keeps it. The caller disables ``CULL_FACE`` when done."""
+    gl.enable(moderngl.CULL_FACE)
+    gl.cull_face = "front" if np.linalg.det(body_to_clip) < 0 else "back"
 
 
 def draw_depth_map(
-    scene: GpuScene, world_to_clip: NDArray[np.float64], bias: tuple[float, float]
+    scene: GpuScene,
+    world_to_clip: NDArray[np.float64],
+    bias: tuple[float, float],
+    *,
+    back_faces: bool = False,
 ) -> moderngl.Texture:
     """Every body's depth from the light into a new depth texture (released with the scene),
-    set up for hardware comparison (``sampler2DShadow``, ``<=``, nearest, clamp to edge)."""
+    set up for hardware comparison (``sampler2DShadow``, ``<=``, nearest, clamp to edge);
+    ``back_faces`` as in :func:`draw_depths`."""
     tex: moderngl.Texture = scene.keep(depth_map_texture(scene.ctx, scene.map_size))
     fbo = scene.ctx.framebuffer(depth_attachment=tex)
     try:
-        draw_depths(scene, fbo, world_to_clip, bias)
+        draw_depths(scene, fbo, world_to_clip, bias, back_faces=back_faces)
     finally:
         fbo.release()
     tex.compare_func = "<="

@@ -340,6 +340,7 @@ class PassOptions(NamedTuple):
     depth_bias: tuple[float, float] | None = None
     samples: int = 16
     seed: int | None = 0
+    light_size: float = 0.0
 
 
 #: A shadow pass's checked receivers or blockers.

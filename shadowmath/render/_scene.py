@@ -18,6 +18,7 @@ from ._context import image_size as _image_size
 from ._pass_depth import DepthPass
 from ._pass_lit import MAX_LIGHTS, draw_lit, finish, subtract_light
 from ._pass_omni import OmniPass
+from ._pass_pcss import PcssPass
 from ._pass_planar import PlanarPass
 from ._pass_soft import RadiancePass, SoftPass
 from ._pass_texture import TexturePass
@@ -33,7 +34,7 @@ from ._resources import (
 )
 
 #: The shadow systems that draw directional lights (``Light(direction=...)``).
-DIRECTIONAL_METHODS = ("planar", "depth")
+DIRECTIONAL_METHODS = ("planar", "depth", "pcss")
 
 #: The shadow systems by ``method`` name: each takes the options of :func:`render_scene`
 #: it uses (``pcf_radius``, ``depth_bias``) and ignores the others.
@@ -44,6 +45,7 @@ PASSES: dict[str, Callable[[PassOptions], ShadowPass]] = {
     "omni": lambda o: OmniPass(o.depth_bias),
     "soft": lambda o: SoftPass(o.samples, o.seed, o.pcf_radius, o.depth_bias),
     "radiance": lambda o: RadiancePass(o.samples, o.seed),
+    "pcss": lambda o: PcssPass(o.light_size, o.depth_bias),
 }
 
 
@@ -64,14 +66,16 @@ class Frame(NamedTuple):
         setups: ``setups[l][b]`` the :class:`ShadowSetup` of light ``l`` and blocker ``b``
             (``method="depth"``: ``setups[l][0]``, one per light, fitted to all blockers;
             ``method="omni"`` and ``"radiance"``: none, ``setups[l] == ()``;
-            ``method="soft"``: one ``method="depth"`` setup per light sample).
+            ``method="soft"``: one ``method="depth"`` setup per light sample;
+            ``method="pcss"``: as ``"depth"``).
         shadow_maps: ``shadow_maps[l][b]`` the ``(h, w)`` pass-1 mask, as
             :func:`render_shadow_map` returns it (row 0 is ``t = 0``);
             ``method="depth"``: ``shadow_maps[l][0]`` the light's depth map, window
             depths in ``[0, 1]`` (1 where nothing was drawn); ``method="omni"``: the six
             cube faces ``+X, -X, +Y, -Y, +Z, -Z``, window depths, row 0 is ``t = 0``;
             ``method="soft"``: none; ``method="radiance"``: ``shadow_maps[l][r]``
-            receiver ``r``'s visibility texture (:func:`radiance_texture`).
+            receiver ``r``'s visibility texture (:func:`radiance_texture`);
+            ``method="pcss"``: as ``"depth"``, of the faces turned from the light.
     """
 
     color: NDArray[np.float32]
@@ -91,7 +95,7 @@ def render_scene(
     *,
     image_size: int | tuple[int, int] = (512, 384),
     map_size: int | tuple[int, int] = 256,
-    method: Literal["texture", "planar", "depth", "omni", "soft", "radiance"] = "texture",
+    method: Literal["texture", "planar", "depth", "omni", "soft", "radiance", "pcss"] = "texture",
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.06, 0.07, 0.09),
     setups: Sequence[Sequence[ShadowSetup]] | None = None,
@@ -99,6 +103,7 @@ def render_scene(
     depth_bias: tuple[float, float] | None = None,
     samples: int = 16,
     seed: int | None = 0,
+    light_size: float = 0.0,
     ctx: moderngl.Context | None = None,
 ) -> Frame:
     r"""Render receivers in the shadows of blockers, the article's passes on the GPU.
@@ -140,6 +145,15 @@ def render_scene(
        a radiance texture of ``map_size`` texels over the rectangle around it in its
        plane (:func:`radiance_texture`), drawn onto it. The lit pass lights from the
        area light's centre.
+       ``method="pcss"`` (Fernando's percentage-closer soft shadows, real time): one
+       ``method="depth"`` map per light of ``light_size`` (a point light's radius, a
+       directional light's angular radius in radians), holding the faces turned from the
+       light (closed casters: the surface nearest the receiver, so the shadow hardens
+       where a caster touches it), with a border as wide as the widest blocker search;
+       each visible point searches the map for blockers over ``K |d_R - d_near|`` texels
+       and filters over ``K (d_R - d_B)`` (``K``, ``d_near``:
+       :func:`shadowmath.pcss_parameters`; ``d_B`` the found blockers' mean depth), each
+       over a Vogel disk rotated per pixel (interleaved gradient noise).
     3. **Subtractive pass** per light (pass 4): each shadowed body drawn again with
        ``FUNC_REVERSE_SUBTRACT`` blending removes that light's diffuse term where its
        mask is set, so the shadows of several lights compose correctly.
@@ -159,7 +173,7 @@ def render_scene(
         receivers: the bodies that receive shadows.
         blockers: the bodies that cast them (drawn lit, not shadowed).
         lights: up to :data:`MAX_LIGHTS` lights: points (``Light(position)``), or
-            with ``method="planar"`` and ``"depth"`` also directional lights
+            with ``method="planar"``, ``"depth"`` and ``"pcss"`` also directional lights
             (``Light(direction=...)``, toward the light; the depth map is then
             orthographic, from ``fit_shadow((x, y, z, 0), ...)``).
         world_to_clip: ``(4, 4)`` the camera, e.g. ``perspective(...) @ look_at(...)``.
@@ -170,8 +184,9 @@ def render_scene(
             ``"depth"`` (Williams' shadow z-buffer: every body casts and receives) or
             ``"omni"`` (a cube depth map: every body casts and receives, in every
             direction from the light; ``map_size`` must be square), ``"soft"`` (the
-            averaged depth-map shadows of an area light's samples) or ``"radiance"``
-            (Heckbert and Herf's radiance textures: every receiver needs a ``plane``).
+            averaged depth-map shadows of an area light's samples), ``"radiance"``
+            (Heckbert and Herf's radiance textures: every receiver needs a ``plane``) or
+            ``"pcss"`` (percentage-closer soft shadows of a light of ``light_size``).
         ambient: the ambient term ``a``.
         background: RGB of empty pixels.
         setups: ``setups[l][b]`` to use instead of ``fit_shadow(light, blocker, map_size,
@@ -180,11 +195,14 @@ def render_scene(
             (``blocker_to_clip @ inv(blocker_to_world)``) with a depth range that
             encloses the receivers.
         pcf_radius: ``method="depth"``: the PCF kernel's radius ``k`` in texels.
-        depth_bias: ``method="depth"`` and ``"omni"``: ``(factor, units)`` of the depth
-            map's polygon offset (slope-scaled and constant); default ``(2.5 + 2 k, 4.0)``.
+        depth_bias: ``method="depth"``, ``"omni"`` and ``"pcss"``: ``(factor, units)`` of
+            the depth map's polygon offset (slope-scaled and constant); default
+            ``(2.5 + 2 k, 4.0)``, with ``"pcss"`` :data:`PCSS_POLYGON_OFFSET`.
         samples: ``method="soft"`` and ``"radiance"``: points per area light, ``>= 1``.
         seed: ``method="soft"`` and ``"radiance"``: the samples' jitter seed (None: fresh
             jitter each call).
+        light_size: ``method="pcss"``: a point light's radius (world units) or a
+            directional light's angular radius (radians), ``>= 0`` (0: hard shadows).
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
 
     Returns:
@@ -193,8 +211,9 @@ def render_scene(
     Raises:
         ValueError: bad meshes, matrices, sizes, colours; no lights or too many; a
             receiver without a plane under ``method="planar"`` or ``"radiance"``; a
-            directional light under another method than ``"planar"`` and ``"depth"``; a
-            point light or bad ``samples`` under ``method="soft"`` or ``"radiance"``;
+            directional light under another method than ``"planar"``, ``"depth"`` and
+            ``"pcss"``; a point light or bad ``samples`` under ``method="soft"`` or
+            ``"radiance"``; a negative or non-finite ``light_size`` under ``"pcss"``;
             ``setups`` of the wrong shape; and whatever :func:`fit_shadow` raises for a
             light and a blocker.
         GLUnavailableError: no OpenGL context could be created.
@@ -213,7 +232,7 @@ def render_scene(
     """
     if method not in PASSES:
         raise ValueError(f"method: expected one of {', '.join(map(repr, PASSES))}, got {method!r}")
-    shadow_pass = PASSES[method](PassOptions(pcf_radius, depth_bias, samples, seed))
+    shadow_pass = PASSES[method](PassOptions(pcf_radius, depth_bias, samples, seed, light_size))
     if not 1 <= len(lights) <= MAX_LIGHTS:
         raise ValueError(f"lights: expected 1 to {MAX_LIGHTS} lights, got {len(lights)}")
     if not (np.isfinite(ambient) and ambient >= 0):

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from shadowmath.__main__ import main
+from shadowmath.cli._options import DEFAULT_PCSS_BIAS
 from shadowmath.meshes import box, grid
-from shadowmath.render import Body, Light, render_scene
+from shadowmath.render import PCSS_POLYGON_OFFSET, Body, Light, render_scene
 
 
 def _png(path) -> np.ndarray:
@@ -304,3 +305,24 @@ def test_demo_draws_the_depth_method_with_webgpu(demo_frames, wgpu_device, monke
     assert (webgpu.body == opengl.body).mean() > 0.99
     assert np.abs(webgpu.shadow - opengl.shadow[..., 0]).mean() < 0.01
     assert _png(map_png).shape == (128, 128)
+
+
+def test_pcss_penumbra_grows_with_the_light_size(demo_frames):
+    """--method pcss: the hard shadow's place (its darker half where the depth method's
+    shadow is), a penumbra that widens with --light-size, none at size 0."""
+    hard, _ = demo_frames("--method", "depth")
+    pcss, said = demo_frames("--method", "pcss")
+    assert "percentage-closer soft shadows of radius 0.25" in said and "depth bias 0 1" in said
+    assert DEFAULT_PCSS_BIAS == PCSS_POLYGON_OFFSET  # the demo's default is the renderer's
+    assert _agreement(_shadowed(hard), _shadowed(pcss)) > 0.85
+    none, _ = demo_frames("--method", "pcss", "--light-size", "0")
+    small, _ = demo_frames("--method", "pcss", "--light-size", "0.1")
+    big, _ = demo_frames("--method", "pcss", "--light-size", "0.6")
+    widths = [_penumbra(f).sum() for f in (none, small, pcss, big)]
+    assert widths[0] == 0 and widths[1] < widths[2] < widths[3], widths
+    sun, said = demo_frames("--method", "pcss", "--directional", "-1", "2", "1.5")
+    assert "angular radius 1 degrees" in said and "orthographic" in said
+    wide, _ = demo_frames(
+        "--method", "pcss", "--directional", "-1", "2", "1.5", "--light-size", "4"
+    )
+    assert 0 < _penumbra(sun).sum() < _penumbra(wide).sum()

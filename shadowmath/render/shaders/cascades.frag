@@ -25,6 +25,11 @@
 // so no tap reads a neighbour's tile in an atlas. Outside the tile, or beyond the map's
 // depth range, or beyond the last split: lit.
 //
+// PCSS (pcss = 1, the maps holding the faces turned from the sun): in cascade i the
+// blocker search and filter of pcss.glsl with pcss_k[i] and pcss_near[i]
+// (sm.pcss_parameters of the cascades: one world penumbra in every cascade), every tap
+// clamped to the cascade's tile, the constant bias only.
+//
 // Renderer-specific: this pass draws every body again over the lit pass's record
 // (`surface`: world position, w = body id + 1) and keeps the fragment that is visible;
 // mode 0 writes the shadow (1 shadowed, 0 lit), mode 1 the cascade's debug colour.
@@ -47,11 +52,42 @@ uniform sampler2D surface;
 uniform float body_id;
 uniform int mode;
 uniform vec3 colors[MAX_CASCADES];
+uniform int pcss;                    // 1: percentage-closer soft shadows
+uniform vec2 pcss_k[MAX_CASCADES];   // texels per unit of stored depth, per cascade
+uniform float pcss_near[MAX_CASCADES];
 
 in vec3 v_world;
 flat in vec3 v_face_normal;
 
 out vec4 result;
+
+#include "pcss.glsl"
+
+// The tile and layer pcss_depth reads (set before each pcss_lit).
+ivec4 pcss_tile;
+int pcss_layer;
+
+float pcss_depth(vec2 uv) {
+    ivec2 texel = ivec2(floor(uv * vec2(textureSize(maps, 0).xy)));
+    ivec2 tap = clamp(texel, pcss_tile.xy, pcss_tile.xy + pcss_tile.zw - 1);
+    return texelFetch(maps, ivec3(tap, pcss_layer), 0).r;
+}
+
+// PCSS in cascade i at p: 0 lit .. 1 shadowed (outside the tile or its depth range: lit).
+float pcss_shadow_in(int i, vec3 p) {
+    vec2 size = vec2(textureSize(maps, 0).xy);
+    vec4 h = world_to_texture[i] * vec4(p, 1.0);
+    vec3 str = h.xyz / h.w;
+    pcss_tile = viewports[i];
+    pcss_layer = atlas == 1 ? 0 : i;
+    ivec2 texel = ivec2(floor(str.xy * size));
+    if (str.z > 1.0 || any(lessThan(texel, pcss_tile.xy))
+        || any(greaterThanEqual(texel, pcss_tile.xy + pcss_tile.zw))) {
+        return 0.0;
+    }
+    float phi = pixel_angle(gl_FragCoord.xy);
+    return 1.0 - pcss_lit(str, size, pcss_k[i], pcss_near[i], constant_bias, phi);
+}
 
 // The cascade serving view depth d (-1: none), and the weight of cascade i - 1 in its band.
 int pick(float d, out float previous) {
@@ -80,6 +116,7 @@ mat3 texture_gradients(mat4 M, vec3 p) {
 
 // The shadow of point p (unit normal n, facing the sun) in cascade i: 0 lit .. 1 shadowed.
 float shadow_in(int i, vec3 p, vec3 n) {
+    if (pcss == 1) return pcss_shadow_in(i, p);
     vec2 size = vec2(textureSize(maps, 0).xy);
     mat3 g = texture_gradients(world_to_texture[i], p);
     vec3 D = cross(g[0], g[1]);
