@@ -14,8 +14,9 @@ turned by 90 degrees), and the unturned frame first. A candidate direction ``(c,
 and the area ``(max u - min u) (max v - min v)`` over the points; the argmin picks one
 (ties keep the first: the unturned frame wins a tie). With ``m`` points the pairs cost
 ``m (m - 1) / 2`` candidates of ``m`` points each, in chunks of one shape (at most about
-:data:`CHUNK_VALUES` values at once). Differentiable where the argmin is locally constant (a
-piecewise function of the points). Trusted inputs: nothing here raises.
+:data:`CHUNK_VALUES` values at once; NumPy first drops the points that no row counts).
+Differentiable where the argmin is locally constant (a piecewise function of the points).
+Trusted inputs: nothing here raises.
 """
 
 from __future__ import annotations
@@ -66,6 +67,9 @@ def min_area_rectangle(xp: Any, x: Any, y: Any, ok: Any) -> Rectangle:
         >>> round(float((r.hi_u - r.lo_u) * (r.hi_v - r.lo_v)), 12), round(float(r.s), 12)
         (4.0, 0.5)
     """
+    if xp is np:  # drop the points that no row counts: the same candidates, fewer pairs
+        keep = np.any(np.reshape(ok, (-1, ok.shape[-1])), axis=0)
+        x, y, ok = x[..., keep], y[..., keep], ok[..., keep]
     one = xp.ones_like(x[..., :1])
     cs = [(one, 0.0 * one)]
     areas = [_areas(xp, (x, y, ok), one, 0.0 * one)[..., None]]
@@ -99,6 +103,8 @@ def _pairs(shape: tuple[int, ...]) -> list[tuple[Any, Any]]:
     :data:`CHUNK_VALUES` values over the batch (and JAX compiles one shape)."""
     m = shape[-1]
     i, j = np.triu_indices(m, 1)
+    if len(i) == 0:
+        return []
     chunks = max(1, -(-math.prod(shape) * len(i) // CHUNK_VALUES))
     size = -(-len(i) // chunks)
     pad = np.zeros(chunks * size - len(i), dtype=i.dtype)
