@@ -20,7 +20,8 @@ from :data:`ELEVATIONS` (10°, 40°, 70°) chosen by a Latin square over pitch a
 
 **The comparisons** (:data:`COMPARISONS`): ``fit_cascades``'s default against three.js's
 ``SunLightShadow`` and bevy; ``stable=True`` against three.js (stable itself) and the bounding
-spheres of Godot and Unreal; ``warp="lispsm"`` against no warp. ``gain`` = their statistic /
+spheres of Godot and Unreal; ``warp="lispsm"`` and ``orientation="fitted"`` (each map turned
+to its body's least-area rectangle) against the default. ``gain`` = their statistic /
 shadowmath's (``> 1``: shadowmath finer), at the median and the 90th percentile (p90).
 
 The engines (three.js and bevy: :mod:`bench_cascades`), written here from their sources with
@@ -332,6 +333,7 @@ default) is λ = 0.75 over the camera's range and the log scheme over a visible 
 range: the rows without ``lam`` or ``scheme`` are its."""
 DEFAULT = "default: auto, camera's range (λ=0.75)"
 LISPSM = "LiSPSM"
+FITTED = "fitted orientation"
 ENGINES: dict[str, Callable[[Scene, F64], Fit]] = {
     "three.js": threejs_fit,
     "bevy": bevy_fit,
@@ -341,7 +343,7 @@ ENGINES: dict[str, Callable[[Scene, F64], Fit]] = {
 TIGHT_RIVALS = ("three.js", "bevy")
 STABLE_RIVALS = ("three.js", "Godot", "Unreal")
 STATS = ("median", "p90")
-OURS = {"default": DEFAULT, "stable": f"{DEFAULT} stable", "LiSPSM": LISPSM}
+OURS = {"default": DEFAULT, "stable": f"{DEFAULT} stable", "LiSPSM": LISPSM, "fitted": FITTED}
 """shadowmath's fits whose distance to the aliasing limit is reported."""
 
 
@@ -358,6 +360,7 @@ COMPARISONS = (
     Comparison("stable / Godot", f"{DEFAULT} stable", "Godot"),
     Comparison("stable / Unreal", f"{DEFAULT} stable", "Unreal"),
     Comparison("LiSPSM / no warp", LISPSM, DEFAULT),
+    Comparison("fitted / light orientation", FITTED, DEFAULT),
 )
 
 
@@ -380,6 +383,9 @@ def measure_pose(
     plain = plain(hits) if callable(plain) else plain
     fits[LISPSM] = shadowmath_fit(
         scene, projection, stable=False, splits=None, warp=True, options=plain
+    )
+    fits[FITTED] = shadowmath_fit(
+        scene, projection, stable=False, splits=None, options={**plain, "orientation": "fitted"}
     )
     return {name: stats(ratios(fit, hits, scene.sun)) for name, fit in fits.items()}
 

@@ -8,7 +8,8 @@ The boundary converts and checks the arguments once, then runs the steps of
   for one to :data:`PYTHON_LOOP_CAMERAS` cameras without Numba;
 * the array mode, JAX input (and NumPy batches without Numba): the same steps once on
   whole arrays (the cascades on the last axis); values and gradients follow the same
-  expressions. ``warp="lispsm"`` runs here only.
+  expressions. ``warp="lispsm"`` and ``orientation="fitted"`` (:mod:`._orientation`) run
+  here only.
 
 Both return a status word of :data:`shadowmath._boundary._status.CASCADE_CHECKS`; the
 boundary raises the first failing check's message (NumPy) or makes the entry NaN (JAX).
@@ -51,6 +52,7 @@ from shadowmath.lights import DirectionalLight
 
 from ._cascade_splits import CascadeScheme, check_count, scheme_lam
 from ._lispsm import check_warp, warp_cascades
+from ._orientation import check_orientation, fitted_cascade
 from ._spec import ShadowMapSpec, api_rows, map_spec
 
 __all__ = ["CascadeState", "Cascades", "fit_cascades"]
@@ -101,7 +103,8 @@ class Cascades(NamedTuple):
 
     Attributes:
         world_to_light: ``(*batch, n, 4, 4)`` world to each cascade's light
-            coordinates (one rotation for all; origins differ along ``Z`` only).
+            coordinates (one rotation for all, origins differ along ``Z`` only; with
+            ``orientation="fitted"`` each turned about ``Z`` by its own angle).
         frustum: the :class:`OrthographicBox` of each cascade, fields ``(*batch, n)``.
         world_to_clip: ``(*batch, n, 4, 4)`` world to the cascade's clip coordinates:
             draw the casters into cascade ``i`` with ``world_to_clip[i] @ model``.
@@ -170,6 +173,7 @@ def fit_cascades(
     warp: Literal[None, "lispsm"] = None,
     depth_range: DepthRangeName | Real[ArrayLike, "*#batch 2"] = "camera",
     state: CascadeState | None = None,
+    orientation: Literal["light", "fitted"] = "light",
 ) -> Cascades:
     r"""Fit a directional light's cascaded shadow maps to what a camera sees.
 
@@ -261,6 +265,15 @@ def fit_cascades(
             the target's ladder value is more than a step inside, so the splits change
             only at ladder steps; with ``stable=True`` each square's half-width likewise
             follows its slice's visible part (``docs/cascades.md``).
+        orientation: ``"light"``: every map's ``X`` and ``Y`` are the light frame's
+            (the helper axis or ``up``); ``"fitted"``: each cascade's map turned about
+            the light's axis (by at most 45 degrees) to the minimum-area rectangle
+            enclosing the light-space projection of its slice intersected with
+            ``scene_bounds`` (Freeman and Shapira 1975): the same texel count over at
+            most the axis-aligned map's area (finer texels), the texels' shape kept;
+            ``world_to_light`` then turns per cascade and ``frustum`` is the turned
+            box. The turn follows the camera (the map shimmers as it moves): tight
+            cascades only, not with ``stable=True`` nor a ``warp`` (``ValueError``).
 
     Returns:
         :class:`Cascades`.
@@ -292,6 +305,7 @@ def fit_cascades(
                     pcf_filter=pcf_filter, api=api, reversed_z=reversed_z,
                     stable=stable)  # fmt: skip
     check_warp(warp, spec.stable)
+    fitted = check_orientation(orientation, spec.stable, warp)
     cam_api = spec.api if camera_api is None else camera_api
     _check_api(cam_api, camera_reversed_z)
     if layout not in ("layers", "atlas"):
@@ -328,7 +342,7 @@ def fit_cascades(
     call = _Call(ctx, spec, layout, shape, o)
     extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
     arrays = (L, V, P, box, U, S, dmax, lm, ov, extra, W)
-    if ctx.xp is np and warp is None:
+    if ctx.xp is np and warp is None and not fitted:
         python = not _kernels.available()
         if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
             try:
@@ -336,7 +350,7 @@ def fit_cascades(
             except (ZeroDivisionError, OverflowError):
                 pass  # Python floats raise where Numba's give inf: invalid input, which the
                 # array mode below reports with its message
-    return _arrays(call, checks, arrays, warp)
+    return _arrays(call, checks, arrays, (warp, fitted))
 
 
 def _range_option(
@@ -542,9 +556,12 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
     return _result(call, out.reshape(*shape, n, ROW), splits.reshape(*shape, n + 1))
 
 
-def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | None) -> Cascades:
+def _arrays(
+    call: _Call, checks: Checks, arrays: tuple[Any, ...], hooks: tuple[str | None, bool]
+) -> Cascades:
     """The array mode: the same steps once on whole arrays (NumPy or JAX), per-entry
-    values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``)."""
+    values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``);
+    ``hooks``: the warp and whether the maps are turned (``orientation="fitted"``)."""
     ctx, o = call.ctx, call.o
     xp, F = ctx.xp, formulas(ctx.xp)
     L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
@@ -565,7 +582,11 @@ def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | No
         splits = F.cascade_split(S, j, e[0][1:4], o)
         sl = F.cascade_slice(e, inputs[3], splits, j[:-1], o)
         row: list[Any] = [0.0] * ROW
-        F.cascade_fit(e, sl, j[:-1], o, row)
+        warp, fitted = hooks
+        if fitted:
+            fitted_cascade(xp, F, (e, sl, j[:-1], o), row)
+        else:
+            F.cascade_fit(e, sl, j[:-1], o, row)
         if warp is not None:
             _warp(call, (e, sl, j[:-1]), (V, P), row)
     for bit, message in cascade_messages():

@@ -7,7 +7,8 @@ slice, 12 of the box) clipped to the other solid with :func:`._cascade_formulas.
 * :func:`_bounds_loop` (the loop mode: Python or Numba floats), where each corner's outcode
   settles most edges without clipping;
 * :func:`_bounds_array` (the array mode), every edge of every cascade at once, reductions
-  over the last axis; :func:`cascade_body` is its first half (LiSPSM reuses it).
+  over the last axis; :func:`cascade_body` is its first half (LiSPSM and the fitted
+  orientation reuse it), :func:`body_bounds` its second.
 
 ``specialize`` binds the name ``cascade_bounds`` to the mode's form (:data:`FORMS`). Both
 take the slice's corners in light coordinates (``lc``, 8 x 3) and the box's half-space
@@ -165,8 +166,14 @@ def _corners(xp: Any, buffer: Any, m: int) -> Any:
 
 def _bounds_array(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
     """The array form: :func:`cascade_body`'s vertices reduced over the last axis."""
+    return body_bounds(cascade_body(lc, gs, boxp, d))
+
+
+def body_bounds(body: Any) -> Any:
+    """:func:`cascade_body`'s vertices reduced over the last axis: the bounds of the array
+    form (the slice's own where the intersection is empty)."""
     xp = array_api
-    ends, ok2, sl, bc = cascade_body(lc, gs, boxp, d)
+    ends, ok2, sl, bc = body
     seen = xp.any(ok2, axis=-1)
     inf = xp.asarray(np.inf, dtype=ends[0].dtype)
     low = [where(seen, xp.min(where(ok2, v, inf), axis=-1), xp.min(f, axis=-1))
@@ -185,4 +192,5 @@ FUNCTIONS = (
     "cascade_body",
     "_corners",
     "_bounds_array",
+    "body_bounds",
 )

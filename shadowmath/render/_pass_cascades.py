@@ -134,6 +134,7 @@ def render_cascades(
     overlap: float = 0.1,
     stable: bool = False,
     warp: Literal[None, "lispsm"] = None,
+    orientation: Literal["light", "fitted"] = "light",
     layout: Literal["layers", "atlas"] = "layers",
     pcf_radius: int = 0,
     depth_bias: tuple[float, float] | None = None,
@@ -185,10 +186,10 @@ def render_cascades(
             receiver; default the bodies' bounding box. A caster outside it may lose
             its shadow (the maps reach toward the sun only to the box).
         image_size, map_size: the picture's and each cascade's map size in pixels/texels.
-        count, splits, scheme, lam, max_distance, overlap, stable, warp, layout: as in
-            :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades), but
-            the splits default to the practical scheme with ``lam = 0.5`` (three.js's);
-            ``scheme="auto", lam=None`` is ``fit_cascades``'s default.
+        count, splits, scheme, lam, max_distance, overlap, stable, warp, orientation,
+            layout: as in :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES`
+            cascades), but the splits default to the practical scheme with ``lam = 0.5``
+            (three.js's); ``scheme="auto", lam=None`` is ``fit_cascades``'s default.
         pcf_radius: the PCF kernel's radius ``k`` (also the maps' border).
         depth_bias: ``(factor, units)`` of the slope-scaled bias ``b = units r_min +
             factor m`` (:func:`shadowmath.slope_scaled_bias`'s formula, computed per
@@ -230,7 +231,7 @@ def render_cascades(
     fit_options = {
         "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
         "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
-        "stable": stable, "warp": warp,
+        "stable": stable, "warp": warp, "orientation": orientation,
     }  # fmt: skip
     scene = prepare_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options

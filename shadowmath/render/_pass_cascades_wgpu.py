@@ -95,6 +95,7 @@ def render_cascades_wgpu(
     overlap: float = 0.1,
     stable: bool = False,
     warp: Literal[None, "lispsm"] = None,
+    orientation: Literal["light", "fitted"] = "light",
     layout: Literal["layers", "atlas"] = "layers",
     pcf_radius: int = 0,
     depth_bias: tuple[float, float] | None = None,
@@ -112,10 +113,10 @@ def render_cascades_wgpu(
         light: a directional :class:`Light` (``Light(direction=...)``, toward the sun).
         view, projection: the camera, in OpenGL's conventions, as in :func:`render_cascades`.
         scene_bounds, image_size, map_size: as in :func:`render_cascades`.
-        count, splits, scheme, lam, max_distance, overlap, stable, warp, layout: as in
-            :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES` cascades), but
-            the splits default to the practical scheme with ``lam = 0.5`` (three.js's);
-            ``scheme="auto", lam=None`` is ``fit_cascades``'s default.
+        count, splits, scheme, lam, max_distance, overlap, stable, warp, orientation,
+            layout: as in :func:`shadowmath.fit_cascades` (at most :data:`MAX_CASCADES`
+            cascades), but the splits default to the practical scheme with ``lam = 0.5``
+            (three.js's); ``scheme="auto", lam=None`` is ``fit_cascades``'s default.
         pcf_radius, normal_offset: as in :func:`render_cascades`.
         depth_bias: as in :func:`render_cascades`, ``units`` counting
             :data:`FLOAT_DEPTH_RESOLUTION` (``depth32float`` maps).
@@ -145,7 +146,7 @@ def render_cascades_wgpu(
     fit_options = {
         "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
         "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
-        "stable": stable, "warp": warp,
+        "stable": stable, "warp": warp, "orientation": orientation,
     }  # fmt: skip
     scene = prepare_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options, api="webgpu"
