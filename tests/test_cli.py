@@ -930,3 +930,22 @@ def test_atlas_demo_writes_the_picture_and_the_atlas(capsys, tmp_path):
     # the picture shows drawn depths (dark) inside the tiles and their outlines
     assert (picture.min(axis=-1) < 100).mean() > 0.01
     assert (np.abs(picture[..., 0] - picture[..., 2]) > 100).any()  # orange outlines
+
+
+@pytest.mark.usefixtures("gl")
+def test_omni_demo_draws_the_hard_cube_map_shadow(tmp_path, monkeypatch):
+    """--method omni does not read --light-size: render_scene gets light_size 0 (with a
+    size it would draw PCSS through the cube map)."""
+    import shadowmath.render
+
+    seen = {}
+    real = shadowmath.render.render_scene
+
+    def recording(*args, **kwargs):
+        seen.update(kwargs)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(shadowmath.render, "render_scene", recording)
+    args = ["--method", "omni", "--size", "64", "48", "--map-size", "64"]
+    assert main([*args, "--output", str(tmp_path / "o.png")]) == 0
+    assert seen["method"] == "omni" and seen["light_size"] == 0.0

@@ -824,7 +824,11 @@ def resolve_options(args: argparse.Namespace) -> Options:
 
 
 def _light_size_of(args: argparse.Namespace, directional: bool) -> float:
-    """``--light-size`` or its default (none for cascades), a sun's degrees in radians."""
+    """``--light-size`` or its default (none for cascades; 0 for the methods that do not
+    read it, so ``--method omni`` stays the hard cube-map shadow), a sun's degrees in
+    radians."""
+    if args.method not in LIGHT_SIZE_METHODS:
+        return 0.0
     if args.method == "cascades":
         return 0.0 if args.light_size is None else math.radians(args.light_size)
     if directional:

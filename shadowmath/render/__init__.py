@@ -17,7 +17,8 @@ does not.
   sampled with ``samplerCubeShadow``; ``method="soft"`` and ``"radiance"`` average
   the hard shadows of an area light's samples (seed 003's depth maps, Heckbert and
   Herf's radiance textures); ``method="pcss"`` is percentage-closer soft shadows of a
-  light of ``light_size``, with :func:`shadowmath.pcss_parameters`' quantities.
+  light of ``light_size``, with :func:`shadowmath.pcss_parameters`' quantities
+  (``method="omni"`` with ``light_size``: the same through the cube map).
   Lights are points (``Light(position)``), area lights (``edge_u``, ``edge_v``) or,
   for ``method="planar"``, ``"depth"`` and ``"pcss"``, directional (``Light(direction=...)``,
   the homogeneous ``(x, y, z, 0)``: parallel rays, an orthographic depth map).

@@ -28,8 +28,14 @@ from ._context import (
     set_uniform,
 )
 from ._context import image_size as _image_size
-from ._pass_depth import begin_depth_pass, depth_bias_option, pcf_radius_option
+from ._pass_depth import (
+    begin_depth_pass,
+    cull_faces_toward_light,
+    depth_bias_option,
+    pcf_radius_option,
+)
 from ._pass_lit import draw_lit, finish
+from ._pass_pcss import PCSS_POLYGON_OFFSET, light_size_option
 from ._resources import Body, GpuScene, Prepared, prepare_body, read_texture
 
 #: The default normal-offset bias of :func:`render_atlas`, in texels of each light's map.
@@ -99,6 +105,7 @@ def render_atlas(
     pcf_radius: int = 1,
     depth_bias: tuple[float, float] | None = None,
     normal_offset: float = NORMAL_OFFSET,
+    light_size: Any = None,
     image_size: int | tuple[int, int] = (512, 384),
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.06, 0.07, 0.09),
@@ -141,6 +148,14 @@ def render_atlas(
             size there, times the sine of the angle to the light
             (:data:`NORMAL_OFFSET` by default, 0 for none; receivers that cast nothing
             need none).
+        light_size: ``(L,)`` each light's radius (point and spot lights only): PCSS
+            instead of the PCF box. Each tile's ``K`` and ``d_near`` are
+            :func:`shadowmath.pcss_parameters` of the fit (atlas texels); the atlas is
+            allocated again with the border :func:`shadowmath.pcss_border_texels` of
+            them all (one border for every tile) when that exceeds the kernel's; the
+            tiles hold the faces turned from the light (default ``depth_bias``
+            :data:`PCSS_POLYGON_OFFSET`); the search and filter of ``pcss.glsl`` clamp
+            their taps to the tile.
         image_size: the picture's size in pixels.
         ambient, background: shading as in :func:`render_scene`.
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
@@ -149,7 +164,9 @@ def render_atlas(
         :class:`AtlasFrame`.
 
     Raises:
-        ValueError: bad bodies, lights, matrices, sizes or options, no caster; and
+        ValueError: bad bodies, lights, matrices, sizes or options, no caster; a
+            ``light_size`` that is not one radius ``>= 0`` per light, or beside a
+            directional light; and
             whatever :func:`shadowmath.allocate_atlas` and :func:`shadowmath.fit_atlas`
             raise (casters behind a spot light or outside its cone are not refused:
             each spot's fit clips the casters' triangles to its cone's square pyramid).
@@ -174,15 +191,18 @@ def render_atlas(
         bodies, lights, view, projection, casters=casters, colors=colors, coverage=coverage,
         atlas_size=atlas_size, budget=budget, previous=previous, pcf_radius=pcf_radius,
         depth_bias=depth_bias, normal_offset=normal_offset, ambient=ambient,
+        light_size=light_size,
     )  # fmt: skip
     size = _image_size("image_size", image_size)
     atlas, fit, cast = scene.atlas, scene.fit, scene.cast
     gl = resolve_context(ctx)
     clip = scene.projection @ scene.view
     with GpuScene(gl, scene.bodies, (), [], clip, size=size, map_size=fit.texture_size) as gpu:
-        depths = draw_atlas(gpu, fit, cast, scene.bias)
+        depths = draw_atlas(gpu, fit, cast, scene.bias, back_faces=scene.pcss is not None)
         options = _Options(cast, scene.pcf_radius, scene.normal_offset, scene.ambient, background)
-        return _shade_all(gpu, scene.lights, atlas, fit, depths=depths, options=options)
+        return _shade_all(
+            gpu, scene.lights, atlas, fit, depths=depths, options=options, pcss=scene.pcss
+        )
 
 
 class AtlasScene(NamedTuple):
@@ -199,6 +219,8 @@ class AtlasScene(NamedTuple):
     ambient: float
     atlas: sm.ShadowAtlas
     fit: sm.AtlasFit
+    #: Each tile's PCSS ``K`` and ``d_near`` (atlas texels), None without ``light_size``.
+    pcss: sm.PcssParameters | None = None
 
 
 def prepare_atlas(
@@ -218,6 +240,7 @@ def prepare_atlas(
     normal_offset: float,
     ambient: float = 0.15,
     api: Literal["opengl", "webgpu"] = "opengl",
+    light_size: Any = None,
 ) -> AtlasScene:
     """Check the bodies, lights, camera (OpenGL conventions) and options of an atlas pass;
     allocate the atlas and fit it in ``api``'s conventions (step 1 of :func:`render_atlas`)."""
@@ -227,26 +250,50 @@ def prepare_atlas(
     cast = _casters(casters, len(prepared))
     table = _light_table(lights, colors)
     k = pcf_radius_option(pcf_radius)
+    sizes = None if light_size is None else _light_sizes(light_size, table)
     bias = depth_bias_option(depth_bias, k)
+    if sizes is not None and depth_bias is None:
+        bias = PCSS_POLYGON_OFFSET
     if not (np.isfinite(normal_offset) and normal_offset >= 0):
         raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
     if not (np.isfinite(ambient) and ambient >= 0):
         raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
     v, p = check_matrix("view", view), check_camera_projection(projection)
-    atlas = sm.allocate_atlas(
-        np.ones(len(table.cube)) if coverage is None else coverage, atlas_size=atlas_size,
-        cube=table.cube, border_texels=sm.pcf_border_texels(k), previous=previous,
-        budget=budget,
-    )  # fmt: skip
     world = [b.world_vertices()[b.triangles] for b in prepared]  # (T, 3, 3) each
     # The casters as surfaces: a cube light's near counts a triangle passing nearer the
     # light than its corners. Every body's triangles hold what the shadows fall on: a
     # ground's corners may lie outside a light's map while its middle is under the casters.
     casting = sm.Triangles(np.concatenate([t for t, c in zip(world, cast, strict=True) if c]))
     surfaces = sm.Triangles(np.concatenate(world))
-    fit = sm.fit_atlas(list(lights), casting, atlas, receivers=surfaces, pcf_radius=k, api=api)
+
+    def allocate_and_fit(border: int) -> tuple[sm.ShadowAtlas, sm.AtlasFit]:
+        atlas = sm.allocate_atlas(
+            np.ones(len(table.cube)) if coverage is None else coverage, atlas_size=atlas_size,
+            cube=table.cube, border_texels=border, previous=previous, budget=budget,
+        )  # fmt: skip
+        fit = sm.fit_atlas(list(lights), casting, atlas, receivers=surfaces, pcf_radius=k, api=api)
+        return atlas, fit
+
+    border = sm.pcf_border_texels(k)
+    atlas, fit = allocate_and_fit(border)
+    pcss = None
+    if sizes is not None:  # the border holds the widest search (K only shrinks with it)
+        pcss = sm.pcss_parameters(fit, light_radius=sizes[np.asarray(atlas.tile_light)])
+        if sm.pcss_border_texels(pcss) > border:
+            atlas, fit = allocate_and_fit(sm.pcss_border_texels(pcss))
+            pcss = sm.pcss_parameters(fit, light_radius=sizes[np.asarray(atlas.tile_light)])
     return AtlasScene(prepared, cast, table, v, p, k, bias, float(normal_offset), float(ambient),
-                      atlas, fit)  # fmt: skip
+                      atlas, fit, pcss)  # fmt: skip
+
+
+def _light_sizes(light_size: Any, table: LightTable) -> NDArray[np.float64]:
+    """``light_size`` checked: one radius ``>= 0`` per light, point and spot lights only."""
+    sizes = np.asarray([light_size_option(r) for r in np.atleast_1d(light_size)])
+    if sizes.shape != table.cube.shape:
+        raise ValueError(f"light_size: expected one radius per light ({len(table.cube)})")
+    if np.any(table.rows[:, 0, 3] == 0):
+        raise ValueError("light_size: PCSS in the atlas takes point and spot lights only")
+    return sizes
 
 
 def _casters(casters: Sequence[bool] | None, count: int) -> list[bool]:
@@ -308,10 +355,16 @@ def _light_rows(i: int, light: Any, rows: NDArray[np.float64]) -> NDArray[np.flo
 
 
 def draw_atlas(
-    scene: GpuScene, fit: sm.AtlasFit, cast: Sequence[bool], bias: tuple[float, float]
+    scene: GpuScene,
+    fit: sm.AtlasFit,
+    cast: Sequence[bool],
+    bias: tuple[float, float],
+    *,
+    back_faces: bool = False,
 ) -> moderngl.Texture:
     """Every caster's depth into each tile's viewport (scissored) of one depth texture of
-    ``fit.texture_size``, cleared to 1; returns the texture (released with the scene)."""
+    ``fit.texture_size``, cleared to 1; returns the texture (released with the scene).
+    ``back_faces``: only the faces turned from the light (:func:`cull_faces_toward_light`)."""
     gl = scene.ctx
     tex: moderngl.Texture = scene.keep(gl.depth_texture(fit.texture_size))
     fbo = scene.keep(gl.framebuffer(depth_attachment=tex))
@@ -323,10 +376,14 @@ def draw_atlas(
             fbo.viewport = fbo.scissor = tuple(int(c) for c in port)
             for body, mesh, casts in zip(scene.bodies, scene.meshes, cast, strict=True):
                 if casts:
+                    if back_faces:
+                        cull_faces_toward_light(gl, clip[t] @ body.to_world)
                     set_matrix(prog, "body_to_clip", clip[t] @ body.to_world)
                     mesh.render(prog)
     finally:
         gl.polygon_offset = (0.0, 0.0)
+        gl.disable(moderngl.CULL_FACE)
+        gl.cull_face = "back"
         fbo.scissor = None
     tex.compare_func = ""  # read the stored depth itself (texelFetch)
     tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
@@ -351,12 +408,17 @@ def _shade_all(
     *,
     depths: moderngl.Texture,
     options: _Options,
+    pcss: sm.PcssParameters | None = None,
 ) -> AtlasFrame:
     """The lit record, each light's mask, the picture; read back."""
     gl = scene.ctx
     texture = np.asarray(fit.world_to_texture, dtype=np.float64)
     rect = np.concatenate([atlas.tile_rect, np.zeros((len(atlas.tile_rect), 1))], axis=1)
-    tile_rows = np.concatenate([texture, rect[:, None, :]], axis=1)  # (T, 5, 4)
+    pcss_row = np.zeros_like(rect)  # (K_s, K_t, d_near, 1) with PCSS, 0 without
+    if pcss is not None:
+        k_near = np.column_stack([pcss.texels_per_depth, pcss.near_depth])
+        pcss_row = np.nan_to_num(np.column_stack([k_near, np.ones(len(rect))]))
+    tile_rows = np.concatenate([texture, rect[:, None, :], pcss_row[:, None, :]], axis=1)
     faces = atlas.light_tiles.astype(np.float32)[..., None]  # (L, 6, 1)
     data = [
         scene.keep(_data_texture(gl, tile_rows, 4)),

@@ -46,12 +46,18 @@ def omni_depth_range(
 
 
 def face_to_clip(
-    light_position: NDArray[np.float64], near: float, far: float, map_size: int
+    light_position: NDArray[np.float64],
+    near: float,
+    far: float,
+    map_size: int,
+    border_texels: int = 0,
 ) -> NDArray[np.float64]:
     """``(6, 4, 4)`` world to each face's OpenGL clip space, faces ``+X, -X, +Y, -Y, +Z, -Z``
-    (the index of ``GL_TEXTURE_CUBE_MAP_POSITIVE_X + i``)."""
+    (the index of ``GL_TEXTURE_CUBE_MAP_POSITIVE_X + i``), with a border ring of
+    ``border_texels`` (:func:`shadowmath.cube_face_projection`)."""
     views = np.asarray(cube_face_views(light_position), dtype=np.float64)
-    proj = np.asarray(cube_face_projection(near, far, map_size=map_size), dtype=np.float64)
+    proj = cube_face_projection(near, far, map_size=map_size, border_texels=border_texels)
+    proj = np.asarray(proj, dtype=np.float64)
     return np.asarray(proj @ views, dtype=np.float64)
 
 
@@ -60,6 +66,32 @@ def cube_map_side(name: str, map_size: tuple[int, int]) -> int:
     if map_size[0] != map_size[1]:
         raise ValueError(f"{name}: cube map faces are square, got {map_size[0]}x{map_size[1]}")
     return map_size[0]
+
+
+def draw_cube_faces(
+    scene: GpuScene,
+    world_to_clip: NDArray[np.float64],
+    side: int,
+    bias: tuple[float, float],
+    *,
+    back_faces: bool = False,
+) -> NDArray[np.float32]:
+    """``(6, side, side)`` float32 window depths of every body drawn through each face's
+    ``world_to_clip[i]`` with ``glPolygonOffset(*bias)`` (:func:`draw_depths`, with its
+    ``back_faces``); row 0 is ``t = 0`` (NDC ``y = -1``), 1 where nothing was drawn."""
+    gl = scene.ctx
+    face_tex = gl.depth_texture((side, side))
+    fbo = gl.framebuffer(depth_attachment=face_tex)
+    faces = np.empty((6, side, side), dtype=np.float32)
+    try:
+        for i in range(6):
+            draw_depths(scene, fbo, world_to_clip[i], bias, back_faces=back_faces)
+            data = np.frombuffer(face_tex.read(alignment=1), dtype=np.float32)
+            faces[i] = data.reshape(side, side)
+    finally:
+        fbo.release()
+        face_tex.release()
+    return faces
 
 
 def draw_cube_depth(
@@ -85,23 +117,23 @@ def draw_cube_depth(
         1 where nothing was drawn).
     """
     gl = scene.ctx
-    face_tex = gl.depth_texture((side, side))
-    fbo = gl.framebuffer(depth_attachment=face_tex)
-    faces = np.empty((6, side, side), dtype=np.float32)
-    try:
-        for i in range(6):
-            draw_depths(scene, fbo, world_to_clip[i], bias)
-            data = np.frombuffer(face_tex.read(alignment=1), dtype=np.float32)
-            faces[i] = data.reshape(side, side)
-    finally:
-        fbo.release()
-        face_tex.release()
+    faces = draw_cube_faces(scene, world_to_clip, side, bias)
     cube: moderngl.TextureCube = scene.keep(gl.depth_texture_cube((side, side)))
     for i in range(6):
         cube.write(i, faces[i].tobytes(), alignment=1)
     cube.filter = (texel_filter, texel_filter)
     cube.compare_func = "<="
     return cube, faces
+
+
+def draw_world_bodies(scene: GpuScene, prog: moderngl.Program) -> None:
+    """Every body into the bound mask target through ``prog``, with its ``body_to_world``
+    and record (:meth:`bind_record`): a mask pass that looks the light's maps up from
+    the world position."""
+    for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
+        set_matrix(prog, "body_to_world", body.to_world)
+        scene.bind_record(prog, i)
+        mesh.render(prog)
 
 
 def cube_filter_option(name: str, value: object) -> int:
@@ -172,10 +204,7 @@ class OmniPass(ShadowPass):
         else:
             gl.disable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)
         try:
-            for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
-                set_matrix(prog, "body_to_world", body.to_world)
-                scene.bind_record(prog, i)
-                mesh.render(prog)
+            draw_world_bodies(scene, prog)
         finally:
             gl.enable_direct(GL_TEXTURE_CUBE_MAP_SEAMLESS)
         return tuple(faces)

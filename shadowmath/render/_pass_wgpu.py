@@ -117,6 +117,19 @@ def normal_to_world(body_to_world: NDArray[np.float64]) -> NDArray[np.float64]:
     return normal
 
 
+def body_matrices(
+    world_to_clip: NDArray[np.float64],
+    body_to_world: NDArray[np.float64],
+    body_to_texture: NDArray[np.float64],
+) -> bytes:
+    """The four ``mat4x4`` a camera pass's ``struct Body`` begins with (column-major):
+    the camera, ``body_to_world``, :func:`normal_to_world` and ``body_to_texture``."""
+    normal = normal_to_world(body_to_world)
+    return b"".join(
+        column_major_bytes(m) for m in (world_to_clip, body_to_world, normal, body_to_texture)
+    )
+
+
 def _scene_uniforms(
     world_to_clip: NDArray[np.float64],
     body_to_world: NDArray[np.float64],
@@ -127,10 +140,7 @@ def _scene_uniforms(
     pcf_radius: int,
 ) -> bytes:
     """``struct Body`` of depth_scene.wgsl: four mat4x4 (column-major), vec3 + f32, i32."""
-    normal = normal_to_world(body_to_world)
-    mats = b"".join(
-        column_major_bytes(m) for m in (world_to_clip, body_to_world, normal, body_to_texture)
-    )
+    mats = body_matrices(world_to_clip, body_to_world, body_to_texture)
     tail = np.zeros(8, dtype=np.float32)
     tail[:3] = light
     tail[3] = body_id
@@ -160,9 +170,12 @@ def vertex_buffers(device: Any, bodies: Sequence[Prepared]) -> list[tuple[Any, i
     ]  # fmt: skip
 
 
-def depth_pipeline(device: Any, bias: tuple[float, float] = (0.0, 0.0)) -> Any:
-    """Depth only through ``depth_map.wgsl`` into ``depth32float``, test ``less``, both
-    faces, WebGPU's polygon offset ``bias = (factor, units)`` (``units`` rounded)."""
+def depth_pipeline(
+    device: Any, bias: tuple[float, float] = (0.0, 0.0), cull_mode: str = "none"
+) -> Any:
+    """Depth only through ``depth_map.wgsl`` into ``depth32float``, test ``less``, the
+    faces ``cull_mode`` keeps (``"none"``: both; front faces counter-clockwise), WebGPU's
+    polygon offset ``bias = (factor, units)`` (``units`` rounded)."""
     return device.create_render_pipeline(
         layout="auto",
         vertex={
@@ -170,7 +183,7 @@ def depth_pipeline(device: Any, bias: tuple[float, float] = (0.0, 0.0)) -> Any:
             "entry_point": "vs_main",
             "buffers": [{**VERTEX_LAYOUT, "attributes": VERTEX_LAYOUT["attributes"][:1]}],
         },
-        primitive={"topology": "triangle-list", "cull_mode": "none"},
+        primitive={"topology": "triangle-list", "cull_mode": cull_mode},
         depth_stencil={
             "format": "depth32float",
             "depth_write_enabled": True,
@@ -293,15 +306,20 @@ def read_wgpu_texture(
 
 def _depth_map(device: Any, texels: tuple[int, int], bias: tuple[float, float], draws: Any) -> Any:
     """A ``depth32float`` map drawn with the pipeline's depth bias ``(factor, units)``."""
-    depth_tex = device.create_texture(
+    depth_tex = depth_map_texture(device, texels)
+    draw_depth(device, depth_pipeline(device, bias), depth_tex.create_view(), draws)
+    return depth_tex
+
+
+def depth_map_texture(device: Any, texels: tuple[int, int]) -> Any:
+    """A ``depth32float`` texture to draw a light's map into, sample and read back."""
+    return device.create_texture(
         size=(*texels, 1),
         format="depth32float",
         usage=wgpu.TextureUsage.RENDER_ATTACHMENT
         | wgpu.TextureUsage.TEXTURE_BINDING
         | wgpu.TextureUsage.COPY_SRC,
     )
-    draw_depth(device, depth_pipeline(device, bias), depth_tex.create_view(), draws)
-    return depth_tex
 
 
 def _compare_sampler(device: Any) -> Any:

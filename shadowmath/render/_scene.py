@@ -18,6 +18,7 @@ from ._context import image_size as _image_size
 from ._pass_depth import DepthPass
 from ._pass_lit import MAX_LIGHTS, draw_lit, finish, subtract_light
 from ._pass_omni import OmniPass
+from ._pass_omni_pcss import OmniPcssPass
 from ._pass_pcss import PcssPass
 from ._pass_planar import PlanarPass
 from ._pass_soft import RadiancePass, SoftPass
@@ -42,7 +43,9 @@ PASSES: dict[str, Callable[[PassOptions], ShadowPass]] = {
     "texture": lambda _: TexturePass(),
     "planar": lambda _: PlanarPass(),
     "depth": lambda o: DepthPass(o.pcf_radius, o.depth_bias),
-    "omni": lambda o: OmniPass(o.depth_bias),
+    "omni": lambda o: (
+        OmniPcssPass(o.light_size, o.depth_bias) if o.light_size else OmniPass(o.depth_bias)
+    ),
     "soft": lambda o: SoftPass(o.samples, o.seed, o.pcf_radius, o.depth_bias),
     "radiance": lambda o: RadiancePass(o.samples, o.seed),
     "pcss": lambda o: PcssPass(o.light_size, o.depth_bias),
@@ -154,6 +157,12 @@ def render_scene(
        and filters over ``K (d_R - d_B)`` (``K``, ``d_near``:
        :func:`shadowmath.pcss_parameters`; ``d_B`` the found blockers' mean depth), each
        over a Vogel disk rotated per pixel (interleaved gradient noise).
+       ``method="omni"`` with ``light_size > 0``: the same PCSS through the point
+       light's cube map (a sphere of that radius), each face fitted with
+       :func:`shadowmath.cube_depth_range` to every body and a border ring as wide as
+       the widest search, searched and filtered in the texture coordinates of the face
+       that sees the point (:func:`shadowmath.pcss_parameters` of the range: one ``K``
+       for every face).
     3. **Subtractive pass** per light (pass 4): each shadowed body drawn again with
        ``FUNC_REVERSE_SUBTRACT`` blending removes that light's diffuse term where its
        mask is set, so the shadows of several lights compose correctly.
@@ -202,7 +211,8 @@ def render_scene(
         seed: ``method="soft"`` and ``"radiance"``: the samples' jitter seed (None: fresh
             jitter each call).
         light_size: ``method="pcss"``: a point light's radius (world units) or a
-            directional light's angular radius (radians), ``>= 0`` (0: hard shadows).
+            directional light's angular radius (radians), ``>= 0`` (0: hard shadows);
+            ``method="omni"``: the point light's radius (0: the hard cube-map shadow).
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
 
     Returns:
@@ -213,7 +223,8 @@ def render_scene(
             receiver without a plane under ``method="planar"`` or ``"radiance"``; a
             directional light under another method than ``"planar"``, ``"depth"`` and
             ``"pcss"``; a point light or bad ``samples`` under ``method="soft"`` or
-            ``"radiance"``; a negative or non-finite ``light_size`` under ``"pcss"``;
+            ``"radiance"``; a negative or non-finite ``light_size`` under ``"pcss"`` or
+            ``"omni"``;
             ``setups`` of the wrong shape; and whatever :func:`fit_shadow` raises for a
             light and a blocker.
         GLUnavailableError: no OpenGL context could be created.

@@ -5,7 +5,8 @@ without a GPU it runs on Mesa's software Vulkan driver (Debian:
 ``mesa-vulkan-drivers``). :func:`render_depth_wgpu` draws the scene of
 ``render_scene(..., method="depth")`` with WebGPU's conventions
 (:func:`shadowmath.api_convention` ``api="webgpu"``), :func:`render_cascades_wgpu` the
-cascades of ``render_cascades`` (``shaders/cascades.wgsl``).
+cascades of ``render_cascades`` (``shaders/cascades.wgsl``), :func:`render_pcss_wgpu`
+one light's ``method="pcss"`` (``shaders/pcss_scene.wgsl``).
 """
 
 from ._pass_atlas_wgpu import WgpuAtlasFrame as WgpuAtlasFrame
@@ -13,6 +14,7 @@ from ._pass_atlas_wgpu import render_atlas_wgpu as render_atlas_wgpu
 from ._pass_cascades_wgpu import FLOAT_DEPTH_RESOLUTION as FLOAT_DEPTH_RESOLUTION
 from ._pass_cascades_wgpu import WgpuCascadeFrame as WgpuCascadeFrame
 from ._pass_cascades_wgpu import render_cascades_wgpu as render_cascades_wgpu
+from ._pass_pcss_wgpu import render_pcss_wgpu as render_pcss_wgpu
 from ._pass_wgpu import VULKAN_DEBIAN_PACKAGES as VULKAN_DEBIAN_PACKAGES
 from ._pass_wgpu import WgpuFrame as WgpuFrame
 from ._pass_wgpu import WgpuUnavailableError as WgpuUnavailableError
@@ -31,5 +33,6 @@ __all__ = [
     "render_atlas_wgpu",
     "render_cascades_wgpu",
     "render_depth_wgpu",
+    "render_pcss_wgpu",
     "wgpu_device",
 ]

@@ -71,6 +71,9 @@ CASTERS = {
 #: The box's face ``x = 0`` at the ``contact`` view.
 BOX_FACE_X = 0.0
 PLATE_CENTRE = np.array([0.3, -0.2, 1.2])
+#: A thin horizontal 1 x 1 slab at ``PLATE_CENTRE``: a flat blocker parallel to the
+#: ``-Z`` face of a point light's cube map above it (PCSS's exact case there).
+CASTERS["slab"] = Body(*box((1.0, 1.0, 0.01)), to_world=place(translation=PLATE_CENTRE))
 
 
 class LightCase(NamedTuple):

@@ -10,11 +10,16 @@
 //   * Williams' comparison r <= stored over a (2k + 1)^2 box of texels (PCF), every tap
 //     clamped into the tile's texels: the tile's border is empty (2D) or holds the
 //     neighbouring faces' depths (the cube ring), so no tap reads another light's map.
+//   * with PCSS (the tile's row 5 (K_s, K_t, d_near, 1), render_atlas's light_size): the
+//     blocker search and filter of pcss.glsl instead of the box, K in atlas texels, every
+//     tap clamped into the tile's texels (its border holds the widest search).
 // No shadow behind the light (q <= 0), outside the depth range or the tile (lit by this map).
 //   mode 0: the shadow mask of light `which` (1 shadowed, 0 lit or not reached);
 //   mode 1: the picture, albedo (ambient + sum over lights of colour max(n.l, 0) (1 - shadow)).
+#include "pcss.glsl"
+
 uniform sampler2D atlas;     // the depth atlas, window depths (1.0 where nothing was drawn)
-uniform sampler2D tiles;     // (4 texels: world_to_texture's rows, then (x, y, n, 0)) per tile
+uniform sampler2D tiles;     // (world_to_texture's 4 rows, (x, y, n, 0), PCSS row) per tile
 uniform sampler2D lights;    // (light, colour, (spot axis, cos), (cube, 0, 0, 0)) per light
 uniform sampler2D faces;     // R: the tile of each (face, light), -1 none
 uniform sampler2D surface;   // the lit pass's position record (w = body id + 1)
@@ -33,6 +38,13 @@ in vec3 v_normal;
 flat in vec3 v_face_normal;
 
 out vec4 result;
+
+ivec3 tile_rect;  // the tile pcss_depth reads: (x, y, n) texels
+
+float pcss_depth(vec2 uv) {
+    ivec2 texel = ivec2(floor(uv * vec2(textureSize(atlas, 0))));
+    return texelFetch(atlas, clamp(texel, tile_rect.xy, tile_rect.xy + tile_rect.z - 1), 0).r;
+}
 
 int cube_face(vec3 d) {
     vec3 a = abs(d);
@@ -70,6 +82,12 @@ float shadow_of(int l, vec3 p) {
     if (str.z < 0.0 || str.z > 1.0 || any(lessThan(texel, rect.xy))
         || any(greaterThanEqual(texel, rect.xy + rect.z))) {
         return 0.0;
+    }
+    vec4 pcss = texelFetch(tiles, ivec2(5, t), 0);  // (K_s, K_t, d_near, 1) or 0
+    if (pcss.w > 0.5) {
+        tile_rect = rect;
+        vec2 size = vec2(textureSize(atlas, 0));
+        return 1.0 - pcss_lit(str, size, pcss.xy, pcss.z, 0.0, pixel_angle(gl_FragCoord.xy));
     }
     float lit = 0.0;
     for (int j = -pcf_radius; j <= pcf_radius; ++j) {

@@ -19,20 +19,7 @@ struct Body {
 @group(0) @binding(2) var depth_compare: sampler_comparison;  // less-equal: 1 where lit
 
 #include "surface.wgsl"
-
-struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) @interpolate(flat) face_normal: vec3<f32>,
-    @location(2) strq: vec4<f32>,
-};
-
-@vertex
-fn vs_main(@location(0) position: vec3<f32>, @location(1) face_normal: vec3<f32>) -> VertexOut {
-    let v = place(position, face_normal);
-    let strq = body.body_to_texture * vec4<f32>(position, 1.0);
-    return VertexOut(body.world_to_clip * v.world, v.world.xyz / v.world.w, v.face_normal, strq);
-}
+#include "light_map_vertex.wgsl"
 
 @fragment
 fn fs_main(in: VertexOut) -> FragmentOut {

@@ -1,0 +1,127 @@
+"""Percentage-closer soft shadows on WebGPU: :class:`PcssPass`'s map and quantities, the
+blocker search and filter of ``pcss.wgsl`` (``pcss.glsl`` in WGSL, tap for tap)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from shadowmath import api_convention
+
+from ._context import check_matrix
+from ._context import image_size as _image_size
+from ._pass_depth import world_to_light_clip
+from ._pass_pcss import PcssPass, PcssUniforms, map_parameters, pcss_uniforms
+from ._pass_wgpu import (
+    WgpuFrame,
+    adapter_description,
+    body_matrices,
+    depth_map_texture,
+    depth_pipeline,
+    draw_camera,
+    draw_depth,
+    read_record,
+    read_wgpu_texture,
+    uniform_buffer,
+    vertex_buffers,
+    wgpu_device,
+)
+from ._resources import Body, Light, prepare_body, prepare_light
+
+
+def back_face_map(
+    device: Any, texels: tuple[int, int], bias: tuple[float, float], draws: Any
+) -> Any:
+    """A ``depth32float`` map of the faces turned from the light: each ``(body_to_clip,
+    vertex buffer, count)`` culls its counter-clockwise (outside) faces where
+    ``body_to_clip`` keeps orientation, its clockwise ones where it reverses it
+    (``det < 0``, as :func:`cull_faces_toward_light`); the second group loads the first's."""
+    depth_tex = depth_map_texture(device, texels)
+    view = depth_tex.create_view()
+    for i, cull in enumerate(("back", "front")):
+        group = [d for d in draws if (np.linalg.det(d[0]) < 0) == (cull == "front")]
+        viewport = None if i == 0 else (0, 0, *texels)
+        draw_depth(device, depth_pipeline(device, bias, cull), view, group, viewport)
+    return depth_tex
+
+
+def pcss_body_uniforms(
+    matrices: bytes, light: NDArray[np.float64], body_id: int, uniforms: PcssUniforms
+) -> bytes:
+    """``struct Body`` of pcss_scene.wgsl: the four matrices, then ``light: vec4`` (w = 0
+    a directional light), ``body_id: f32``, ``k: vec2`` (at byte 280), ``d_near: f32``;
+    304 bytes."""
+    tail = np.zeros(12, dtype=np.float32)
+    tail[:4], tail[4] = light, body_id
+    tail[6:8], tail[8] = uniforms.k, uniforms.d_near
+    return matrices + tail.tobytes()
+
+
+def render_pcss_wgpu(
+    receivers: Sequence[Body],
+    blockers: Sequence[Body],
+    light: Light,
+    world_to_clip: Any,
+    *,
+    light_size: float,
+    image_size: int | tuple[int, int] = (512, 384),
+    map_size: int | tuple[int, int] = 256,
+    depth_bias: tuple[float, float] | None = None,
+) -> WgpuFrame:
+    """``render_scene(..., method="pcss")`` on WebGPU: one light's percentage-closer soft
+    shadows.
+
+    The light's setup, border and ``K``, ``d_near`` are :class:`PcssPass`'s
+    (:func:`shadowmath.pcss_parameters`); the map, converted with
+    ``api_convention(api="webgpu")``, holds the faces turned from the light
+    (:func:`back_face_map`); every body is drawn from the camera and searched and
+    filtered over Vogel disks rotated per pixel (``pcss_scene.wgsl``, ``pcss.wgsl``).
+
+    Arguments:
+        receivers, blockers: as in :func:`render_scene`.
+        light: one point light (``light_size`` its radius) or directional light
+            (``light_size`` its angular radius in radians).
+        world_to_clip: ``(4, 4)`` the camera in OpenGL's clip conventions.
+        light_size: ``>= 0``.
+        image_size, map_size: ``size`` or ``(width, height)`` in pixels and texels.
+        depth_bias: ``(factor, units)``; default :data:`PCSS_POLYGON_OFFSET`.
+
+    Returns:
+        :class:`WgpuFrame` (``depth_map`` row 0 is ``t = 0``, WebGPU's top row).
+
+    Raises:
+        ValueError: bad input, as :func:`render_scene`.
+        WgpuUnavailableError: no WebGPU adapter.
+    """
+    camera = check_matrix("world_to_clip", world_to_clip)
+    size, texels = _image_size("image_size", image_size), _image_size("map_size", map_size)
+    options = PcssPass(light_size, depth_bias)
+    recv = [prepare_body(f"receivers[{i}]", b) for i, b in enumerate(receivers)]
+    block = [prepare_body(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
+    lit = prepare_light("light", light)
+    (setup,) = options.fit(recv, block, lit, texels)
+    uniforms = pcss_uniforms(map_parameters(setup, lit, options.light_size, texels))
+    bodies, device = recv + block, wgpu_device()
+    conv = api_convention(api="webgpu")
+    light_clip = world_to_light_clip(setup)
+    buffers = vertex_buffers(device, bodies)
+    light_to_clip = conv.gl_clip_to_clip @ light_clip
+    draws = [(light_to_clip @ b.to_world, v, n) for b, (v, n) in zip(bodies, buffers, strict=True)]
+    depth_tex = back_face_map(device, texels, options.bias, draws)
+    view, world_to_texture = depth_tex.create_view(), conv.gl_clip_to_texture @ light_clip
+    camera_draws = []
+    for i, (b, (vbo, count)) in enumerate(zip(bodies, buffers, strict=True)):
+        m = body_matrices(conv.gl_clip_to_clip @ camera, b.to_world, world_to_texture @ b.to_world)
+        data = pcss_body_uniforms(m, lit.homogeneous, i, uniforms)
+        entries = [
+            {"binding": 0, "resource": {"buffer": uniform_buffer(device, data)}},
+            {"binding": 1, "resource": view},
+        ]
+        camera_draws.append((entries, vbo, count))
+    targets = draw_camera(device, "pcss_scene.wgsl", size, camera_draws)
+    mask, position, normal, body = read_record(device, targets, size)
+    depth_map = read_wgpu_texture(device, depth_tex, texels, 1)[..., 0].astype(np.float32)
+    return WgpuFrame(mask, position, normal, body, setup, depth_map, adapter_description())
