@@ -2629,6 +2629,12 @@ PUBLIC_TARGETS: dict[str, tuple[str, ...]] = {
     "atlas_viewports": ("test_fuzz_fit_atlas",),
     "fit_atlas": ("test_fuzz_fit_atlas",),
     "world_to_light": ("test_fuzz_light_frame",),
+    "PcssParameters": ("test_fuzz_pcss",),
+    "PcssWidths": ("test_fuzz_pcss",),
+    "pcss_parameters": ("test_fuzz_pcss", "test_fuzz_widen_cascades"),
+    "pcss_widths": ("test_fuzz_pcss",),
+    "pcss_border_texels": ("test_fuzz_pcss",),
+    "widen_cascades": ("test_fuzz_widen_cascades",),
 }  # fmt: skip
 
 
@@ -2885,3 +2891,72 @@ def test_fuzz_fit_atlas(scene: Any, api: Any, reversed_z: bool, border: int,
         assert np.all(row[inside] >= y[inside] + inner - slack)
         assert np.all(row[inside] <= y[inside] + n - inner + slack)
         assert np.all((r > -1e-9) & (r < 1 + 1e-9))
+
+
+@given(data=st.data())
+def test_fuzz_pcss(data: st.DataObject) -> None:
+    """Random point lights and suns, light sizes, APIs, reversed Z, map sizes and borders:
+    ``pcss_parameters``'s ``K`` and ``d_near`` give, through ``pcss_widths`` and the stored
+    depths, the penumbra and the blocker search found by similar triangles in world space
+    (``tests/test_pcss.py``'s oracles); ``pcss_border_texels`` holds the widest search
+    (``>= ceil(max K)``); a negative or non-finite size is refused naming its argument."""
+    from .test_pcss import caster_box, orthographic_case, perspective_case
+
+    CASES["pcss_parameters"] += 1
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    verts = caster_box(rng)
+    size = (data.draw(st.integers(16, 2048)), data.draw(st.integers(16, 2048)))
+    api = data.draw(st.sampled_from(sm.GRAPHICS_APIS))
+    rev = data.draw(st.booleans())
+    border = data.draw(st.integers(0, 5))
+    sun = data.draw(st.booleans())
+    B = verts[data.draw(st.integers(0, 7))]
+    if sun:
+        theta = float(np.radians(data.draw(st.floats(0.05, 10.0))))
+        light = np.r_[rng.normal(size=3), 0.0]
+        assume(np.linalg.norm(light[:3]) > 0.1)
+        fit = sm.fit_shadow(light, verts, size, api=api, reversed_z=rev, border_texels=border)
+        p = sm.pcss_parameters(fit, angular_radius=theta, map_size=size)
+        Z = fit.world_to_light[2, :3]
+        near_point = (np.linalg.inv(fit.world_to_light) @ [0, 0, float(fit.frustum.near), 1])[:3]
+        zR = data.draw(st.floats(0.1, 5.0))
+        orthographic_case(fit.world_to_texture, size, Z, near_point, p, theta, B, zR)
+        bad = {"angular_radius": data.draw(st.sampled_from([-0.1, np.inf, np.pi / 2]))}
+    else:
+        R = data.draw(st.floats(0.01, 2.0))
+        L = rng.uniform(-3, 3, 3) + [0, data.draw(st.floats(6.0, 60.0)), 0]
+        fit = sm.fit_shadow(L, verts, size, api=api, reversed_z=rev, border_texels=border)
+        p = sm.pcss_parameters(fit, light_radius=R, map_size=size)
+        Z = fit.world_to_light[2, :3]
+        zR = float((B - L) @ Z) * data.draw(st.floats(1.01, 4.0))
+        perspective_case(fit.world_to_texture, size, L, Z, float(fit.frustum.near), p, R, B, zR)
+        bad = {"light_radius": data.draw(st.sampled_from([-0.5, np.inf, np.nan]))}
+    assert float(p.near_depth) == float(rev)
+    assert sm.pcss_border_texels(p) >= np.ceil(np.max(p.texels_per_depth))
+    with pytest.raises(ValueError, match=f"^{next(iter(bad))}:"):
+        sm.pcss_parameters(fit, map_size=size, **bad)
+
+
+@given(data=st.data())
+def test_fuzz_widen_cascades(data: st.DataObject) -> None:
+    """Random cameras, suns and angular radii: the widened cascades keep every depth row and
+    every world penumbra (``K`` times the texel size), and each box grows by
+    ``tan(theta) (f - n)`` on every side, about the same centre."""
+    from .cameras import scene as camera_scene
+
+    CASES["widen_cascades"] += 1
+    sun, view, proj, box = camera_scene(data.draw(st.integers(0, 7)))
+    theta = float(np.radians(data.draw(st.floats(0.05, 5.0))))
+    c = sm.fit_cascades(sun, view, proj, box, data.draw(st.integers(64, 2048)),
+                        border_texels=data.draw(st.integers(0, 4)))  # fmt: skip
+    wide = sm.widen_cascades(c, angular_radius=theta)
+    p, q = (sm.pcss_parameters(x, angular_radius=theta) for x in (c, wide))
+    np.testing.assert_allclose(p.texels_per_depth * c.texel_size,
+                               q.texels_per_depth * wide.texel_size, rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(wide.world_to_texture[..., 2, :], c.world_to_texture[..., 2, :])
+    a, b = c.frustum, wide.frustum
+    w = np.tan(theta) * (np.asarray(a.far) - np.asarray(a.near))
+    np.testing.assert_allclose(b.half_width, np.asarray(a.half_width) + w, rtol=1e-9)
+    np.testing.assert_allclose(b.half_height, np.asarray(a.half_height) + w, rtol=1e-9)
+    np.testing.assert_allclose(b.center_x, a.center_x, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(b.center_y, a.center_y, rtol=1e-9, atol=1e-9)

@@ -112,7 +112,7 @@ def operands(shape: tuple[int, ...], a: Inputs) -> tuple[Array, ...]:
         verts = flat_batch(a.verts, shape, a.verts.shape[-2:])
     # Each entry's vertices as one flat row x0, y0, z0, x1, ... (a view of a C-contiguous
     # array): the loops read them at a stride the compiler knows (:mod:`._vertex_passes`).
-    verts = verts.reshape(len(verts), -1)
+    verts = verts.reshape(len(verts), verts.shape[-2] * verts.shape[-1])  # (-1: not for 0 entries)
     return (
         light,
         verts,
