@@ -74,6 +74,10 @@ PLATE_CENTRE = np.array([0.3, -0.2, 1.2])
 #: A thin horizontal 1 x 1 slab at ``PLATE_CENTRE``: a flat blocker parallel to the
 #: ``-Z`` face of a point light's cube map above it (PCSS's exact case there).
 CASTERS["slab"] = Body(*box((1.0, 1.0, 0.01)), to_world=place(translation=PLATE_CENTRE))
+#: A long thin bar at height 0.7 whose shadow under ``SEAM_LIGHT`` runs along ``x``
+#: across the floor line ``x = 1.5`` where the light's cube turns from its ``-Z`` face to
+#: its ``+X`` face (tests/render/test_render_pcss_seams.py).
+CASTERS["bar"] = Body(*box((2.0, 0.3, 0.02)), to_world=place(translation=(1.5, 0.3, 0.7)))
 
 
 class LightCase(NamedTuple):
@@ -94,6 +98,10 @@ LIGHTS = {
         for deg in (0.5, 2.0, 5.0)
     },
 }
+
+
+#: A point light 1.5 above the floor's origin, radius 0.25 (the ``bar``'s seam scene).
+SEAM_LIGHT = LightCase("point", (0.0, 0.0, 1.5), 0.25)
 
 
 def light_axis(case: LightCase) -> np.ndarray:
@@ -161,11 +169,14 @@ def disk_samples(count: int) -> np.ndarray:
     return np.stack([r * np.cos(a), r * np.sin(a)], axis=-1)
 
 
-def true_visibility(points: np.ndarray, scene: str, light: str, axis: np.ndarray) -> np.ndarray:
+def true_visibility(
+    points: np.ndarray, scene: str, light: str | LightCase, axis: np.ndarray
+) -> np.ndarray:
     """``(P,)`` the fraction of the light's disk (a point or spot light's, facing
-    ``axis``; a sun's, in the tangent plane of its direction) each floor point sees."""
-    case = LIGHTS[light]
-    v, t = world_mesh(caster(scene, light))
+    ``axis``; a sun's, in the tangent plane of its direction) each floor point sees
+    (``light`` a name of ``LIGHTS`` or a light of its own)."""
+    case = LIGHTS[light] if isinstance(light, str) else light
+    v, t = world_mesh(CASTERS[scene] if isinstance(light, LightCase) else caster(scene, light))
     centre = np.asarray(case.where, float)
     if case.kind == "sun":
         centre = centre / np.linalg.norm(centre)
