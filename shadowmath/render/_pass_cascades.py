@@ -236,8 +236,6 @@ def render_cascades(
     scene = prepare_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options
     )
-    if options.light_size > 0 and not stable:
-        scene = scene._replace(fit=sm.widen_cascades(scene.fit, angular_radius=options.light_size))
     size = _image_size("image_size", image_size)
     texels = _image_size("map_size", map_size)
     gl = resolve_context(ctx)
@@ -294,7 +292,8 @@ def prepare_cascades(
     """Check the bodies, the sun and the camera (OpenGL conventions); fit the cascades with
     :func:`shadowmath.fit_cascades` in ``api``'s conventions, given the projection in
     ``api``'s (``fit_options``: its keywords, ``scene_bounds`` defaulting to the bodies'
-    box)."""
+    box), widened by :func:`shadowmath.widen_cascades` for PCSS (``options.light_size >
+    0``, unless ``stable``)."""
     prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
     if not prepared:
         raise ValueError("bodies: expected at least one body")
@@ -311,6 +310,8 @@ def prepare_cascades(
     fit = sm.fit_cascades(sun.position, v, camera, bounds, map_size, api=api,
                           pcf_radius=options.pcf_radius, layout=options.layout,
                           **fit_options)  # fmt: skip
+    if options.light_size > 0 and not fit_options.get("stable"):
+        fit = sm.widen_cascades(fit, angular_radius=options.light_size)
     if fit.splits.shape[-1] - 1 > MAX_CASCADES:
         raise ValueError(f"count: at most {MAX_CASCADES} cascades, got {fit.splits.shape[-1] - 1}")
     return CascadeScene(prepared, sun, v, p, fit)

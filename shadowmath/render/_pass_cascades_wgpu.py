@@ -29,6 +29,7 @@ from ._pass_cascades import (
     CascadeScene,
     cascade_index,
     cascade_options,
+    cascade_pcss_parameters,
     prepare_cascades,
 )
 from ._pass_wgpu import (
@@ -100,6 +101,7 @@ def render_cascades_wgpu(
     pcf_radius: int = 0,
     depth_bias: tuple[float, float] | None = None,
     normal_offset: float = NORMAL_OFFSET,
+    light_size: float = 0.0,
 ) -> WgpuCascadeFrame:
     """Render bodies under a sun with cascaded shadow maps, in WebGPU.
 
@@ -120,6 +122,11 @@ def render_cascades_wgpu(
         pcf_radius, normal_offset: as in :func:`render_cascades`.
         depth_bias: as in :func:`render_cascades`, ``units`` counting
             :data:`FLOAT_DEPTH_RESOLUTION` (``depth32float`` maps).
+        light_size: the sun's angular radius in radians, ``>= 0``: PCSS when ``> 0``, as
+            in :func:`render_cascades` (the cascades widened by
+            :func:`shadowmath.widen_cascades` unless ``stable``, the maps holding the faces
+            turned from the sun, ``pcss.wgsl`` with each cascade's ``K`` and near depth of
+            :func:`shadowmath.pcss_parameters`, taps clamped to the cascade's tile).
 
     Returns:
         :class:`WgpuCascadeFrame`.
@@ -142,7 +149,7 @@ def render_cascades_wgpu(
         ((64, 64), (1, 512, 512))
     """
     options = cascade_options(layout=layout, pcf_radius=pcf_radius, depth_bias=depth_bias,
-                              normal_offset=normal_offset)  # fmt: skip
+                              normal_offset=normal_offset, light_size=light_size)  # fmt: skip
     fit_options = {
         "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
         "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
@@ -154,7 +161,9 @@ def render_cascades_wgpu(
     size = _image_size("image_size", image_size)
     device = wgpu_device()
     buffers = vertex_buffers(device, scene.bodies)
-    maps, depths = _draw_maps(device, scene, buffers, atlas=options.layout == "atlas")
+    maps, depths = _draw_maps(
+        device, scene, buffers, atlas=options.layout == "atlas", back_faces=options.light_size > 0
+    )
     targets = _draw_camera(device, scene, options, buffers, maps, size=size)
     shadow, position, normal, body = read_record(device, targets, size)
     return WgpuCascadeFrame(
@@ -170,10 +179,16 @@ def render_cascades_wgpu(
 
 
 def _draw_maps(
-    device: Any, scene: CascadeScene, buffers: Sequence[tuple[Any, int]], *, atlas: bool
+    device: Any,
+    scene: CascadeScene,
+    buffers: Sequence[tuple[Any, int]],
+    *,
+    atlas: bool,
+    back_faces: bool,
 ) -> tuple[Any, NDArray[np.float32]]:
     """Every body's depth into each cascade's map: a ``depth32float`` texture array of one
-    layer per cascade, or of one atlas layer with each cascade in its viewport; the
+    layer per cascade, or of one atlas layer with each cascade in its viewport (only the
+    faces turned from the sun with ``back_faces``, as the 2D PCSS pass's map); the
     texture and its ``(layers, h, w)`` depths read back."""
     fit = scene.fit
     ports = np.asarray(fit.viewports, dtype=np.int64)
@@ -184,16 +199,21 @@ def _draw_maps(
         size=(w, h, layers), format="depth32float",
         usage=usage.RENDER_ATTACHMENT | usage.TEXTURE_BINDING | usage.COPY_SRC,
     )  # fmt: skip
-    pipeline = depth_pipeline(device)
+    pipelines = {cull: depth_pipeline(device, cull_mode=cull) for cull in ("none", "back", "front")}
     for i, port in enumerate(ports):
         draws = [(clip[i] @ b.to_world, vbo, n)
                  for b, (vbo, n) in zip(scene.bodies, buffers, strict=True)]  # fmt: skip
         layer = 0 if atlas else i
         target = texture.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
         if not atlas or i == 0:
-            draw_depth(device, pipeline, target, [])  # clear the layer
+            draw_depth(device, pipelines["none"], target, [])  # clear the layer
         x, y, tw, th = (int(c) for c in port)
-        draw_depth(device, pipeline, target, draws, (x, y, tw, th))
+        if not back_faces:
+            draw_depth(device, pipelines["none"], target, draws, (x, y, tw, th))
+            continue
+        for cull in ("back", "front"):  # a reversing matrix (det < 0) turns the winding
+            group = [d for d in draws if (np.linalg.det(d[0]) < 0) == (cull == "front")]
+            draw_depth(device, pipelines[cull], target, group, (x, y, tw, th))
     depths = np.stack(
         [read_wgpu_texture(device, texture, (w, h), 1, layer)[..., 0] for layer in range(layers)]
     )
@@ -201,7 +221,8 @@ def _draw_maps(
 
 
 def _frame_uniforms(scene: CascadeScene, options: CascadeOptions) -> bytes:
-    """``struct Frame`` of cascades.wgsl (896 bytes)."""
+    """``struct Frame`` of cascades.wgsl (1024 bytes): with PCSS, each cascade's ``K``
+    and near depth (:func:`cascade_pcss_parameters`)."""
     fit = scene.fit
     conv = api_convention(api="webgpu")
     camera = conv.gl_clip_to_clip @ scene.projection @ scene.view
@@ -211,14 +232,21 @@ def _frame_uniforms(scene: CascadeScene, options: CascadeOptions) -> bytes:
     ints = np.array([len(fit.viewports), options.pcf_radius, options.layout == "atlas"], np.int32)
     floats = np.array([options.normal_offset, *options.bias], dtype=np.float32)
     floats[2] *= FLOAT_DEPTH_RESOLUTION  # constant_bias in depth units
+    pcss = np.array([options.light_size > 0], np.int32)
     data = column_major_bytes(camera) + head[:8].tobytes() + ints.tobytes() + floats.tobytes()
+    data += pcss.tobytes()
     data += bytes(128 - len(data))
     splits = np.asarray(fit.splits, dtype=np.float32)
     band = np.asarray(fit.band_end, dtype=np.float32)
+    n = len(fit.viewports)
+    k, near = np.zeros((n, 2)), np.zeros(n)
+    if options.light_size > 0:
+        p = cascade_pcss_parameters(fit, options.light_size)
+        k, near = np.asarray(p.texels_per_depth), np.asarray(p.near_depth)
     for i, port in enumerate(np.asarray(fit.viewports, dtype=np.int32)):
-        tail = np.array([splits[i], splits[i + 1], band[i], 0.0], dtype=np.float32)
+        tail = np.array([splits[i], splits[i + 1], band[i], 0.0, *k[i], near[i], 0.0], np.float32)
         data += column_major_bytes(fit.world_to_texture[i]) + port.tobytes() + tail.tobytes()
-    return data + bytes(96 * (MAX_CASCADES - len(fit.viewports)))
+    return data + bytes(112 * (MAX_CASCADES - n))
 
 
 def _body_uniforms(body_to_world: NDArray[np.float64], body_id: int) -> bytes:

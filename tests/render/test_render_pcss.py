@@ -152,14 +152,17 @@ def babylon_parameters(fit, light_size: float, ratio: float = 0.1) -> sm.PcssPar
     return sm.PcssParameters(np.full((n, 2), ratio * CASCADE_MAP), np.zeros(n))
 
 
-def wall_scene(gl):
+def wall_scene(gl, render=None):
+    """The wall scene through ``render_cascades`` (``render``: another renderer of its
+    arguments, as ``render_cascades_wgpu``, which takes no ``ctx``)."""
     ground = Body(*grid((200.0, 200.0)))
     wall = Body(*box((0.4, 120.0, 3.0)), to_world=place(translation=(1.0, 60.0, 1.5)))
     view = look_at([-1.0, -2.0, 4.0], [0.0, 30.0, 0.0], [0, 0, 1])
-    frame = render_cascades(
+    context = {"ctx": gl} if render is None else {}
+    frame = (render or render_cascades)(
         [ground, wall], Light(direction=(1.0, 0.15, 1.2)), view,
         perspective(60.0, 1.0, 0.3, 120.0), image_size=256, map_size=CASCADE_MAP,
-        light_size=SUN_THETA, pcf_radius=8, max_distance=100.0, ctx=gl,
+        light_size=SUN_THETA, pcf_radius=8, max_distance=100.0, **context,
     )  # fmt: skip
     return frame, view
 

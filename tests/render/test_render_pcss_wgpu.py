@@ -54,3 +54,19 @@ def test_a_box_stays_near_the_truth(wgpu_device, light):
     e = ps.errors(c)
     assert e.mean < 1.5 * MEAN_BOUND + 0.01 and e.p90 < 1.5 * P90_BOUND, e
     assert 0.8 < ps.width_ratio(c) < 1.05
+
+
+def test_the_cascades_penumbra_does_not_jump_at_a_split(wgpu_device, monkeypatch):
+    """``render_cascades_wgpu(light_size=)``: tests/render/test_render_pcss.py's wall
+    under a 2° sun, its penumbra's width on either side of the first split within 15%,
+    Babylon.js's constant ratio a jump of over 25%."""
+    import shadowmath.render._pass_cascades_wgpu as pass_cascades_wgpu
+    from shadowmath.render.webgpu import render_cascades_wgpu
+
+    from .test_render_pcss import babylon_parameters, penumbra_widths, wall_scene
+
+    before, after = penumbra_widths(*wall_scene(None, render_cascades_wgpu))
+    assert before > 0.1 and abs(np.log(after / before)) < np.log(1.15), (before, after)
+    monkeypatch.setattr(pass_cascades_wgpu, "cascade_pcss_parameters", babylon_parameters)
+    jump_before, jump_after = penumbra_widths(*wall_scene(None, render_cascades_wgpu))
+    assert abs(np.log(jump_after / jump_before)) > np.log(1.25), (jump_before, jump_after)

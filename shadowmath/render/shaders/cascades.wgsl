@@ -24,6 +24,10 @@
 // PCF: the (2k + 1)^2 texels around the point's texel, each clamped to the cascade's tile,
 // so no tap reads a neighbour's tile in an atlas. Outside the tile, or beyond the map's
 // depth range, or beyond the last split: lit.
+// PCSS (pcss = 1, the maps holding the faces turned from the sun): in cascade i the
+// blocker search and filter of pcss.wgsl with cascades[i].k and cascades[i].d_near
+// (sm.pcss_parameters of the cascades: one world penumbra in every cascade), every tap
+// clamped to the cascade's tile, the constant bias only (as cascades.frag).
 //
 // Renderer-specific: the outputs are the shadow (1 shadowed, 0 lit) and a record of the
 // visible surface (world position with body id + 1, face normal) for the tests.
@@ -35,6 +39,8 @@ struct Cascade {
     near: f32,
     far: f32,
     band_end: f32,
+    k: vec2<f32>,                 // PCSS: texels per unit of stored depth
+    d_near: f32,                  // PCSS: the near plane's stored depth
 };
 
 struct Frame {
@@ -47,6 +53,7 @@ struct Frame {
     normal_offset: f32,           // scale of sm.normal_offset (1: the derived minimum)
     slope_factor: f32,            // of sm.slope_scaled_bias (2c: the derived minimum)
     constant_bias: f32,           // its constant term, in depth units (constant * r_min)
+    pcss: i32,                    // 1: percentage-closer soft shadows
     cascades: array<Cascade, MAX_CASCADES>,
 };
 
@@ -74,6 +81,33 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) face_normal: vec3<f32>
     out.face_normal = (body.normal_to_world * vec4<f32>(face_normal, 0.0)).xyz;
     out.clip = frame.world_to_clip * world;
     return out;
+}
+
+#include "pcss.wgsl"
+
+// The tile and layer pcss_depth reads (set before each pcss_lit).
+var<private> pcss_tile: vec4<i32>;
+var<private> pcss_layer: i32;
+
+fn pcss_depth(uv: vec2<f32>) -> f32 {
+    let texel = vec2<i32>(floor(uv * vec2<f32>(textureDimensions(maps))));
+    let tap = clamp(texel, pcss_tile.xy, pcss_tile.xy + pcss_tile.zw - 1);
+    return textureLoad(maps, tap, pcss_layer, 0);
+}
+
+// PCSS in cascade i at p: 0 lit .. 1 shadowed (outside the tile or its depth range: lit).
+fn pcss_shadow_in(i: i32, p: vec3<f32>, phi: f32) -> f32 {
+    let cascade = frame.cascades[i];
+    let size = vec2<f32>(textureDimensions(maps));
+    let h = cascade.world_to_texture * vec4<f32>(p, 1.0);
+    let str = h.xyz / h.w;
+    pcss_tile = cascade.viewport;
+    pcss_layer = select(i, 0, frame.atlas == 1);
+    let texel = vec2<i32>(floor(str.xy * size));
+    if (str.z > 1.0 || any(texel < pcss_tile.xy) || any(texel >= pcss_tile.xy + pcss_tile.zw)) {
+        return 0.0;
+    }
+    return 1.0 - pcss_lit(str, size, cascade.k, cascade.d_near, frame.constant_bias, phi);
 }
 
 struct Pick {
@@ -111,7 +145,10 @@ fn texture_gradients(M: mat4x4<f32>, p: vec3<f32>) -> mat3x3<f32> {
 }
 
 // The shadow of point p (unit normal n, facing the sun) in cascade i: 0 lit .. 1 shadowed.
-fn shadow_in(i: i32, p: vec3<f32>, n: vec3<f32>) -> f32 {
+fn shadow_in(i: i32, p: vec3<f32>, n: vec3<f32>, phi: f32) -> f32 {
+    if (frame.pcss == 1) {
+        return pcss_shadow_in(i, p, phi);
+    }
     let cascade = frame.cascades[i];
     let size = vec2<f32>(textureDimensions(maps));
     let g = texture_gradients(cascade.world_to_texture, p);
@@ -159,9 +196,10 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     if (i < 0 || dot(n, frame.light.xyz) <= 0.0) {  // turned from the sun: unlit anyway
         return out;
     }
-    out.shadow = shadow_in(i, in.world, n);
+    let phi = pixel_angle(in.clip.xy);
+    out.shadow = shadow_in(i, in.world, n, phi);
     if (picked.previous > 0.0) {
-        out.shadow = mix(out.shadow, shadow_in(i - 1, in.world, n), picked.previous);
+        out.shadow = mix(out.shadow, shadow_in(i - 1, in.world, n, phi), picked.previous);
     }
     return out;
 }
