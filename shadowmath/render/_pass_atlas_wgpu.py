@@ -28,6 +28,7 @@ from ._pass_wgpu import (
     depth_pipeline,
     draw_camera,
     draw_depth,
+    draw_faces_away,
     normal_to_world,
     read_record,
     read_wgpu_texture,
@@ -74,6 +75,7 @@ def render_atlas_wgpu(
     depth_bias: tuple[float, float] | None = None,
     normal_offset: float = NORMAL_OFFSET,
     image_size: int | tuple[int, int] = (512, 384),
+    light_size: Any = None,
 ) -> WgpuAtlasFrame:
     """Render each light's shadow on the bodies through one shadow atlas, in WebGPU.
 
@@ -92,6 +94,10 @@ def render_atlas_wgpu(
             ``depthBiasSlopeScale`` and ``depthBias`` (an integer in WebGPU: ``units`` is
             rounded; its unit is ``2^(e - 23)`` at a triangle's largest depth ``z`` with
             ``2^e <= z``, ``2^-24`` near depth 1 as a 24-bit buffer's).
+        light_size: ``(L,)`` each light's radius, PCSS as in :func:`render_atlas`: each
+            tile's ``K`` and ``d_near`` from :func:`shadowmath.pcss_parameters` of the fit
+            (atlas texels), the tiles drawn with only the faces turned from the light, the
+            search and filter of ``pcss.wgsl`` with every tap clamped to the tile.
 
     Returns:
         :class:`WgpuAtlasFrame`.
@@ -119,7 +125,8 @@ def render_atlas_wgpu(
     scene = prepare_atlas(
         bodies, lights, view, projection, casters=casters, colors=None, coverage=coverage,
         atlas_size=atlas_size, budget=budget, previous=previous, pcf_radius=pcf_radius,
-        depth_bias=depth_bias, normal_offset=normal_offset, api="webgpu",
+        depth_bias=depth_bias, normal_offset=normal_offset, light_size=light_size,
+        api="webgpu",
     )  # fmt: skip
     size = _image_size("image_size", image_size)
     device = wgpu_device()
@@ -153,15 +160,18 @@ def _draw_atlas(device: Any, scene: AtlasScene, buffers: Sequence[tuple[Any, int
         usage=usage.RENDER_ATTACHMENT | usage.TEXTURE_BINDING | usage.COPY_SRC,
     )  # fmt: skip
     target = texture.create_view()
-    pipeline = depth_pipeline(device, scene.bias)
-    draw_depth(device, pipeline, target, [])  # clear
+    pipelines = {c: depth_pipeline(device, scene.bias, c) for c in ("none", "back", "front")}
+    draw_depth(device, pipelines["none"], target, [])  # clear
     clip = np.asarray(scene.fit.world_to_clip, dtype=np.float64)
     casting = [(b, vbo, n) for b, (vbo, n), c in zip(scene.bodies, buffers, scene.cast, strict=True)
                if c]  # fmt: skip
     for t, port in enumerate(np.asarray(scene.fit.viewports, dtype=np.int64)):
         draws = [(clip[t] @ b.to_world, vbo, n) for b, vbo, n in casting]
         x, y, w, h = (int(c) for c in port)
-        draw_depth(device, pipeline, target, draws, (x, y, w, h))
+        if scene.pcss is None:
+            draw_depth(device, pipelines["none"], target, draws, (x, y, w, h))
+        else:
+            draw_faces_away(device, pipelines, target, draws, (x, y, w, h))
     return texture
 
 
@@ -171,13 +181,19 @@ def _storage(device: Any, data: bytes) -> Any:
 
 def _tables(device: Any, scene: AtlasScene) -> tuple[Any, Any]:
     """The ``tiles`` and ``lights`` storage buffers of atlas.wgsl: per tile
-    ``world_to_texture`` and ``(x, y, n, 0)`` (80 bytes); per light its position or
+    ``world_to_texture``, ``(x, y, n, 0)`` and ``(K_s, K_t, d_near, 1)`` with PCSS, 0
+    without (96 bytes); per light its position or
     direction, ``(spot axis, cos)``, the six faces' tiles, ``cube`` (64 bytes)."""
     rect = np.zeros((len(scene.atlas.tile_rect), 4), dtype=np.int32)
     rect[:, :3] = scene.atlas.tile_rect
     texture = np.asarray(scene.fit.world_to_texture, dtype=np.float64)
+    pcss = np.zeros((len(rect), 4), dtype=np.float32)
+    if scene.pcss is not None:
+        k_near = np.column_stack([scene.pcss.texels_per_depth, scene.pcss.near_depth])
+        pcss = np.nan_to_num(np.column_stack([k_near, np.ones(len(rect))])).astype(np.float32)
     tiles = b"".join(
-        column_major_bytes(m) + r.tobytes() for m, r in zip(texture, rect, strict=True)
+        column_major_bytes(m) + r.tobytes() + k.tobytes()
+        for m, r, k in zip(texture, rect, pcss, strict=True)
     )
     rows = scene.lights.rows
     faces = np.zeros((len(rows), 8), dtype=np.int32)

@@ -37,6 +37,7 @@ from ._pass_wgpu import (
     depth_pipeline,
     draw_camera,
     draw_depth,
+    draw_faces_away,
     normal_to_world,
     read_record,
     read_wgpu_texture,
@@ -211,9 +212,7 @@ def _draw_maps(
         if not back_faces:
             draw_depth(device, pipelines["none"], target, draws, (x, y, tw, th))
             continue
-        for cull in ("back", "front"):  # a reversing matrix (det < 0) turns the winding
-            group = [d for d in draws if (np.linalg.det(d[0]) < 0) == (cull == "front")]
-            draw_depth(device, pipelines[cull], target, group, (x, y, tw, th))
+        draw_faces_away(device, pipelines, target, draws, (x, y, tw, th))
     depths = np.stack(
         [read_wgpu_texture(device, texture, (w, h), 1, layer)[..., 0] for layer in range(layers)]
     )

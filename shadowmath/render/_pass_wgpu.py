@@ -196,6 +196,22 @@ def depth_pipeline(
     )
 
 
+def draw_faces_away(
+    device: Any,
+    pipelines: dict[str, Any],
+    target: Any,
+    draws: Sequence[tuple[NDArray[np.float64], Any, int]],
+    viewport: tuple[int, int, int, int],
+) -> None:
+    """:func:`draw_depth` of only the faces turned from the light (PCSS's back-face maps):
+    ``pipelines["back"]`` culls the counter-clockwise faces' backs, ``pipelines["front"]``
+    serves the draws whose ``body_to_clip`` reverses orientation (``det < 0``: the
+    Jacobian of ``p -> (M p)_xyz / (M p)_w`` is ``det M / w^4``, the winding turns)."""
+    for cull in ("back", "front"):
+        group = [d for d in draws if (np.linalg.det(d[0]) < 0) == (cull == "front")]
+        draw_depth(device, pipelines[cull], target, group, viewport)
+
+
 def draw_depth(
     device: Any,
     pipeline: Any,

@@ -6,7 +6,9 @@ without a GPU it runs on Mesa's software Vulkan driver (Debian:
 ``render_scene(..., method="depth")`` with WebGPU's conventions
 (:func:`shadowmath.api_convention` ``api="webgpu"``), :func:`render_cascades_wgpu` the
 cascades of ``render_cascades`` (``shaders/cascades.wgsl``), :func:`render_pcss_wgpu`
-one light's ``method="pcss"`` (``shaders/pcss_scene.wgsl``).
+one light's ``method="pcss"`` (``shaders/pcss_scene.wgsl``), :func:`render_atlas_wgpu`
+many lights through one atlas (``shaders/atlas.wgsl``; PCSS with ``light_size``, a point
+light's six face tiles WebGPU's cube maps).
 """
 
 from ._pass_atlas_wgpu import WgpuAtlasFrame as WgpuAtlasFrame

@@ -1,11 +1,15 @@
 """PCSS in the shadow atlas (``render_atlas(..., light_size=)``): a spot light's tile and
 a point light's six face tiles in one atlas, each tile's ``K`` from
-``pcss_parameters(AtlasFit)`` in atlas texels, taps clamped to the tile; each light's
+``pcss_parameters(AtlasFit)`` in atlas texels, taps clamped to the tile, on OpenGL and on WebGPU
+(``render_atlas_wgpu``, ``atlas.wgsl`` including ``pcss.wgsl``); each light's
 mask against its true soft shadow (tests/render/pcss_scenes.py) with the bounds of
 tests/render/test_render_pcss.py's casters with depth (a box on the floor). The point
 light's shadow falls on its ``-Z`` face, whose plane the truth's disk faces."""
 
 from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pytest
@@ -21,12 +25,11 @@ LIGHTS = {"spot": ps.spot_light(ps.LIGHTS["spot"]),
 AXES = {"spot": tuple(ps.light_axis(ps.LIGHTS["spot"])), "point": (0.0, 0.0, -1.0)}
 
 
-def compare(sizes: list[float], gl) -> dict[str, ps.Comparison]:
+def compare(sizes: list[float], render: Callable[..., Any]) -> dict[str, ps.Comparison]:
     view = ps.VIEWS["top"]
-    frame = render_atlas(
+    frame = render(
         [ps.FLOOR, ps.CASTERS["box"]], list(LIGHTS.values()), np.eye(4), view.world_to_clip(),
         casters=[False, True], light_size=sizes, image_size=view.pixels, atlas_size=4096,
-        ctx=gl,
     )  # fmt: skip
     assert (np.asarray(frame.atlas.light_tiles) >= 0).sum() == 7  # the spot's, six faces
     floor = frame.body == 0
@@ -38,18 +41,29 @@ def compare(sizes: list[float], gl) -> dict[str, ps.Comparison]:
     return out
 
 
-def test_each_tile_is_near_the_true_soft_shadow_and_the_wrong_size_is_not(gl):
+def check_near_truth(render: Callable[..., Any]) -> None:
+    """Each light's mask near its true soft shadow; the spot's ``K`` halved is not."""
     sizes = [ps.LIGHTS["spot"].size, ps.LIGHTS["point"].size]
-    right = compare(sizes, gl)
+    right = compare(sizes, render)
     for name, c in right.items():
         e = ps.errors(c)
         assert e.pixels > 300
         assert e.mean < 1.5 * MEAN_BOUND + 0.01 and e.p90 < 1.5 * P90_BOUND, (name, e)
         assert 0.8 < ps.width_ratio(c) < 1.05, name
-    wrong = compare([sizes[0] / 2, sizes[1]], gl)["spot"]  # the spot's K halved
+    wrong = compare([sizes[0] / 2, sizes[1]], render)["spot"]  # the spot's K halved
     e, e_right = ps.errors(wrong), ps.errors(right["spot"])
     assert e.mean > max(2 * MEAN_BOUND, 4 * e_right.mean), (e_right, e)
     assert not 0.9 < ps.width_ratio(wrong) < 1.1
+
+
+def test_each_tile_is_near_the_true_soft_shadow_and_the_wrong_size_is_not(gl):
+    check_near_truth(lambda *a, **k: render_atlas(*a, **k, ctx=gl))
+
+
+def test_webgpu_tiles_are_near_the_true_soft_shadow_and_the_wrong_size_is_not(wgpu_device):
+    from shadowmath.render.webgpu import render_atlas_wgpu
+
+    check_near_truth(render_atlas_wgpu)
 
 
 def test_atlas_pcss_options(gl):

@@ -10,6 +10,9 @@
 //   * Williams' comparison r <= stored over a (2k + 1)^2 box of texels (PCF), every tap
 //     clamped into the tile's texels: the tile's border is empty (2D) or holds the
 //     neighbouring faces' depths (the cube ring), so no tap reads another light's map.
+// With PCSS (the tile's pcss row (K_s, K_t, d_near, 1), render_atlas_wgpu's light_size):
+// the blocker search and filter of pcss.wgsl instead of the box, K in atlas texels, every
+// tap clamped into the tile, on maps of the faces turned from the light.
 // No shadow behind the light (q <= 0), outside the depth range or the tile (lit by this map).
 // Bias: the maps are drawn with the pipeline's depthBias / depthBiasSlopeScale (the polygon
 // offset of atlas.frag's maps); a caster's point is looked up moved along its face normal
@@ -27,6 +30,7 @@ struct Frame {
 struct Tile {
     world_to_texture: mat4x4<f32>,
     rect: vec4<i32>,             // (x, y, n, 0): the tile's texels, x, y from the first row
+    pcss: vec4<f32>,             // (K_s, K_t, d_near, 1) with PCSS, 0 without
 };
 
 struct Light {
@@ -50,6 +54,14 @@ struct Body {
 @group(0) @binding(4) var<uniform> body: Body;
 
 #include "surface.wgsl"
+#include "pcss.wgsl"
+
+var<private> pcss_rect: vec4<i32>;  // the tile pcss_depth reads: (x, y, n, 0) texels
+
+fn pcss_depth(uv: vec2<f32>) -> f32 {
+    let texel = vec2<i32>(floor(uv * vec2<f32>(textureDimensions(atlas))));
+    return textureLoad(atlas, clamp(texel, pcss_rect.xy, pcss_rect.xy + pcss_rect.zz - 1), 0);
+}
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -78,7 +90,7 @@ fn tile_of(light: Light, p: vec3<f32>) -> i32 {
 }
 
 // How much of light l's map says p (face normal n) is shadowed (0 lit .. 1 shadowed).
-fn shadow_of(l: i32, p: vec3<f32>, n_face: vec3<f32>) -> f32 {
+fn shadow_of(l: i32, p: vec3<f32>, n_face: vec3<f32>, pixel: vec2<f32>) -> f32 {
     let light = lights[l];
     let t = tile_of(light, p);
     if (t < 0) { return 0.0; }
@@ -104,6 +116,11 @@ fn shadow_of(l: i32, p: vec3<f32>, n_face: vec3<f32>) -> f32 {
     if (str.z < 0.0 || str.z > 1.0 || any(texel < rect.xy) || any(texel >= rect.xy + rect.zz)) {
         return 0.0;
     }
+    let pcss = tiles[t].pcss;
+    if (pcss.w > 0.5) {
+        pcss_rect = rect;
+        return 1.0 - pcss_lit(str, size, pcss.xy, pcss.z, 0.0, pixel_angle(pixel));
+    }
     let k = frame.pcf_radius;
     var lit = 0.0;
     for (var j = -k; j <= k; j++) {
@@ -127,7 +144,7 @@ fn reaches(l: i32, p: vec3<f32>, n: vec3<f32>) -> bool {
 fn fs_main(in: VertexOut) -> FragmentOut {
     var out = record(in.world, in.face_normal);
     if (reaches(frame.which, in.world, in.face_normal)) {
-        out.mask = shadow_of(frame.which, in.world, in.face_normal);
+        out.mask = shadow_of(frame.which, in.world, in.face_normal, in.clip.xy);
     }
     return out;
 }
