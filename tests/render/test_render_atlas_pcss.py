@@ -66,12 +66,22 @@ def test_webgpu_tiles_are_near_the_true_soft_shadow_and_the_wrong_size_is_not(wg
     check_near_truth(render_atlas_wgpu)
 
 
-def test_atlas_pcss_options(gl):
+def check_options(render: Callable[..., Any]) -> None:
     args = ([ps.FLOOR, ps.CASTERS["box"]], list(LIGHTS.values()), np.eye(4),
             ps.VIEWS["top"].world_to_clip())  # fmt: skip
     for bad in ([0.3], [0.3, -1.0], [0.3, float("nan")]):
         with pytest.raises(ValueError, match="light_size"):
-            render_atlas(*args, light_size=bad, atlas_size=256, image_size=16, ctx=gl)
+            render(*args, light_size=bad, atlas_size=256, image_size=16)
     sun = [sm.DirectionalLight(np.array([0.0, 0.0, 1.0]))]
     with pytest.raises(ValueError, match="light_size"):
-        render_atlas(*args[:1], sun, *args[2:], light_size=[0.01], atlas_size=256, ctx=gl)
+        render(*args[:1], sun, *args[2:], light_size=[0.01], atlas_size=256)
+
+
+def test_atlas_pcss_options(gl):
+    check_options(lambda *a, **k: render_atlas(*a, **k, ctx=gl))
+
+
+def test_webgpu_atlas_pcss_options(wgpu_device):
+    from shadowmath.render.webgpu import render_atlas_wgpu
+
+    check_options(render_atlas_wgpu)
