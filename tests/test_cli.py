@@ -857,19 +857,25 @@ def test_cascades_demo_writes_the_picture_and_its_cascades(capsys, tmp_path):
         assert np.allclose(np.array(last.strip(" []").split(), dtype=float), [0, 0, 0, 1])
 
 
-@pytest.mark.usefixtures("gl")
-def test_cascades_demo_draws_pcss_with_a_light_size(capsys, tmp_path, monkeypatch):
-    """--light-size DEGREES with --method cascades: render_cascades' PCSS of that sun."""
+def _recorded_keywords(monkeypatch, name):
+    """The keywords the demo passes to ``shadowmath.render.<name>`` (the call still runs)."""
     import shadowmath.render
 
     seen = {}
-    real = shadowmath.render.render_cascades
+    real = getattr(shadowmath.render, name)
 
     def recording(*args, **kwargs):
         seen.update(kwargs)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(shadowmath.render, "render_cascades", recording)
+    monkeypatch.setattr(shadowmath.render, name, recording)
+    return seen
+
+
+@pytest.mark.usefixtures("gl")
+def test_cascades_demo_draws_pcss_with_a_light_size(capsys, tmp_path, monkeypatch):
+    """--light-size DEGREES with --method cascades: render_cascades' PCSS of that sun."""
+    seen = _recorded_keywords(monkeypatch, "render_cascades")
     args = ["--method", "cascades", "--size", "64", "48", "--map-size", "128"]
     assert main([*args, "--light-size", "2", "--output", str(tmp_path / "c.png")]) == 0
     first = capsys.readouterr().out.splitlines()[0]
@@ -936,16 +942,7 @@ def test_atlas_demo_writes_the_picture_and_the_atlas(capsys, tmp_path):
 def test_omni_demo_draws_the_hard_cube_map_shadow(tmp_path, monkeypatch):
     """--method omni does not read --light-size: render_scene gets light_size 0 (with a
     size it would draw PCSS through the cube map)."""
-    import shadowmath.render
-
-    seen = {}
-    real = shadowmath.render.render_scene
-
-    def recording(*args, **kwargs):
-        seen.update(kwargs)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(shadowmath.render, "render_scene", recording)
+    seen = _recorded_keywords(monkeypatch, "render_scene")
     args = ["--method", "omni", "--size", "64", "48", "--map-size", "64"]
     assert main([*args, "--output", str(tmp_path / "o.png")]) == 0
     assert seen["method"] == "omni" and seen["light_size"] == 0.0

@@ -313,19 +313,23 @@ def test_derivatives_match_finite_differences() -> None:
     check_grads(sun, args, order=1, modes=("fwd", "rev"), eps=1e-5, atol=1e-6, rtol=1e-6)
 
 
-def test_cascades_derivatives_match_finite_differences() -> None:
+@pytest.mark.parametrize("output", ["K", "widened"])
+def test_cascades_derivatives_match_finite_differences(output: str) -> None:
+    """K of each cascade, and widen_cascades' matrices, in the sun and its angular radius."""
     jax = pytest.importorskip("jax")
     jnp = jax.numpy
     from jax.test_util import check_grads
 
     sun, view, proj, box = camera_scene(2)
 
-    def K(direction: Any, theta: Any) -> Any:
+    def f(direction: Any, theta: Any) -> Any:
         c = sm.fit_cascades(direction, view, proj, box, 512)
-        return sm.pcss_parameters(c, angular_radius=theta).texels_per_depth
+        if output == "K":
+            return sm.pcss_parameters(c, angular_radius=theta).texels_per_depth
+        return sm.widen_cascades(c, angular_radius=theta).world_to_texture
 
     args = (jnp.asarray(sun), jnp.asarray(0.02))
-    check_grads(K, args, order=1, modes=("rev",), eps=1e-6, atol=1e-5, rtol=1e-5)
+    check_grads(f, args, order=1, modes=("rev",), eps=1e-6, atol=1e-5, rtol=1e-5)
 
 
 def test_invalid_sizes_are_nan_under_jit() -> None:
@@ -402,21 +406,6 @@ def test_widen_cascades_refuses_stable_and_bad_angles() -> None:
     c = sm.fit_cascades(sun, view, proj, box, 256)
     with pytest.raises(ValueError, match="angular_radius: expected radians"):
         sm.widen_cascades(c, angular_radius=-0.01)
-
-
-def test_widen_cascades_derivatives_match_finite_differences() -> None:
-    jax = pytest.importorskip("jax")
-    jnp = jax.numpy
-    from jax.test_util import check_grads
-
-    sun, view, proj, box = camera_scene(2)
-
-    def wide(direction: Any, theta: Any) -> Any:
-        c = sm.fit_cascades(direction, view, proj, box, 512)
-        return sm.widen_cascades(c, angular_radius=theta).world_to_texture
-
-    args = (jnp.asarray(sun), jnp.asarray(0.02))
-    check_grads(wide, args, order=1, modes=("rev",), eps=1e-6, atol=1e-5, rtol=1e-5)
 
 
 def test_a_cube_range_needs_a_positive_near() -> None:
