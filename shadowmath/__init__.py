@@ -122,6 +122,9 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from .lights import SpotLight as SpotLight
     from .receivers import Mesh as Mesh
     from .receivers import Triangles as Triangles
+    from .scene import LightShadows as LightShadows
+    from .scene import SceneCascades as SceneCascades
+    from .scene import ShadowScene as ShadowScene
 
 # Each public name and the module that defines it, imported on first use (PEP 562): ``import
 # shadowmath`` costs a dictionary, not the package (tests/test_lazy_import.py checks that this
@@ -247,6 +250,11 @@ _MODULES: dict[str, tuple[str, ...]] = {
     ".receivers": (
         "Mesh",
         "Triangles",
+    ),
+    ".scene": (
+        "LightShadows",
+        "SceneCascades",
+        "ShadowScene",
     ),
 }
 _WHERE = {name: module for module, names in _MODULES.items() for name in names}

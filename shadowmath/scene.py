@@ -1,0 +1,472 @@
+r"""A scene that lives across frames: :class:`ShadowScene`.
+
+A renderer adds its geometries once and its objects (placements of a geometry) once,
+then each frame sets the objects' world matrices as one ``(N, 4, 4)`` array and fits
+all its lights. The cost of a frame grows with the number of objects and lights, not
+with the number of triangles:
+
+* what the fits read of a geometry, its **summary** (its own triangles when they are
+  few, else the surface of its 26-DOP: a convex polytope of at most a few dozen
+  corners that holds it; :mod:`shadowmath._scene._summary`), is computed once per
+  geometry and shared by its instances;
+* each frame only the objects whose matrix changed are moved to the world (their
+  summary triangles, bounding sphere and box);
+* each light first **culls** the objects that cannot cast into its maps, from their
+  bounding spheres (:mod:`shadowmath._scene._cull`: a spot light's cone, each cube
+  face of a point light, each cascade's box), then fits from the summaries of the
+  rest (:func:`fit_shadow`, :func:`cube_depth_range`, :func:`fit_cascades`);
+* each map gets its **draw list**: the indices of the objects to draw into it (an
+  empty list: nothing to draw, the map may be skipped).
+
+The fits keep every caster (a summary holds its geometry), so a renderer that draws
+only the draw lists draws the same shadows as one that draws every caster into every
+map; the maps may be slightly larger than those fitted to every triangle (by how much:
+``docs/scenes.md``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ._boundary._shapes import ArrayLike, Float, Int, Real
+from ._boundary._validate import check_faces
+from ._fits._cascades import Cascades, fit_cascades
+from ._fits._cube_depth import CubeDepthRange, cube_depth_range
+from ._fits._setup import fit_shadow
+from ._fits._shadow_setup import ShadowSetup
+from ._fits._spec import ShadowMapSpec
+from ._scene import _cull
+from ._scene._summary import Summary, summarize
+from .lights import DirectionalLight, PointLight, SpotLight
+from .receivers import Mesh, Triangles
+
+__all__ = ["LightShadows", "SceneCascades", "ShadowScene"]
+
+IntArray = Int[np.ndarray, " K"]
+
+
+class LightShadows(NamedTuple):
+    """One light's fit and draw lists, from :meth:`ShadowScene.fit`.
+
+    Attributes:
+        light: the light as given.
+        fit: a :class:`ShadowSetup` (sun, spot) or a :class:`CubeDepthRange` (a point
+            light's cube map), or None where ``skipped``.
+        draws: one integer array of object indices per map: one map for a sun or a spot
+            light, six cube faces (``+X, -X, +Y, -Y, +Z, -Z``) for a point light. An
+            empty array: no caster reaches that map (draw nothing into it; cleared to
+            "far", it shadows nothing).
+        skipped: "" when fitted; else why not (no caster in the light's reach, or the
+            fit's ``ValueError`` message). A skipped light casts no shadow this frame
+            (its draws are empty).
+    """
+
+    light: PointLight | SpotLight | DirectionalLight
+    fit: ShadowSetup | CubeDepthRange | None
+    draws: tuple[IntArray, ...]
+    skipped: str
+
+
+class SceneCascades(NamedTuple):
+    """A directional light's cascades and their draw lists, from
+    :meth:`ShadowScene.fit_cascades`.
+
+    Attributes:
+        cascades: the :class:`Cascades` of :func:`fit_cascades` over the scene's bounds.
+        draws: one integer array of object indices per cascade.
+    """
+
+    cascades: Cascades
+    draws: tuple[IntArray, ...]
+
+
+class _Geometry(NamedTuple):
+    summary: Summary
+    triangles: int  # how many the summary has
+
+
+class ShadowScene:
+    r"""Geometries and their placements, kept across frames, fitted for many lights.
+
+    Example:
+        >>> import numpy as np, shadowmath as sm
+        >>> from shadowmath import meshes
+        >>> scene = sm.ShadowScene()
+        >>> ball = scene.add_geometry(meshes.sphere(0.5))
+        >>> floor = scene.add_geometry(meshes.grid((10.0, 10.0)))
+        >>> lift = np.eye(4); lift[2, 3] = 2.0
+        >>> balls = scene.add_objects(ball, np.stack([lift, lift]))
+        >>> ground = scene.add_objects(floor, casts=False, static=True)
+        >>> shifted = scene.transforms; shifted[1, 0, 3] = 3.0  # the second ball moves
+        >>> scene.set_transforms(shifted)
+        >>> spot = sm.SpotLight(np.array([0.0, 0.0, 6.0]), np.array([0.0, 0.0, -1.0]), 0.3)
+        >>> sun = sm.DirectionalLight(np.array([0.2, 0.1, 1.0]))
+        >>> spot_fit, sun_fit = scene.fit([spot, sun], sm.ShadowMapSpec(1024))
+        >>> spot_fit.draws[0].tolist(), sun_fit.draws[0].tolist()  # the ball at x = 3 is culled
+        ([0], [0, 1])
+    """
+
+    def __init__(self) -> None:
+        self._geometries: list[_Geometry] = []
+        self._geometry_of = np.zeros(0, dtype=np.int64)
+        self._casts = np.zeros(0, dtype=bool)
+        self._receives = np.zeros(0, dtype=bool)
+        self._static = np.zeros(0, dtype=bool)
+        self._M = np.zeros((0, 4, 4))
+        self._offsets = np.zeros(1, dtype=np.int64)
+        self._world = np.zeros((0, 3, 3))  # every object's summary triangles, world space
+        self._owner = np.zeros(0, dtype=np.int64)
+        self._center = np.zeros((0, 3))
+        self._radius = np.zeros(0)
+        self._bounds = np.zeros((0, 2, 3))
+        self._moved = np.zeros(0, dtype=np.int64)
+
+    # -- building -------------------------------------------------------------------
+    def add_geometry(self, geometry: Mesh | Triangles | Real[ArrayLike, "V 3"]) -> int:
+        """Add a geometry in local coordinates; returns its index for :meth:`add_objects`.
+
+        Its summary (:mod:`shadowmath._scene._summary`) is computed here, once: about
+        5-10 ms, whatever its number of triangles beyond a few thousand.
+
+        Arguments:
+            geometry: an :class:`~shadowmath.Mesh` (``vertices (V, 3)``, ``faces (F, 3)``),
+                :class:`~shadowmath.Triangles` ``(M, 3, 3)``, or points ``(V, 3)``
+                (casters drawn as points: their summary is their 26-DOP's corners).
+
+        Raises:
+            ValueError: naming ``geometry``: wrong shapes, no vertices, non-finite
+                values, face indices outside the vertices.
+        """
+        vertices, triangles = _geometry_arrays(geometry)
+        summary = summarize(vertices, triangles)
+        self._geometries.append(_Geometry(summary, len(summary.triangles)))
+        return len(self._geometries) - 1
+
+    def add_objects(
+        self,
+        geometry: int,
+        transforms: Real[ArrayLike, "K 4 4"] | Real[ArrayLike, "4 4"] | None = None,
+        *,
+        casts: bool = True,
+        receives: bool = True,
+        static: bool = False,
+    ) -> IntArray:
+        """Place a geometry ``K`` times (instances); returns the new objects' indices.
+
+        Arguments:
+            geometry: an index from :meth:`add_geometry`.
+            transforms: ``(K, 4, 4)`` or ``(4, 4)`` affine local-to-world matrices
+                (column vectors; last row ``(0, 0, 0, 1)``); None: one object, identity.
+            casts, receives: whether the objects cast shadows (enter the fits and draw
+                lists) and receive them (push the maps' ``far``).
+            static: the objects never move: :meth:`set_transforms` refuses to change them.
+
+        Raises:
+            ValueError: an unknown ``geometry``, a flag that is not a bool, transforms of
+                the wrong shape, non-finite, or not affine.
+        """
+        if isinstance(geometry, bool) or not isinstance(geometry, int | np.integer):
+            raise ValueError(f"geometry: expected an index from add_geometry, got {geometry!r}")
+        if not 0 <= geometry < len(self._geometries):
+            raise ValueError(
+                f"geometry: no geometry {geometry} (the scene has {len(self._geometries)})"
+            )
+        for name, flag in (("casts", casts), ("receives", receives), ("static", static)):
+            if not isinstance(flag, bool | np.bool_):
+                raise ValueError(f"{name}: expected a bool, got {flag!r}")
+        M = np.eye(4)[None] if transforms is None else _placements("transforms", transforms)
+        M = M[None] if M.ndim == 2 else M
+        first, K = len(self._M), len(M)
+        g = self._geometries[geometry]
+        self._geometry_of = np.concatenate([self._geometry_of, np.full(K, geometry)])
+        self._casts = np.concatenate([self._casts, np.full(K, bool(casts))])
+        self._receives = np.concatenate([self._receives, np.full(K, bool(receives))])
+        self._static = np.concatenate([self._static, np.full(K, bool(static))])
+        self._M = np.concatenate([self._M, M])
+        ends = self._offsets[-1] + g.triangles * np.arange(1, K + 1)
+        self._offsets = np.concatenate([self._offsets, ends])
+        self._world = np.concatenate([self._world, np.zeros((K * g.triangles, 3, 3))])
+        self._owner = np.concatenate(
+            [self._owner, np.repeat(np.arange(first, first + K), g.triangles)]
+        )
+        self._center = np.concatenate([self._center, np.zeros((K, 3))])
+        self._radius = np.concatenate([self._radius, np.zeros(K)])
+        self._bounds = np.concatenate([self._bounds, np.zeros((K, 2, 3))])
+        self._place(np.arange(first, first + K))
+        return np.arange(first, first + K)
+
+    # -- each frame -----------------------------------------------------------------
+    @property
+    def transforms(self) -> Float[np.ndarray, "N 4 4"]:
+        """``(N, 4, 4)`` a copy of every object's local-to-world matrix, in object order."""
+        return self._M.copy()
+
+    @property
+    def moved(self) -> IntArray:
+        """The objects whose matrix changed at the last :meth:`set_transforms`."""
+        return self._moved.copy()
+
+    def set_transforms(self, transforms: Real[ArrayLike, "N 4 4"]) -> None:
+        """Set every object's local-to-world matrix for this frame.
+
+        Only the objects whose matrix changed are moved (their summary, sphere and box
+        in world space); the others keep last frame's.
+
+        Arguments:
+            transforms: ``(N, 4, 4)`` affine matrices, one per object in object order.
+
+        Raises:
+            ValueError: naming ``transforms``: another shape than ``(N, 4, 4)``,
+                non-finite, not affine (last row not ``(0, 0, 0, 1)``), or changing an
+                object added with ``static=True`` (named by its index).
+        """
+        M = _placements("transforms", transforms)
+        if M.shape != self._M.shape:
+            raise ValueError(
+                f"transforms: expected shape {self._M.shape} (one matrix per object), got {M.shape}"
+            )
+        moved = np.flatnonzero(np.any(M != self._M, axis=(1, 2)))
+        frozen = moved[self._static[moved]]
+        if len(frozen):
+            raise ValueError(
+                f"transforms[{int(frozen[0])}]: object {int(frozen[0])} was added with "
+                "static=True; its placement cannot change"
+            )
+        self._M[moved] = M[moved]
+        self._place(moved)
+        self._moved = moved
+
+    def bounds(self) -> Float[np.ndarray, "2 3"]:
+        """``(2, 3)`` the world box ``[min, max]`` of every object (for ``scene_bounds``)."""
+        if len(self._bounds) == 0:
+            raise ValueError("the scene has no objects: add some with add_objects")
+        return np.stack([self._bounds[:, 0].min(axis=0), self._bounds[:, 1].max(axis=0)])
+
+    def fit(
+        self,
+        lights: Sequence[PointLight | SpotLight | DirectionalLight],
+        map_size: int | tuple[int, int] | ShadowMapSpec,
+        *,
+        up: Real[ArrayLike, "3"] | None = None,
+    ) -> list[LightShadows]:
+        """Fit every light to the scene as it is now, with its draw lists.
+
+        * :class:`DirectionalLight`: :func:`fit_shadow` of every caster's summary (all
+          of them are drawn: the map holds them all), ``receivers=`` every receiver's;
+        * :class:`SpotLight`: the casters whose sphere reaches into the cone
+          (:func:`._cull.spot_visible`), their summaries clipped to the cone's pyramid by
+          :func:`fit_shadow`, the receivers in the cone as ``receivers=``;
+        * :class:`PointLight`: a cube map, :func:`cube_depth_range` of every caster's
+          and receiver's summary, and per face the casters whose sphere reaches into it
+          (:func:`._cull.cube_faces_visible`).
+
+        Arguments:
+            lights: typed lights, each unbatched (``position`` and ``direction`` ``(3,)``).
+            map_size: the suns' and spots' map: a size or a :class:`ShadowMapSpec`
+                (cube maps use its size and border for their depth range).
+            up: an optional up hint for the suns' and spots' frames (see
+                :func:`fit_shadow`).
+
+        Returns:
+            One :class:`LightShadows` per light, in order.
+
+        Raises:
+            ValueError: a light that is not a typed, unbatched, finite light; an empty
+                scene; what :func:`fit_shadow` refuses of ``map_size`` or ``up``.
+        """
+        spec = map_size if isinstance(map_size, ShadowMapSpec) else ShadowMapSpec(map_size)
+        if len(self._M) == 0:
+            raise ValueError("the scene has no objects: add some with add_objects")
+        checked = [_light(i, light) for i, light in enumerate(lights)]
+        up_array = None if up is None else np.asarray(up, dtype=np.float64)
+        return [self._fit_light(light, spec, up_array) for light in checked]
+
+    def fit_cascades(
+        self,
+        light: DirectionalLight,
+        view: Real[ArrayLike, "4 4"],
+        projection: Real[ArrayLike, "4 4"],
+        map_size: int | tuple[int, int] | ShadowMapSpec,
+        **options: Any,
+    ) -> SceneCascades:
+        """:func:`fit_cascades` over the scene's bounds (:meth:`bounds`), with one draw
+        list per cascade: the casters whose sphere reaches into its map's window on the
+        light side of its ``far`` (:func:`._cull.box_visible`).
+
+        ``options`` are :func:`fit_cascades`' keywords (``count``, ``stable``,
+        ``depth_range``, ``state``...); what it raises, this raises.
+        """
+        cascades = fit_cascades(light, view, projection, self.bounds(), map_size, **options)
+        box = cascades.frustum
+        casting = np.flatnonzero(self._casts)
+        draws = []
+        for i in range(np.shape(cascades.world_to_light)[-3]):
+            hx = float(box.half_width[..., i]) / float(box.margin_x[..., i])
+            hy = float(box.half_height[..., i]) / float(box.margin_y[..., i])
+            cx, cy = float(box.center_x[..., i]), float(box.center_y[..., i])
+            window = np.array([cx - hx, cx + hx, cy - hy, cy + hy])
+            keep = _cull.box_visible(
+                np.asarray(cascades.world_to_light[..., i, :, :]), window,
+                float(box.far[..., i]), self._center[casting], self._radius[casting],
+            )  # fmt: skip
+            draws.append(casting[keep])
+        return SceneCascades(cascades, tuple(draws))
+
+    # -- the steps ------------------------------------------------------------------
+    def _place(self, objects: IntArray) -> None:
+        """Move the summaries, spheres and boxes of ``objects`` to the world."""
+        geometry_of = self._geometry_of[objects]
+        for g in np.unique(geometry_of):
+            ids = objects[geometry_of == g]
+            s = self._geometries[g].summary
+            M = self._M[ids]
+            tris = np.einsum("nij,tcj->ntci", M[:, :3, :3], s.triangles) + M[:, None, None, :3, 3]
+            rows = self._offsets[ids][:, None] + np.arange(len(s.triangles))
+            self._world[rows] = tris
+            self._bounds[ids] = np.stack([tris.min(axis=(1, 2)), tris.max(axis=(1, 2))], axis=1)
+            c, r = _cull.world_spheres(M, np.broadcast_to(s.center, (len(ids), 3)),
+                                       np.full(len(ids), s.radius))  # fmt: skip
+            self._center[ids], self._radius[ids] = c, r
+
+    def _triangles(self, objects: np.ndarray) -> Triangles:
+        """The world summary triangles of the objects where ``objects`` (a mask) holds."""
+        return Triangles(self._world[objects[self._owner]])
+
+    def _fit_light(
+        self, light: PointLight | SpotLight | DirectionalLight, spec: ShadowMapSpec,
+        up: np.ndarray | None,
+    ) -> LightShadows:  # fmt: skip
+        casts, receives = self._casts, self._receives
+        if isinstance(light, PointLight):
+            return self._fit_cube(light, spec)
+        if isinstance(light, SpotLight):
+            reach = _cull.spot_visible(
+                np.asarray(light.position), np.asarray(light.direction),
+                float(light.angle), self._center, self._radius,
+            )  # fmt: skip
+            casts, receives = casts & reach, receives & reach
+        draws = (np.flatnonzero(casts),)
+        if not len(draws[0]):
+            return LightShadows(light, None, (draws[0],), "no caster in the light's reach")
+        try:
+            if isinstance(light, DirectionalLight) and not spec.stable:
+                fit = self._fit_sun(light, casts, receives, spec, up)
+            else:
+                recv = self._triangles(receives) if receives.any() else None
+                fit = fit_shadow(light, self._triangles(casts), spec, receivers=recv, up=up)
+        except ValueError as err:
+            return LightShadows(light, None, (np.zeros(0, np.int64),), str(err))
+        return LightShadows(light, fit, draws, "")
+
+    def _fit_sun(
+        self, light: DirectionalLight, casts: np.ndarray, receives: np.ndarray,
+        spec: ShadowMapSpec, up: np.ndarray | None,
+    ) -> ShadowSetup:  # fmt: skip
+        """A sun's fit from the objects that may bound its box (:func:`._cull.sun_candidates`),
+        checked against every other object (:func:`._cull.inside_box`) and refitted with
+        those that stick out until none does: the map holds every caster's sphere."""
+        c, r = self._center, self._radius
+        cand_c, cand_r = _cull.sun_candidates(np.asarray(light.direction), c, r, casts, receives)
+        while True:
+            recv = self._triangles(cand_r) if cand_r.any() else None
+            fit = fit_shadow(light, self._triangles(cand_c), spec, receivers=recv, up=up)
+            W2L, box = np.asarray(fit.world_to_light), fit.frustum
+            out_c = casts & ~cand_c & ~_cull.inside_box(W2L, box, c, r, receiver=False)
+            out_r = receives & ~cand_r & ~_cull.inside_box(W2L, box, c, r, receiver=True)
+            if not (out_c.any() or out_r.any()):
+                return fit
+            cand_c, cand_r = cand_c | out_c, cand_r | out_r
+
+    def _fit_cube(self, light: PointLight, spec: ShadowMapSpec) -> LightShadows:
+        position = np.asarray(light.position, dtype=np.float64)
+        casting = np.flatnonzero(self._casts)
+        none = tuple(np.zeros(0, np.int64) for _ in range(6))
+        if not len(casting):
+            return LightShadows(light, None, none, "no caster in the light's reach")
+        faces = _cull.cube_faces_visible(position, self._center[casting], self._radius[casting])
+        near, far = _cull.cube_range_candidates(position, self._center, self._radius,
+                                                self._casts, self._receives)  # fmt: skip
+        recv = self._triangles(far & self._receives) if np.any(far & self._receives) else None
+        try:
+            fit = cube_depth_range(position, self._triangles((near | far) & self._casts),
+                                   receivers=recv, map_size=spec.size[0],
+                                   border_texels=spec.border)  # fmt: skip
+        except ValueError as err:
+            return LightShadows(light, None, none, str(err))
+        return LightShadows(light, fit, tuple(casting[f] for f in faces), "")
+
+
+def _geometry_arrays(geometry: object) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertices (V, 3), triangles (F, 3, 3))`` float64 of a geometry, checked."""
+    name = "geometry"
+    if isinstance(geometry, Mesh):
+        V = _finite(f"{name}.vertices", geometry.vertices, 2)
+        faces = np.asarray(geometry.faces)
+        check_faces(f"{name}.faces", faces, len(V))
+        return V, V[faces]
+    if isinstance(geometry, Triangles):
+        T = _finite(f"{name}.corners", geometry.corners, 3)
+        if T.shape[1:] != (3, 3):
+            raise ValueError(f"{name}.corners: expected shape (M, 3, 3), got {T.shape}")
+        return T.reshape(-1, 3), T
+    return _finite(name, geometry, 2), np.zeros((0, 3, 3))
+
+
+def _finite(name: str, value: object, ndim: int) -> np.ndarray:
+    a = np.asarray(value)
+    if not (np.issubdtype(a.dtype, np.integer) or np.issubdtype(a.dtype, np.floating)):
+        raise ValueError(f"{name}: expected real numbers, got dtype {a.dtype}")
+    a = a.astype(np.float64)
+    if a.ndim != ndim or a.shape[-1] != 3 or a.shape[0] == 0:
+        want = "(V, 3)" if ndim == 2 else "(M, 3, 3)"
+        raise ValueError(f"{name}: expected a non-empty array of shape {want}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: contains non-finite values (NaN or inf)")
+    return a
+
+
+def _placements(name: str, value: object) -> np.ndarray:
+    """Affine ``(K, 4, 4)`` or ``(4, 4)`` matrices, float64, checked."""
+    M = np.asarray(value)
+    if not (np.issubdtype(M.dtype, np.integer) or np.issubdtype(M.dtype, np.floating)):
+        raise ValueError(f"{name}: expected real numbers, got dtype {M.dtype}")
+    M = M.astype(np.float64)
+    if M.ndim not in (2, 3) or M.shape[-2:] != (4, 4):
+        raise ValueError(f"{name}: expected shape (N, 4, 4) or (4, 4), got {M.shape}")
+    flat = M.reshape(-1, 4, 4)
+    bad = np.flatnonzero(~np.all(np.isfinite(flat), axis=(1, 2)))
+    if len(bad):
+        raise ValueError(f"{name}[{int(bad[0])}]: contains non-finite values (NaN or inf)")
+    scale = np.max(np.abs(flat), axis=(1, 2))
+    last = np.max(np.abs(flat[:, 3] - [0.0, 0.0, 0.0, 1.0]), axis=1)
+    bad = np.flatnonzero(last > 4 * np.finfo(np.float64).eps * scale)
+    if len(bad):
+        raise ValueError(
+            f"{name}[{int(bad[0])}]: its last row is not (0, 0, 0, 1): give affine "
+            "local-to-world matrices in column-vector form (p_world = M @ p; a row-major "
+            "matrix has its translation in the last row)"
+        )
+    return M
+
+
+def _light(i: int, light: object) -> PointLight | SpotLight | DirectionalLight:
+    """A typed, unbatched, finite light (float64 fields)."""
+    name = f"lights[{i}]"
+    if not isinstance(light, PointLight | SpotLight | DirectionalLight):
+        raise ValueError(
+            f"{name}: expected an sm.PointLight, sm.SpotLight or sm.DirectionalLight, "
+            f"got {type(light).__name__}"
+        )
+    fields = []
+    for field, value in zip(light._fields, light, strict=True):
+        a = np.asarray(value, dtype=np.float64)
+        want = () if field == "angle" else (3,)
+        if a.shape != want:
+            raise ValueError(f"{name}.{field}: expected shape {want} (one light), got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{name}.{field}: contains non-finite values (NaN or inf)")
+        fields.append(a)
+    return type(light)(*fields)
