@@ -331,9 +331,20 @@ class ShadowScene:
                                        np.full(len(ids), s.radius))  # fmt: skip
             self._center[ids], self._radius[ids] = c, r
 
-    def _triangles(self, objects: np.ndarray) -> Triangles:
-        """The world summary triangles of the objects where ``objects`` (a mask) holds."""
-        return Triangles(self._world[objects[self._owner]])
+    def _triangles(self, objects: np.ndarray, light: np.ndarray | None = None) -> Triangles:
+        """The world summary triangles of the objects where ``objects`` (a mask) holds; for
+        those whose bounding sphere holds the point ``light``, their own triangles instead
+        (a summary around a light would hold the light: a torus around it)."""
+        if light is None:
+            return Triangles(self._world[objects[self._owner]])
+        around = objects & (np.linalg.norm(self._center - light, axis=1) <= self._radius)
+        if not around.any():
+            return Triangles(self._world[objects[self._owner]])
+        parts = [self._world[(objects & ~around)[self._owner]]]
+        for k in np.flatnonzero(around):
+            own, M = self._geometries[self._geometry_of[k]].summary.own, self._M[k]
+            parts.append(np.einsum("ij,tcj->tci", M[:3, :3], own) + M[:3, 3])
+        return Triangles(np.concatenate(parts))
 
     def _fit_light(
         self, light: PointLight | SpotLight | DirectionalLight, spec: ShadowMapSpec,
@@ -356,7 +367,8 @@ class ShadowScene:
                 fit = self._fit_sun(light, casts, receives, spec, up)
             else:
                 recv = self._triangles(receives) if receives.any() else None
-                fit = fit_shadow(light, self._triangles(casts), spec, receivers=recv, up=up)
+                at = np.asarray(light.position) if isinstance(light, SpotLight) else None
+                fit = fit_shadow(light, self._triangles(casts, at), spec, receivers=recv, up=up)
         except ValueError as err:
             return LightShadows(light, None, (np.zeros(0, np.int64),), str(err))
         return LightShadows(light, fit, draws, "")
@@ -391,7 +403,7 @@ class ShadowScene:
                                                 self._casts, self._receives)  # fmt: skip
         recv = self._triangles(far & self._receives) if np.any(far & self._receives) else None
         try:
-            fit = cube_depth_range(position, self._triangles((near | far) & self._casts),
+            fit = cube_depth_range(position, self._triangles((near | far) & self._casts, position),
                                    receivers=recv, map_size=spec.size[0],
                                    border_texels=spec.border)  # fmt: skip
         except ValueError as err:

@@ -50,6 +50,9 @@ class Summary(NamedTuple):
         radius: ``()`` its radius: every corner within it.
         bounds: ``(2, 3)`` ``[min, max]`` of the geometry's own vertices.
         exact: the summary is the geometry's own triangles (not its 26-DOP).
+        own: ``(F, 3, 3)`` the geometry's own triangles (read in place of the summary
+            by a light inside the bounding sphere, where a polytope around the light
+            would hold the light itself: a torus around a point light).
     """
 
     triangles: Float[Array, "T 3 3"]
@@ -58,6 +61,7 @@ class Summary(NamedTuple):
     radius: float
     bounds: Float[Array, "2 3"]
     exact: bool
+    own: Float[Array, "F 3 3"]
 
 
 def _directions() -> np.ndarray:
@@ -84,7 +88,7 @@ def summarize(vertices: np.ndarray, triangles: np.ndarray) -> Summary:
     points = vertices if exact else corners
     center, radius = _sphere(points)
     bounds = np.stack([vertices.min(axis=0), vertices.max(axis=0)])
-    return Summary(tris, points, center, radius, bounds, exact)
+    return Summary(tris, points, center, radius, bounds, exact, triangles)
 
 
 def dop(vertices: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,377 @@
+"""ShadowScene: summaries hold their geometry, culling never drops a caster that can
+shadow a lit point, the fits hold every kept caster, and bad input is refused by name.
+
+Each culling rule is checked against geometry computed another way (the distance from a
+sphere to a cone, points sampled on the culled objects' own triangles), and against the
+mutation that makes it too aggressive (its bound halved), which a constructed scene
+catches.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import shadowmath as sm
+from shadowmath import meshes
+from shadowmath._scene import _cull
+from shadowmath._scene._summary import DIRECTIONS, summarize
+
+SEEDS = st.integers(0, 2**32 - 1)
+
+
+def _rotation(rng: np.random.Generator) -> np.ndarray:
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    return q * np.sign(np.diag(r))
+
+
+def _affine(rng: np.random.Generator, spread: float = 4.0) -> np.ndarray:
+    """A random affine placement: rotation, non-uniform scale, shear, translation."""
+    M = np.eye(4)
+    M[:3, :3] = (
+        _rotation(rng)
+        @ np.diag(rng.uniform(0.3, 2.0, 3))
+        @ (np.eye(3) + np.triu(rng.uniform(-0.3, 0.3, (3, 3)), 1))
+    )
+    M[:3, 3] = rng.uniform(-spread, spread, 3)
+    return M
+
+
+def _geometry(rng: np.random.Generator) -> sm.Mesh:
+    kind = rng.integers(0, 4)
+    if kind == 0:
+        return meshes.sphere(rng.uniform(0.2, 1.0), segments=int(rng.integers(6, 20)), rings=6)
+    if kind == 1:
+        return meshes.torus(rng.uniform(0.5, 1.0), 0.2, segments=16, sides=8)
+    if kind == 2:
+        return meshes.box(tuple(rng.uniform(0.1, 1.5, 3)))
+    V = rng.normal(size=(int(rng.integers(4, 200)), 3)) * rng.uniform(0.1, 1.0, 3)
+    F = rng.integers(0, len(V), (int(rng.integers(1, 300)), 3))
+    return sm.Mesh(V, F)
+
+
+def _world(mesh: sm.Mesh, M: np.ndarray) -> np.ndarray:
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    return (V @ M[:3, :3].T + M[:3, 3])[np.asarray(mesh.faces)]
+
+
+def _samples(triangles: np.ndarray, n: int = 6) -> np.ndarray:
+    """Points on each triangle: a barycentric grid of ``n`` steps per edge (corners too)."""
+    i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+    keep = i + j <= n
+    a, b = i[keep] / n, j[keep] / n
+    w = np.stack([1 - a - b, a, b], axis=-1)  # (S, 3)
+    return np.einsum("sc,tcd->tsd", w, triangles).reshape(-1, 3)
+
+
+# -- summaries ------------------------------------------------------------------------
+@given(SEEDS)
+def test_summary_holds_its_geometry(seed: int) -> None:
+    """Every direction's support of the summary is at least the geometry's (so the
+    summary's convex solid holds the geometry), and every vertex is in the sphere."""
+    rng = np.random.default_rng(seed)
+    mesh = _geometry(rng)
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    s = summarize(V, V[np.asarray(mesh.faces)])
+    U = rng.normal(size=(200, 3))
+    U = np.concatenate([U / np.linalg.norm(U, axis=1, keepdims=True), DIRECTIONS])
+    tol = 1e-12 * np.max(np.abs(V))
+    assert np.all(np.max(s.triangles.reshape(-1, 3) @ U.T, axis=0) >= np.max(V @ U.T, axis=0) - tol)
+    assert np.all(np.linalg.norm(V - s.center, axis=1) <= s.radius)
+    assert np.all(np.linalg.norm(s.triangles.reshape(-1, 3) - s.center, axis=1) <= s.radius)
+
+
+def test_summary_of_a_dense_sphere_is_small_and_close() -> None:
+    """A 4,000-triangle sphere: the 26-DOP's 92 triangles, its corners within the bound
+    of the 26-DOP of a ball (the corner of the (1, 1, 1) face: 12.8 % out), and every
+    face plane touching the sphere."""
+    mesh = meshes.sphere(1.0, segments=64, rings=32)
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    s = summarize(V, V[np.asarray(mesh.faces)])
+    assert not s.exact and len(s.triangles) <= 100
+    far = np.max(np.linalg.norm(s.points, axis=1))
+    assert 1.0 < far < 1.13
+    small = summarize(V[:8], V[:8][None, :3])  # one triangle: its own
+    assert small.exact and len(small.triangles) == 1
+
+
+@given(SEEDS)
+def test_world_spheres_hold_placed_vertices(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    mesh = _geometry(rng)
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    s = summarize(V, V[np.asarray(mesh.faces)])
+    M = np.stack([_affine(rng) for _ in range(3)])
+    c, r = _cull.world_spheres(M, np.broadcast_to(s.center, (3, 3)), np.full(3, s.radius))
+    for k in range(3):
+        W = V @ M[k, :3, :3].T + M[k, :3, 3]
+        assert np.all(np.linalg.norm(W - c[k], axis=1) <= r[k])
+    # the bound is the largest stretch, not a looser one: a pure scale is exact
+    S = np.diag([3.0, 1.0, 1.0, 1.0])
+    _, r1 = _cull.world_spheres(S[None], np.zeros((1, 3)), np.ones(1))
+    assert r1[0] == pytest.approx(3.0, rel=1e-9)
+
+
+# -- culling rules --------------------------------------------------------------------
+def _cone_distance(L: np.ndarray, axis: np.ndarray, theta: float, p: np.ndarray) -> np.ndarray:
+    """Euclidean distance from points ``p`` to the solid cone (apex ``L``), written from the
+    angle in the plane of the axis and the point: ``|v| sin(phi - theta)`` beside the cone,
+    ``|v|`` beyond its apex, 0 inside."""
+    v = p - L
+    d = np.linalg.norm(v, axis=-1)
+    cos_phi = (v @ axis) / np.maximum(d, 1e-300) / np.linalg.norm(axis)
+    phi = np.arccos(np.clip(cos_phi, -1.0, 1.0))
+    beside = d * np.sin(phi - theta)
+    return np.where(phi <= theta, 0.0, np.where(phi - theta >= np.pi / 2, d, beside))
+
+
+@given(SEEDS)
+def test_spot_cull_only_drops_spheres_outside_the_cone(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    L, axis = rng.normal(size=3), rng.normal(size=3)
+    theta = rng.uniform(0.05, 1.5)
+    c = L + rng.normal(size=(400, 3)) * 3
+    r = rng.uniform(0.0, 2.0, 400)
+    keep = _cull.spot_visible(L, axis, theta, c, r)
+    gap = _cone_distance(L, axis, theta, c)
+    assert np.all(gap[~keep] > r[~keep] * (1 - 1e-9))  # dropped: sphere misses the cone
+    assert np.all(keep[gap < r * (1 - 1e-9)])  # reaching in: kept
+
+
+@given(SEEDS)
+def test_cube_face_cull_drops_nothing_a_face_sees(seed: int) -> None:
+    """Points sampled on the culled objects' own triangles never lie in the face's pyramid."""
+    rng = np.random.default_rng(seed)
+    L = rng.normal(size=3)
+    mesh = _geometry(rng)
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    s = summarize(V, V[np.asarray(mesh.faces)])
+    M = np.stack([_affine(rng, 3.0) for _ in range(12)])
+    c, r = _cull.world_spheres(M, np.broadcast_to(s.center, (12, 3)), np.full(12, s.radius))
+    seen = _cull.cube_faces_visible(L, c, r)
+    for k in range(12):
+        rel = _samples(_world(mesh, M[k]), 3) - L
+        for f, (axis, sign) in enumerate(_cull.CUBE_FACES):
+            if seen[f, k]:
+                continue
+            main = sign * rel[:, axis]
+            others = np.delete(rel, axis, axis=1)
+            assert not np.any(np.all(main[:, None] >= np.abs(others), axis=1))
+
+
+def test_cube_range_from_candidates_equals_every_object() -> None:
+    rng = np.random.default_rng(7)
+    scene = sm.ShadowScene()
+    ball = scene.add_geometry(meshes.sphere(0.5, segments=12, rings=6))
+    balls = np.stack([_affine(rng, 6.0) for _ in range(40)])
+    balls[:, 2, 3] += 12.0  # above the torus: they hold the far end
+    scene.add_objects(ball, balls)
+    # a torus around the light (its centre nearer than any of its points) and a ball
+    # nearer than the torus's ring: the nearest caster is the ball's
+    ring = scene.add_geometry(meshes.torus(2.0, 0.3, segments=32, sides=8))
+    scene.add_objects(ring, np.eye(4))
+    near_ball = np.eye(4)
+    near_ball[:3, 3] = [1.0, 1.0, 0.0]
+    scene.add_objects(scene.add_geometry(meshes.sphere(0.3, segments=8, rings=4)), near_ball)
+    light = sm.PointLight(np.array([0.0, 0.0, 0.0]))
+    scene_fit = scene.fit([light], 512)[0].fit
+    read = scene._triangles(scene._casts, light.position)  # the torus: its own triangles
+    every = sm.cube_depth_range(light.position, read, map_size=512, border_texels=1)
+    assert isinstance(scene_fit, sm.CubeDepthRange)
+    assert float(scene_fit.near) == float(every.near)
+    assert float(scene_fit.far) == float(every.far)
+    # the ball's nearest point (D = 0.79), not the torus's 26-DOP, whose slab holds the light
+    assert 0.7 < float(scene_fit.near) < 0.79
+
+
+# -- whole scenes ---------------------------------------------------------------------
+def _random_scene(rng: np.random.Generator, n: int = 10) -> tuple[sm.ShadowScene, list]:
+    """A scene of ``n`` placed geometries over a floor; returns it and (mesh, M) per object."""
+    scene = sm.ShadowScene()
+    floor_mesh = meshes.grid((30.0, 30.0))
+    floor = scene.add_geometry(floor_mesh)
+    scene.add_objects(floor, casts=False, static=True)
+    objects: list = [(floor_mesh, np.eye(4))]
+    for _ in range(n):
+        mesh = _geometry(rng)
+        M = _affine(rng, 5.0)
+        M[2, 3] = abs(M[2, 3]) + 2.0
+        scene.add_objects(scene.add_geometry(mesh), M)
+        objects.append((mesh, M))
+    return scene, objects
+
+
+def _inside_map(setup: sm.ShadowSetup, points: np.ndarray) -> np.ndarray:
+    """Texture coordinates of world points: (s, t, r) all in [0, 1] (and q > 0)."""
+    h = np.c_[points, np.ones(len(points))] @ np.asarray(setup.world_to_texture).T
+    q = h[:, 3]
+    stq = h[:, :3] / q[:, None]
+    tol = 1e-9
+    return (q > 0) & np.all((stq >= -tol) & (stq <= 1 + tol), axis=1)
+
+
+@given(SEEDS)
+@settings(max_examples=10, deadline=None)
+def test_spot_fit_holds_every_caster_in_its_cone(seed: int) -> None:
+    """Every point of every caster (its own triangles, sampled) inside the cone lies in the
+    map, and every object left out of the draw list has no point in the cone."""
+    rng = np.random.default_rng(seed)
+    scene, objects = _random_scene(rng)
+    L = np.r_[rng.uniform(-3, 3, 2), rng.uniform(8, 12)]
+    axis = np.r_[rng.uniform(-0.4, 0.4, 2), -1.0]
+    theta = float(rng.uniform(0.2, 0.8))
+    result = scene.fit([sm.SpotLight(L, axis, np.float64(theta))], 1024)[0]
+    drawn = set(result.draws[0].tolist())
+    for k, (mesh, M) in enumerate(objects):
+        if k == 0:
+            continue  # the floor casts nothing
+        p = _samples(_world(mesh, M), 4)
+        in_cone = _cone_distance(L, axis, theta, p) == 0
+        if k not in drawn:
+            assert not np.any(in_cone)
+        elif result.fit is not None:
+            assert np.all(_inside_map(result.fit, p[in_cone]))
+
+
+@given(SEEDS)
+@settings(max_examples=10, deadline=None)
+def test_sun_fit_equals_the_fit_of_every_summary(seed: int) -> None:
+    """The sun's fit from candidate objects is the fit of every caster's summary (the
+    others lie inside its box), and holds every caster's own vertices."""
+    rng = np.random.default_rng(seed)
+    scene, objects = _random_scene(rng)
+    sun = sm.DirectionalLight(np.r_[rng.uniform(-0.6, 0.6, 2), 1.0])
+    result = scene.fit([sun], 1024)[0]
+    assert result.fit is not None
+    casts = scene._casts[scene._owner]
+    every = sm.fit_shadow(sun, sm.Triangles(scene._world[casts]), 1024,
+                          receivers=sm.Triangles(scene._world))  # fmt: skip
+    for a, b in zip(result.fit.frustum, every.frustum, strict=True):
+        assert float(a) == pytest.approx(float(b), rel=1e-9, abs=1e-9)
+    assert np.allclose(result.fit.world_to_texture, every.world_to_texture, atol=1e-9)
+    for mesh, M in objects[1:]:
+        assert np.all(_inside_map(result.fit, _world(mesh, M).reshape(-1, 3)))
+    assert result.draws[0].tolist() == list(range(1, len(objects)))
+
+
+def test_cascade_draws_leave_out_only_what_cannot_shadow_the_slice() -> None:
+    """Objects left out of a cascade's draw list project wholly outside its map's window or
+    beyond its far plane (so they shadow nothing it covers)."""
+    rng = np.random.default_rng(3)
+    scene, objects = _random_scene(rng, 30)
+    view = np.eye(4)
+    view[:3, 3] = [0.0, 0.0, -40.0]  # looking down -z at the floor from 40 above
+    n, f = 1.0, 80.0
+    P = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0],
+                  [0, 0, -(f + n) / (f - n), -2 * f * n / (f - n)], [0, 0, -1, 0]])  # fmt: skip
+    sun = sm.DirectionalLight(np.array([0.3, 0.2, 1.0]))
+    result = scene.fit_cascades(sun, view, P, 512, count=4)
+    c = result.cascades
+    assert len(result.draws) == 4
+    left_out = 0
+    for i, drawn in enumerate(result.draws):
+        for k, (mesh, M) in enumerate(objects):
+            if k == 0 or k in set(drawn.tolist()):
+                continue
+            left_out += 1
+            h = np.c_[_world(mesh, M).reshape(-1, 3), np.ones(3 * len(mesh.faces))]
+            clip = h @ np.asarray(c.world_to_clip[i]).T
+            ndc = clip[:, :3] / clip[:, 3:]
+            outside = (np.abs(ndc[:, 0]) > 1) | (np.abs(ndc[:, 1]) > 1) | (ndc[:, 2] > 1)
+            assert np.all(outside)
+    assert left_out > 0  # the rule did cull something here
+
+
+def test_a_halved_bound_would_drop_a_caster() -> None:
+    """The constructed cases that the rules' bounds are not loose: a ball grazing the
+    cone, a cube face and the cube range, each kept, and dropped with its radius halved."""
+    L, axis, theta = np.zeros(3), np.array([0.0, 0.0, 1.0]), 0.3
+    # a ball of radius 1 whose nearest point is 0.5 inside the cone's side
+    d = 10.0
+    c = d * np.array([np.sin(theta + 0.12), 0.0, np.cos(theta + 0.12)])
+    gap = _cone_distance(L, axis, theta, c[None])[0]
+    r = gap + 0.5
+    assert _cull.spot_visible(L, axis, theta, c[None], np.array([r]))[0]
+    assert not _cull.spot_visible(L, axis, theta, c[None], np.array([r / 2]))[0]
+    # a ball beside the +X face, reaching 0.2 into it
+    c = np.array([[2.0, 2.0 + 1.2 * np.sqrt(2.0), 0.0]])
+    assert _cull.cube_faces_visible(L, c, np.array([1.4]))[0, 0]
+    assert not _cull.cube_faces_visible(L, c, np.array([0.7]))[0, 0]
+
+
+@pytest.mark.parametrize("side", range(5))
+def test_box_rule_keeps_a_sphere_reaching_in_by_half_its_radius(side: int) -> None:
+    """A sphere reaching 0.4 of its radius into each side of a cascade's window (or before
+    its far plane) is kept; moved out by its radius and more, dropped."""
+    window, far, r = np.array([-2.0, 3.0, -1.0, 4.0]), 10.0, 1.0
+    inward = [np.array([window[0] - 0.6, 1.0, 0.0]), np.array([window[1] + 0.6, 1.0, 0.0]),
+              np.array([0.0, window[2] - 0.6, 0.0]), np.array([0.0, window[3] + 0.6, 0.0]),
+              np.array([0.0, 1.0, far + 0.6])][side]  # fmt: skip
+    outward = [np.array([-1.6, 0, 0]), np.array([1.6, 0, 0]), np.array([0, -1.6, 0]),
+               np.array([0, 1.6, 0]), np.array([0, 0, 1.6])][side]  # fmt: skip
+    c = np.stack([inward, inward + outward])
+    keep = _cull.box_visible(np.eye(4), window, far, c, np.full(2, r))
+    assert keep.tolist() == [True, False]
+
+
+def test_scene_moves_only_what_changed_and_refuses_bad_input() -> None:
+    scene = sm.ShadowScene()
+    box = scene.add_geometry(meshes.box())
+    ids = scene.add_objects(box, np.stack([np.eye(4)] * 3))
+    floor = scene.add_objects(scene.add_geometry(meshes.grid((5.0, 5.0))), static=True)
+    assert ids.tolist() == [0, 1, 2] and floor.tolist() == [3]
+    M = scene.transforms
+    M[1, 0, 3] = 2.0
+    scene.set_transforms(M)
+    assert scene.moved.tolist() == [1]
+    assert scene.bounds()[1, 0] == pytest.approx(2.5)
+    scene.set_transforms(M)
+    assert scene.moved.tolist() == []
+    row_major = M.copy()
+    row_major[0] = np.eye(4)
+    row_major[0, 3, :3] = [1.0, 2.0, 3.0]  # translation in the bottom row
+    with pytest.raises(ValueError, match=r"transforms\[0\]: its last row"):
+        scene.set_transforms(row_major)
+    frozen = M.copy()
+    frozen[3, 1, 3] = 1.0
+    with pytest.raises(ValueError, match=r"transforms\[3\].*static=True"):
+        scene.set_transforms(frozen)
+    with pytest.raises(ValueError, match=r"transforms: expected shape \(4, 4, 4\)"):
+        scene.set_transforms(M[:2])
+    bad = M.copy()
+    bad[2, 0, 0] = np.nan
+    with pytest.raises(ValueError, match=r"transforms\[2\]: contains non-finite"):
+        scene.set_transforms(bad)
+    with pytest.raises(ValueError, match="geometry: no geometry 9"):
+        scene.add_objects(9)
+    with pytest.raises(ValueError, match="geometry: contains non-finite"):
+        scene.add_geometry(np.array([[0.0, 0.0, np.inf]]))
+    with pytest.raises(ValueError, match=r"geometry\.faces: indices must lie in"):
+        scene.add_geometry(sm.Mesh(np.zeros((3, 3)), np.array([[0, 1, 5]])))
+    with pytest.raises(ValueError, match=r"lights\[1\]: expected an sm.PointLight"):
+        scene.fit([sm.PointLight(np.array([0.0, 0.0, 5.0])), (0.0, 0.0, 5.0, 1.0)], 256)
+    with pytest.raises(ValueError, match=r"lights\[0\].position: expected shape \(3,\)"):
+        scene.fit([sm.PointLight(np.zeros((2, 3)))], 256)
+    with pytest.raises(ValueError, match="static: expected a bool"):
+        scene.add_objects(box, static=1)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="the scene has no objects"):
+        sm.ShadowScene().fit([sm.PointLight(np.zeros(3))], 256)
+
+
+def test_lights_out_of_reach_are_skipped_with_empty_draws() -> None:
+    scene = sm.ShadowScene()
+    box = scene.add_geometry(meshes.box())
+    lift = np.eye(4)
+    lift[2, 3] = 3.0
+    scene.add_objects(box, lift)
+    away = sm.SpotLight(np.array([0.0, 0.0, 10.0]), np.array([0.0, 0.0, 1.0]), np.float64(0.4))
+    at_box = sm.SpotLight(np.array([0.0, 0.0, 10.0]), np.array([0.0, 0.0, -1.0]), np.float64(0.4))
+    inside = sm.PointLight(np.array([0.0, 0.0, 3.0]))
+    away_fit, box_fit, inside_fit = scene.fit([away, at_box, inside], 256)
+    assert away_fit.fit is None and away_fit.skipped and away_fit.draws[0].size == 0
+    assert box_fit.skipped == "" and box_fit.draws[0].tolist() == [0]
+    assert isinstance(box_fit.fit, sm.ShadowSetup) and int(box_fit.fit.casters_used) > 0
+    # a point light inside the box: every face sees it, and its depth range stays exact
+    assert inside_fit.skipped == "" and all(d.tolist() == [0] for d in inside_fit.draws)
