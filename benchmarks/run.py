@@ -37,6 +37,9 @@ Sections (``--only NAME``, repeatable or comma-separated):
 * ``pygfx``: ``benchmarks/bench_pygfx.py``, ``shadowmath.integrations.pygfx.fit_scene_shadows``
   once a frame on an animated scene (14 meshes, a sun, a spot and a point light) against the
   time pygfx takes to draw that frame offscreen (skipped without pygfx or a wgpu adapter).
+* ``scene``: ``benchmarks/bench_scene.py``, ``ShadowScene``'s whole per-frame update (matrices
+  in, culling, 32 lights' fits, draw lists) for 1,000 objects at 10k and 1M triangles, against
+  today's per-light fit over every triangle; the draws the draw lists save.
 
 Each prints a Markdown table: median (with its repeat count), the baseline measured in the
 same process, ratio = median / baseline median, the issue's target and an informational
@@ -66,6 +69,7 @@ import bench_atlas
 import bench_cascades
 import bench_cube_depth
 import bench_pygfx
+import bench_scene
 import bench_sweep
 from speed import SECTIONS as SPEED_SECTIONS
 from speed._timing import Config, Section, table, target_line, targets
@@ -77,6 +81,7 @@ SECTIONS: dict[str, ModuleType] = {
     bench_atlas.NAME: bench_atlas,
     bench_cube_depth.NAME: bench_cube_depth,
     bench_pygfx.NAME: bench_pygfx,
+    bench_scene.NAME: bench_scene,
 }
 
 

@@ -32,6 +32,7 @@ EXPECTED = [
     "atlas",
     "cube",
     "pygfx",
+    "scene",
 ]
 
 

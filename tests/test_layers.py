@@ -1,12 +1,14 @@
 """The package's layers, read from every module's imports (lazy ones included).
 
-Bottom to top: ``_boundary`` (argument checks) -> ``_math`` (trusted cores) ->
+Bottom to top: ``_boundary`` (argument checks) -> ``_math`` and ``_scene`` (trusted
+cores) ->
 ``_backends`` (the compiled loops) -> ``_api`` (the public functions, each at its
 door, with the public modules ``lights``, ``receivers``, ``meshes``, ``gather`` and
-``groundtruth``) -> ``_fits`` -> ``shadowmath`` (the re-exports) -> ``render`` and
-``integrations`` -> ``cli`` -> ``__main__``. A module imports its own layer or lower
-ones, never a higher one; the clients on top import public names only; the cores take
-types and constants from the boundary, never its checks. ``docs/architecture.md``
+``groundtruth``) -> ``_fits`` (with the public ``scene``) -> ``shadowmath`` (the
+re-exports) -> ``render`` and ``integrations`` -> ``cli`` -> ``__main__``. A module
+imports its own layer or lower ones, never a higher one; the clients on top import
+public names only; the cores take types and constants from the boundary, never its
+checks. ``docs/architecture.md``
 draws the picture.
 """
 
@@ -20,10 +22,10 @@ from .test_layout import ROOT, _module
 
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("_boundary",),
-    ("_math",),
+    ("_math", "_scene"),
     ("_backends",),
     ("_api", "lights", "receivers", "meshes", "gather", "groundtruth"),
-    ("_fits",),
+    ("_fits", "scene"),
     ("",),  # shadowmath/__init__.py
     ("render", "integrations"),
     ("cli",),

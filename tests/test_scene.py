@@ -375,3 +375,14 @@ def test_lights_out_of_reach_are_skipped_with_empty_draws() -> None:
     assert isinstance(box_fit.fit, sm.ShadowSetup) and int(box_fit.fit.casters_used) > 0
     # a point light inside the box: every face sees it, and its depth range stays exact
     assert inside_fit.skipped == "" and all(d.tolist() == [0] for d in inside_fit.draws)
+
+
+def test_the_scenes_page_program_runs() -> None:
+    """docs/scenes.md's per-frame loop, as printed, runs and its assertions hold."""
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parent.parent / "docs" / "scenes.md").read_text()
+    blocks = page.split("```python\n")[1:]
+    assert blocks, "docs/scenes.md shows no program"
+    for block in blocks:
+        exec(compile(block.split("```")[0], "docs/scenes.md", "exec"), {})
