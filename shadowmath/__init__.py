@@ -123,6 +123,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from .receivers import Mesh as Mesh
     from .receivers import Triangles as Triangles
     from .scene import LightShadows as LightShadows
+    from .scene import SceneAtlas as SceneAtlas
     from .scene import SceneCascades as SceneCascades
     from .scene import ShadowScene as ShadowScene
 
@@ -253,6 +254,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
     ),
     ".scene": (
         "LightShadows",
+        "SceneAtlas",
         "SceneCascades",
         "ShadowScene",
     ),

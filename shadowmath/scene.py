@@ -33,6 +33,8 @@ import numpy as np
 
 from ._boundary._shapes import ArrayLike, Float, Int, Real
 from ._boundary._validate import check_faces
+from ._fits._atlas_allocate import ShadowAtlas
+from ._fits._atlas_fit import AtlasFit, fit_atlas
 from ._fits._cascades import Cascades, fit_cascades
 from ._fits._cube_depth import CubeDepthRange, cube_depth_range
 from ._fits._setup import fit_shadow
@@ -43,7 +45,7 @@ from ._scene._summary import Summary, summarize
 from .lights import DirectionalLight, PointLight, SpotLight
 from .receivers import Mesh, Triangles
 
-__all__ = ["LightShadows", "SceneCascades", "ShadowScene"]
+__all__ = ["LightShadows", "SceneAtlas", "SceneCascades", "ShadowScene"]
 
 IntArray = Int[np.ndarray, " K"]
 
@@ -81,6 +83,23 @@ class SceneCascades(NamedTuple):
 
     cascades: Cascades
     draws: tuple[IntArray, ...]
+
+
+class SceneAtlas(NamedTuple):
+    """A shadow atlas fitted to the scene, with a draw list per tile, from
+    :meth:`ShadowScene.fit_atlas`.
+
+    Attributes:
+        fit: the :class:`AtlasFit` of :func:`fit_atlas`.
+        draws: one integer array of object indices per tile (in the atlas's tile order).
+        moved: the objects whose matrix changed since the scene's previous
+            :meth:`~ShadowScene.fit_atlas` (every object at the first): give it, with
+            this and last frame's ``draws``, to :func:`atlas_redraw`.
+    """
+
+    fit: AtlasFit
+    draws: tuple[IntArray, ...]
+    moved: IntArray
 
 
 class _Geometry(NamedTuple):
@@ -123,6 +142,7 @@ class ShadowScene:
         self._radius = np.zeros(0)
         self._bounds = np.zeros((0, 2, 3))
         self._moved = np.zeros(0, dtype=np.int64)
+        self._moved_since_atlas = np.zeros(0, dtype=bool)
 
     # -- building -------------------------------------------------------------------
     def add_geometry(self, geometry: Mesh | Triangles | Real[ArrayLike, "V 3"]) -> int:
@@ -195,6 +215,7 @@ class ShadowScene:
         self._center = np.concatenate([self._center, np.zeros((K, 3))])
         self._radius = np.concatenate([self._radius, np.zeros(K)])
         self._bounds = np.concatenate([self._bounds, np.zeros((K, 2, 3))])
+        self._moved_since_atlas = np.concatenate([self._moved_since_atlas, np.ones(K, bool)])
         self._place(np.arange(first, first + K))
         return np.arange(first, first + K)
 
@@ -238,6 +259,7 @@ class ShadowScene:
         self._M[moved] = M[moved]
         self._place(moved)
         self._moved = moved
+        self._moved_since_atlas[moved] = True
 
     def bounds(self) -> Float[np.ndarray, "2 3"]:
         """``(2, 3)`` the world box ``[min, max]`` of every object (for ``scene_bounds``)."""
@@ -314,6 +336,81 @@ class ShadowScene:
             )  # fmt: skip
             draws.append(casting[keep])
         return SceneCascades(cascades, tuple(draws))
+
+    def fit_atlas(
+        self,
+        lights: Sequence[PointLight | SpotLight | DirectionalLight],
+        atlas: ShadowAtlas,
+        **options: Any,
+    ) -> SceneAtlas:
+        """:func:`fit_atlas` of the lights over the scene, with one draw list per tile.
+
+        Each light reads what :meth:`fit` reads for it: a spot light the casters whose
+        sphere reaches into its cone; a cube-mapped point light (``atlas.light_cube``)
+        the objects that may hold its nearest or farthest point, and each face draws the
+        casters whose sphere reaches into it; a sun or a point light with a 2D map every
+        caster. The lights' summaries go to :func:`fit_atlas` as one ``(L, M, 3, 3)``
+        batch, each light's padded to the longest by repeating its first triangle (which
+        changes no extreme; a 2D point light's mean direction is taken over them).
+
+        ``options`` are :func:`fit_atlas`' keywords (``api``, ``pcf_radius``, ``spec``...);
+        the receivers are the scene's. What :func:`fit_atlas` raises, this raises; and a
+        scene without casters is refused.
+        """
+        if not self._casts.any():
+            raise ValueError("the scene has no casters: add objects with casts=True")
+        checked = [_light(i, light) for i, light in enumerate(lights)]
+        if not isinstance(atlas, ShadowAtlas) or len(atlas.light_cube) != len(checked):
+            raise ValueError(
+                "atlas: expected the ShadowAtlas of these lights (allocate_atlas with one "
+                f"entry per light: {len(checked)})"
+            )
+        reads, draws = zip(
+            *(self._atlas_light(light, bool(cube)) for light, cube in
+              zip(checked, atlas.light_cube, strict=True)),
+            strict=True,
+        )  # fmt: skip
+        longest = max(len(t) for t in reads)
+        batch = np.stack(
+            [np.concatenate([t, np.repeat(t[:1], longest - len(t), 0)]) for t in reads]
+        )
+        recv = self._triangles(self._receives) if self._receives.any() else None
+        fit = fit_atlas(checked, Triangles(batch), atlas, receivers=recv, **options)
+        tiles = tuple(
+            draws[light][face if atlas.light_cube[light] else 0]
+            for light, face in zip(atlas.tile_light.tolist(), atlas.tile_face.tolist(), strict=True)
+        )  # fmt: skip
+        moved = np.flatnonzero(self._moved_since_atlas)
+        self._moved_since_atlas[:] = False
+        return SceneAtlas(fit, tiles, moved)
+
+    def _atlas_light(
+        self, light: PointLight | SpotLight | DirectionalLight, cube: bool
+    ) -> tuple[np.ndarray, tuple[IntArray, ...]]:
+        """One light's triangles for :func:`fit_atlas` and its draw lists (six for a cube)."""
+        casts = self._casts
+        if isinstance(light, PointLight) and cube:
+            position = np.asarray(light.position)
+            near, far = _cull.cube_range_candidates(position, self._center, self._radius,
+                                                    casts, self._receives)  # fmt: skip
+            casting = np.flatnonzero(casts)
+            faces = _cull.cube_faces_visible(position, self._center[casting], self._radius[casting])
+            tris = self._triangles((near | far) & casts, position).corners
+            return tris, tuple(casting[f] for f in faces)
+        if isinstance(light, SpotLight):
+            position = np.asarray(light.position)
+            reach = casts & _cull.spot_visible(
+                position,
+                np.asarray(light.direction),
+                float(light.angle),
+                self._center,
+                self._radius,
+            )
+            if not reach.any():  # one triangle behind the spot: its empty fit
+                behind = position - np.asarray(light.direction)
+                return np.repeat(behind[None, None], 3, axis=1), (np.zeros(0, np.int64),)
+            return self._triangles(reach, position).corners, (np.flatnonzero(reach),)
+        return self._triangles(casts).corners, (np.flatnonzero(casts),)
 
     # -- the steps ------------------------------------------------------------------
     def _place(self, objects: IntArray) -> None:

@@ -386,3 +386,72 @@ def test_the_scenes_page_program_runs() -> None:
     assert blocks, "docs/scenes.md shows no program"
     for block in blocks:
         exec(compile(block.split("```")[0], "docs/scenes.md", "exec"), {})
+
+
+def _atlas_scene() -> tuple[sm.ShadowScene, list, np.ndarray]:
+    scene = sm.ShadowScene()
+    box = scene.add_geometry(meshes.box((1.0, 1.0, 1.0)))
+    places = np.tile(np.eye(4), (6, 1, 1))
+    places[:, :3, 3] = [[0, 0, 1], [1.5, 0, 1], [8, 0, 1], [8, 1.5, 1], [-8, 0, 1], [-8, 2, 1]]
+    scene.add_objects(box, places)
+    scene.add_objects(scene.add_geometry(meshes.grid((30.0, 30.0))), casts=False, static=True)
+    lights = [
+        sm.SpotLight(np.array([0.0, 0.0, 8.0]), np.array([0.0, 0.0, -1.0]), np.float64(0.3)),
+        sm.PointLight(np.array([8.0, 0.5, 4.0])),
+        sm.DirectionalLight(np.array([0.1, 0.2, 1.0])),
+    ]
+    return scene, lights, places
+
+
+def test_scene_atlas_draws_per_tile_and_holds_the_casters() -> None:
+    scene, lights, places = _atlas_scene()
+    atlas = sm.allocate_atlas([0.5, 0.25, 0.5], atlas_size=2048, cube=[False, True, False])
+    result = scene.fit_atlas(lights, atlas)
+    assert len(result.draws) == atlas.tile_light.shape[0] == 8
+    spot_tile = int(atlas.light_tiles[0, 0])
+    assert result.draws[spot_tile].tolist() == [0, 1]  # the boxes under the spot
+    sun_tile = int(atlas.light_tiles[2, 0])
+    assert result.draws[sun_tile].tolist() == list(range(6))
+    for face in range(6):  # the point light at (8, 0.5, 4) above boxes 2 and 3: -Z sees them
+        drawn = result.draws[int(atlas.light_tiles[1, face])].tolist()
+        assert ({2, 3} <= set(drawn)) == (face == 5)
+    # every corner of a drawn box lands inside its tile (s, t within the tile's clamp)
+    corners = np.asarray(meshes.box((1.0, 1.0, 1.0)).vertices, dtype=np.float64)
+    for tile in (spot_tile, sun_tile):
+        for k in result.draws[tile]:
+            p = corners + places[k, :3, 3]
+            h = np.c_[p, np.ones(len(p))] @ np.asarray(result.fit.world_to_texture[tile]).T
+            st = h[:, :2] / h[:, 3:]
+            lo, hi = atlas.tile_clamp[tile, :2], atlas.tile_clamp[tile, 2:]
+            assert np.all((st >= lo - 1e-9) & (st <= hi + 1e-9))
+    assert result.moved.tolist() == list(range(7))  # everything is new at the first fit
+
+
+def test_atlas_redraw_learns_the_objects() -> None:
+    scene, lights, _ = _atlas_scene()
+    atlas = sm.allocate_atlas([0.5, 0.25, 0.5], atlas_size=2048, cube=[False, True, False])
+    first = scene.fit_atlas(lights, atlas)
+    again = scene.fit_atlas(lights, atlas)  # nothing moved, nothing changed
+    redraw = sm.atlas_redraw(again.fit, first.fit, draws=again.draws,
+                             previous_draws=first.draws, moved=again.moved)  # fmt: skip
+    assert again.moved.tolist() == [] and not redraw.any()
+    # box 1 turns in place by 90 degrees about z: the same solid, so the same fits
+    M = scene.transforms
+    M[1, :3, :3] = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # 90 deg
+    scene.set_transforms(M)
+    third = scene.fit_atlas(lights, atlas)
+    plain = sm.atlas_redraw(third.fit, again.fit)
+    assert not plain.any()  # the matrices alone see nothing
+    redraw = sm.atlas_redraw(third.fit, again.fit, draws=third.draws,
+                             previous_draws=again.draws, moved=third.moved)  # fmt: skip
+    spot_tile, sun_tile = int(atlas.light_tiles[0, 0]), int(atlas.light_tiles[2, 0])
+    assert third.moved.tolist() == [1]
+    assert redraw[spot_tile] and redraw[sun_tile]  # both draw box 1
+    # exactly the tiles that draw box 1 (the spot, the sun, the cube's -X face)
+    assert redraw.tolist() == [1 in d.tolist() for d in third.draws]
+    assert redraw[int(atlas.light_tiles[1, 1])] and redraw.sum() == 3
+    with pytest.raises(ValueError, match="give all three"):
+        sm.atlas_redraw(third.fit, again.fit, draws=third.draws)
+    with pytest.raises(ValueError, match=r"draws: expected one draw list per tile \(8\)"):
+        sm.atlas_redraw(third.fit, again.fit, draws=third.draws[:3],
+                        previous_draws=again.draws, moved=[])  # fmt: skip

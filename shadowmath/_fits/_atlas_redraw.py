@@ -8,6 +8,9 @@ the fits (:func:`fit_atlas`) know the matrices, so the rule compares two fits.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -19,7 +22,14 @@ from ._atlas_fit import AtlasFit
 __all__ = ["atlas_redraw"]
 
 
-def atlas_redraw(fit: AtlasFit, previous: AtlasFit | None) -> Bool[NDArray[np.bool_], " T"]:
+def atlas_redraw(
+    fit: AtlasFit,
+    previous: AtlasFit | None,
+    *,
+    draws: Sequence[Any] | None = None,
+    previous_draws: Sequence[Any] | None = None,
+    moved: Any = None,
+) -> Bool[NDArray[np.bool_], " T"]:
     r"""Which tiles of ``fit`` to draw this frame; the others already hold their depths.
 
     ``previous`` is the fit whose tiles the atlas texture holds (last frame's, every
@@ -40,7 +50,15 @@ def atlas_redraw(fit: AtlasFit, previous: AtlasFit | None) -> Bool[NDArray[np.bo
     left, joined or were reordered) but whose key, rect and matrices did not is not:
     its depths are still in its rect. Only the matrices are seen: when casters move
     inside a light's fitted frustum without changing its matrices, the caller redraws
-    that light's tiles too (``|`` its own mask).
+    that light's tiles too (``|`` its own mask), or gives the objects:
+
+    **Objects.** With ``draws`` (this frame's draw list per tile: object indices, as
+    :meth:`ShadowScene.fit_atlas` gives), ``previous_draws`` (the previous fit's, per
+    tile of ``previous``) and ``moved`` (the objects whose geometry or placement changed
+    since the previous fit: :attr:`SceneAtlas.moved`), a tile kept by the rule above is
+    redrawn too when its draw list differs from its previous one (as sets) or holds an
+    object of ``moved``: its depths are those of what it draws. A static scene under
+    static lights redraws nothing.
 
     A renderer that keeps the atlas from frame to frame clears (scissored) and draws
     exactly the flagged tiles' viewports, and samples every tile with this frame's
@@ -49,12 +67,15 @@ def atlas_redraw(fit: AtlasFit, previous: AtlasFit | None) -> Bool[NDArray[np.bo
     Arguments:
         fit: this frame's :class:`AtlasFit`.
         previous: the :class:`AtlasFit` the texture was drawn with, or None.
+        draws, previous_draws, moved: the objects (see above); give all three or none.
 
     Returns:
         ``(T,)`` bool NumPy array, one per tile of ``fit``.
 
     Raises:
-        ValueError: ``fit`` not an :class:`AtlasFit`, ``previous`` neither one nor None.
+        ValueError: ``fit`` not an :class:`AtlasFit`, ``previous`` neither one nor None;
+            ``draws``, ``previous_draws`` and ``moved`` not all given or all None, or a
+            draw list count that is not the fit's (the previous fit's) tile count.
 
     Example:
         >>> import numpy as np, shadowmath as sm
@@ -80,6 +101,7 @@ def atlas_redraw(fit: AtlasFit, previous: AtlasFit | None) -> Bool[NDArray[np.bo
             f"{type(previous).__name__}"
         )
     count = fit.tile_id.shape[0]
+    objects = _objects(fit, previous, draws, previous_draws, moved)
     if previous is None or previous.tile_id.size == 0:
         return np.ones(count, dtype=bool)
     if tuple(previous.texture_size) != tuple(fit.texture_size):
@@ -90,4 +112,39 @@ def atlas_redraw(fit: AtlasFit, previous: AtlasFit | None) -> Bool[NDArray[np.bo
     same_port = np.all(np.asarray(previous.viewports)[old] == np.asarray(fit.viewports), axis=1)
     old_clip = np.asarray(previous.world_to_clip)[old]
     same_clip = np.all(old_clip == np.asarray(fit.world_to_clip), axis=(1, 2))
-    return np.asarray(~(had & same_port & same_clip))
+    keep = had & same_port & same_clip
+    if objects is not None:
+        now, before, changed = objects
+        for t in np.flatnonzero(keep):
+            drawn, was = now[t], before[int(old[t])]
+            if set(drawn.tolist()) != set(was.tolist()) or changed[drawn].any():
+                keep[t] = False
+    return np.asarray(~keep)
+
+
+def _objects(
+    fit: AtlasFit, previous: AtlasFit | None, draws: Any, previous_draws: Any, moved: Any
+) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray] | None:
+    """The draw lists and a mask of the moved objects, checked; None without them."""
+    given = [x is not None for x in (draws, previous_draws, moved)]
+    if not any(given):
+        return None
+    if not all(given):
+        raise ValueError(
+            "draws, previous_draws, moved: give all three (this and the previous fit's "
+            "draw lists per tile, the objects that moved) or none"
+        )
+    lists = []
+    for name, value, ref in (("draws", draws, fit), ("previous_draws", previous_draws, previous)):
+        tiles = 0 if ref is None else ref.tile_id.shape[0]
+        rows = [np.asarray(d, dtype=np.int64).reshape(-1) for d in value]
+        if len(rows) != tiles:
+            raise ValueError(f"{name}: expected one draw list per tile ({tiles}), got {len(rows)}")
+        lists.append(rows)
+    moved_ids = np.asarray(moved, dtype=np.int64).reshape(-1)
+    if np.any(moved_ids < 0) or any(np.any(r < 0) for rows in lists for r in rows):
+        raise ValueError("draws, previous_draws, moved: object indices must be >= 0")
+    size = 1 + max([int(moved_ids.max(initial=-1))] + [int(r.max(initial=-1)) for r in lists[0]])
+    changed = np.zeros(size, dtype=bool)
+    changed[moved_ids] = True
+    return lists[0], lists[1], changed
