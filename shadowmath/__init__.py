@@ -125,7 +125,10 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from .scene import LightShadows as LightShadows
     from .scene import SceneAtlas as SceneAtlas
     from .scene import SceneCascades as SceneCascades
+    from .scene import SceneSummaries as SceneSummaries
     from .scene import ShadowScene as ShadowScene
+    from .scene import SummaryFit as SummaryFit
+    from .scene import fit_summaries as fit_summaries
 
 # Each public name and the module that defines it, imported on first use (PEP 562): ``import
 # shadowmath`` costs a dictionary, not the package (tests/test_lazy_import.py checks that this
@@ -256,7 +259,10 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "LightShadows",
         "SceneAtlas",
         "SceneCascades",
+        "SceneSummaries",
         "ShadowScene",
+        "SummaryFit",
+        "fit_summaries",
     ),
 }
 _WHERE = {name: module for module, names in _MODULES.items() for name in names}

@@ -32,7 +32,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ._boundary._shapes import ArrayLike, Float, Int, Real
-from ._boundary._validate import check_faces
+from ._boundary._validate import Array, check_faces, is_jax
 from ._fits._atlas_allocate import ShadowAtlas
 from ._fits._atlas_fit import AtlasFit, fit_atlas
 from ._fits._cascades import Cascades, fit_cascades
@@ -45,7 +45,15 @@ from ._scene._summary import Summary, summarize
 from .lights import DirectionalLight, PointLight, SpotLight
 from .receivers import Mesh, Triangles
 
-__all__ = ["LightShadows", "SceneAtlas", "SceneCascades", "ShadowScene"]
+__all__ = [
+    "LightShadows",
+    "SceneAtlas",
+    "SceneCascades",
+    "SceneSummaries",
+    "ShadowScene",
+    "SummaryFit",
+    "fit_summaries",
+]
 
 IntArray = Int[np.ndarray, " K"]
 
@@ -100,6 +108,40 @@ class SceneAtlas(NamedTuple):
     fit: AtlasFit
     draws: tuple[IntArray, ...]
     moved: IntArray
+
+
+class SceneSummaries(NamedTuple):
+    """A scene's world-space summaries as arrays with static shapes (a JAX pytree), from
+    :meth:`ShadowScene.summaries`, for :func:`fit_summaries`.
+
+    Attributes:
+        triangles: ``(T, 3, 3)`` every object's summary triangles in the world.
+        owner: ``(T,)`` integer: the object of each triangle.
+        center: ``(N, 3)`` each object's world bounding sphere's centre.
+        radius: ``(N,)`` its radius.
+        casts: ``(N,)`` bool: the object casts shadows.
+        receives: ``(N,)`` bool: it receives them.
+    """
+
+    triangles: Float[Array, "T 3 3"]
+    owner: Int[Array, " T"]
+    center: Float[Array, "N 3"]
+    radius: Float[Array, " N"]
+    casts: Any
+    receives: Any
+
+
+class SummaryFit(NamedTuple):
+    """One light's fit from :func:`fit_summaries`, with its draw lists as masks.
+
+    Attributes:
+        fit: a :class:`ShadowSetup` (sun, spot) or :class:`CubeDepthRange` (point light).
+        draws: ``(maps, N)`` bool: object ``k`` is drawn into map ``m`` (one map for a
+            sun or a spot, six cube faces ``+X, -X, +Y, -Y, +Z, -Z`` for a point light).
+    """
+
+    fit: ShadowSetup | CubeDepthRange
+    draws: Any
 
 
 class _Geometry(NamedTuple):
@@ -260,6 +302,14 @@ class ShadowScene:
         self._place(moved)
         self._moved = moved
         self._moved_since_atlas[moved] = True
+
+    def summaries(self) -> SceneSummaries:
+        """The scene as it is now, as arrays with static shapes for :func:`fit_summaries`
+        (copies; ``jax.numpy.asarray`` them to fit under ``jit`` and ``vmap``)."""
+        return SceneSummaries(
+            self._world.copy(), self._owner.copy(), self._center.copy(), self._radius.copy(),
+            self._casts.copy(), self._receives.copy(),
+        )  # fmt: skip
 
     def bounds(self) -> Float[np.ndarray, "2 3"]:
         """``(2, 3)`` the world box ``[min, max]`` of every object (for ``scene_bounds``)."""
@@ -485,8 +535,9 @@ class ShadowScene:
             W2L, box = np.asarray(fit.world_to_light), fit.frustum
             out_c = casts & ~cand_c & ~_cull.inside_box(W2L, box, c, r, receiver=False)
             out_r = receives & ~cand_r & ~_cull.inside_box(W2L, box, c, r, receiver=True)
-            if not (out_c.any() or out_r.any()):
-                return fit
+            if not (out_c.any() or out_r.any()):  # a sun uses every caster: count them all
+                used = np.asarray(np.count_nonzero(casts[self._owner]))
+                return fit._replace(casters_used=used)
             cand_c, cand_r = cand_c | out_c, cand_r | out_r
 
     def _fit_cube(self, light: PointLight, spec: ShadowMapSpec) -> LightShadows:
@@ -579,3 +630,116 @@ def _light(i: int, light: object) -> PointLight | SpotLight | DirectionalLight:
             raise ValueError(f"{name}.{field}: contains non-finite values (NaN or inf)")
         fields.append(a)
     return type(light)(*fields)
+
+
+def fit_summaries(
+    light: PointLight | SpotLight | DirectionalLight,
+    summaries: SceneSummaries,
+    map_size: int | tuple[int, int] | ShadowMapSpec,
+    *,
+    up: Real[ArrayLike, "3"] | None = None,
+) -> SummaryFit:
+    r"""One light's fit from a scene's summaries, on whole arrays: NumPy or JAX.
+
+    The array form of :meth:`ShadowScene.fit`, with static shapes, so that it runs under
+    ``jax.jit`` and ``jax.vmap`` (a batch of lights, or of scenes of one layout): the
+    culling rules of :meth:`ShadowScene.fit` give masks instead of dropped objects, and
+    a triangle masked out is replaced by one that changes nothing:
+
+    * **spot light**: the casters whose sphere reaches into the cone
+      (:func:`._cull.spot_visible`); every other triangle becomes the point
+      ``position - direction`` behind the light, which the spot's selection drops;
+      receivers likewise. Nothing in the cone: the spot's empty fit.
+    * **sun**: every caster; a receiver-only triangle becomes a copy of the first
+      caster's (inside the map, before its far plane).
+    * **point light**: a cube map's :func:`cube_depth_range` over every caster (others
+      replaced by the first caster's triangle) and receiver; per face the casters whose
+      sphere reaches into it (:func:`._cull.cube_faces_visible`).
+
+    Unlike :meth:`ShadowScene.fit`, an object whose bounding sphere holds the light is
+    read by its summary too (its own triangles would change the shapes): where that
+    summary holds the light, the fit refuses it as a caster at the light (NaN under JAX
+    transformations, as every refusal).
+
+    Arguments:
+        light: a typed light, unbatched (``vmap`` over a batch of them).
+        summaries: :meth:`ShadowScene.summaries` (NumPy or JAX arrays).
+        map_size: the map's size or :class:`ShadowMapSpec` (a cube map uses its size and
+            border).
+        up: an optional up hint (sun, spot).
+
+    Returns:
+        :class:`SummaryFit`.
+
+    Raises:
+        ValueError: a light that is not typed, ``summaries`` that are not
+            :class:`SceneSummaries` or have inconsistent shapes; what :func:`fit_shadow`
+            and :func:`cube_depth_range` raise (NaN under JAX transformations).
+
+    Example:
+        >>> import numpy as np, shadowmath as sm
+        >>> from shadowmath import meshes
+        >>> scene = sm.ShadowScene()
+        >>> box = scene.add_geometry(meshes.box())
+        >>> lift = np.eye(4); lift[2, 3] = 2.0
+        >>> aside = lift.copy(); aside[0, 3] = 5.0
+        >>> _ = scene.add_objects(box, np.stack([lift, aside]))
+        >>> spot = sm.SpotLight(np.array([0.0, 0.0, 6.0]), np.array([0.0, 0.0, -1.0]), 0.3)
+        >>> one = sm.fit_summaries(spot, scene.summaries(), 512)
+        >>> one.draws.tolist(), int(one.fit.casters_used)  # the box aside: masked out
+        ([[True, False]], 12)
+    """
+    if not isinstance(light, PointLight | SpotLight | DirectionalLight):
+        raise ValueError(
+            "light: expected an sm.PointLight, sm.SpotLight or sm.DirectionalLight, got "
+            f"{type(light).__name__}"
+        )
+    if not isinstance(summaries, SceneSummaries):
+        raise ValueError(
+            f"summaries: expected ShadowScene.summaries(), got {type(summaries).__name__}"
+        )
+    T, N = np.shape(summaries.triangles)[0], np.shape(summaries.center)[0]
+    if (
+        np.shape(summaries.triangles) != (T, 3, 3)
+        or np.shape(summaries.owner) != (T,)
+        or any(np.shape(a) != (N,) for a in (summaries.radius, summaries.casts, summaries.receives))
+    ):
+        raise ValueError("summaries: inconsistent shapes (use ShadowScene.summaries())")
+    spec = map_size if isinstance(map_size, ShadowMapSpec) else ShadowMapSpec(map_size)
+    xp = _namespace(summaries)
+    tris, owner = summaries.triangles, summaries.owner
+    casts, receives = summaries.casts, summaries.receives
+    first = tris[xp.argmax(casts[owner])]  # the first caster's triangle (any, if none)
+    if isinstance(light, SpotLight):
+        reach = spot_reach = _cull.spot_visible(
+            xp.asarray(light.position), xp.asarray(light.direction), light.angle,
+            summaries.center, summaries.radius, xp=xp,
+        )  # fmt: skip
+        behind = xp.asarray(light.position) - xp.asarray(light.direction)
+        gone = xp.broadcast_to(behind, (3, 3))
+        cast_t = xp.where((casts & reach)[owner][:, None, None], tris, gone)
+        recv_t = xp.where((receives & spot_reach)[owner][:, None, None], tris, gone)
+        fit: ShadowSetup | CubeDepthRange = fit_shadow(
+            light, Triangles(cast_t), spec, receivers=Triangles(recv_t), up=up
+        )
+        return SummaryFit(fit, (casts & reach)[None])
+    cast_t = xp.where(casts[owner][:, None, None], tris, first)
+    recv_t = xp.where(receives[owner][:, None, None], tris, first)
+    if isinstance(light, DirectionalLight):
+        fit = fit_shadow(light, Triangles(cast_t), spec, receivers=Triangles(recv_t), up=up)
+        used = xp.sum(casts[owner])  # the copies of the first caster are not casters
+        return SummaryFit(fit._replace(casters_used=used), casts[None])
+    position = xp.asarray(light.position)
+    fit = cube_depth_range(position, Triangles(cast_t), receivers=Triangles(recv_t),
+                           map_size=spec.size[0], border_texels=spec.border)  # fmt: skip
+    faces = _cull.cube_faces_visible(position, summaries.center, summaries.radius, xp=xp)
+    return SummaryFit(fit, faces & casts)
+
+
+def _namespace(summaries: SceneSummaries) -> Any:
+    """``jax.numpy`` when any array is a JAX array (or tracer), else NumPy."""
+    if any(is_jax(a) for a in summaries):
+        import jax.numpy as jnp
+
+        return jnp
+    return np

@@ -36,6 +36,7 @@ from the draw lists equal those drawn with every caster in every map.
 
 from __future__ import annotations
 
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -59,17 +60,21 @@ def world_spheres(
 def spot_visible(
     position: Float[Array, "3"],
     axis: Float[Array, "3"],
-    angle: float,
+    angle: Any,
     center: Float[Array, "N 3"],
     radius: Float[Array, " N"],
+    *,
+    xp: ModuleType = np,
 ) -> Bool[Array, " N"]:
-    """``(N,)`` the spheres that reach into the cone (see the module): kept."""
+    """``(N,)`` the spheres that reach into the cone (see the module): kept. ``xp`` the
+    arrays' namespace (NumPy or ``jax.numpy``)."""
     rel = center - position
-    dist = np.linalg.norm(rel, axis=1)
+    dist = xp.sqrt(xp.sum(rel * rel, axis=-1))
     inside = dist <= radius
-    spread = angle + np.arcsin(np.clip(radius / np.where(inside, 1.0, dist), 0.0, 1.0))
-    cos_angle = (rel @ (axis / np.linalg.norm(axis))) / np.where(inside, 1.0, dist)
-    return inside | (spread >= np.pi) | (cos_angle >= np.cos(np.minimum(spread, np.pi)))
+    safe = xp.where(inside, 1.0, dist)
+    spread = angle + xp.arcsin(xp.clip(radius / safe, 0.0, 1.0))
+    cos_angle = (rel @ axis) / xp.sqrt(xp.sum(axis * axis)) / safe
+    return inside | (spread >= np.pi) | (cos_angle >= xp.cos(xp.minimum(spread, np.pi)))
 
 
 #: The cube's faces as (axis, sign) in pygfx's and OpenGL's order +X, -X, +Y, -Y, +Z, -Z.
@@ -77,7 +82,11 @@ CUBE_FACES = ((0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0), (2, 1.0), (2, -1.0))
 
 
 def cube_faces_visible(
-    position: Float[Array, "3"], center: Float[Array, "N 3"], radius: Float[Array, " N"]
+    position: Float[Array, "3"],
+    center: Float[Array, "N 3"],
+    radius: Float[Array, " N"],
+    *,
+    xp: ModuleType = np,
 ) -> Bool[Array, "6 N"]:
     """``(6, N)`` for each cube face, the spheres that reach into its pyramid."""
     rel = center - position
@@ -85,9 +94,9 @@ def cube_faces_visible(
     rows = []
     for axis, sign in CUBE_FACES:
         main = sign * rel[:, axis]
-        others = [rel[:, k] for k in range(3) if k != axis]
-        rows.append(np.all([main - np.abs(o) >= -slack for o in others], axis=0))
-    return np.array(rows)
+        a, b = (rel[:, k] for k in range(3) if k != axis)
+        rows.append((main - xp.abs(a) >= -slack) & (main - xp.abs(b) >= -slack))
+    return xp.stack(rows)
 
 
 def cube_range_candidates(
