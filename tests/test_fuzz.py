@@ -55,6 +55,7 @@ from .strategies import (
     sized_maps,
     unit_vectors,
 )
+from .test_scene import _cone_distance, _inside_map, _random_scene, _samples, _world
 from .test_stable_sphere import DUPLICATE
 
 CASES: Counter[str] = Counter()
@@ -2960,3 +2961,40 @@ def test_fuzz_widen_cascades(data: st.DataObject) -> None:
     np.testing.assert_allclose(b.half_height, np.asarray(a.half_height) + w, rtol=1e-9)
     np.testing.assert_allclose(b.center_x, a.center_x, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(b.center_y, a.center_y, rtol=1e-9, atol=1e-9)
+
+
+@given(st.integers(0, 2**32 - 1))
+@settings(deadline=None)
+def test_fuzz_shadow_scene(seed: int) -> None:
+    """Random scenes and lights through ``ShadowScene.fit``: an object left out of a map's
+    draw list has no point (sampled on its own triangles) where a segment from a lit point
+    of that map to the light could pass, and every drawn caster's points that the map can
+    shadow lie in the fitted map (the spot's texture square, the sun's box, the cube's
+    depth range)."""
+    rng = np.random.default_rng(seed)
+    scene, objects = _random_scene(rng, int(rng.integers(1, 8)))
+    lights = [
+        sm.SpotLight(np.r_[rng.uniform(-4, 4, 2), rng.uniform(6, 12)],
+                     np.r_[rng.uniform(-0.5, 0.5, 2), -1.0], np.float64(rng.uniform(0.1, 1.2))),
+        sm.DirectionalLight(np.r_[rng.uniform(-0.7, 0.7, 2), 1.0]),
+        sm.PointLight(np.r_[rng.uniform(-4, 4, 2), rng.uniform(6, 12)]),
+    ]  # fmt: skip
+    spot, sun, point = scene.fit(lights, 512)
+    points = [_samples(_world(mesh, M), 3) for mesh, M in objects]
+    L, axis, theta = lights[0]
+    for k in range(1, len(objects)):
+        in_cone = _cone_distance(L, axis, float(theta), points[k]) == 0
+        if k not in spot.draws[0]:
+            assert not np.any(in_cone)
+        elif spot.fit is not None:
+            assert np.all(_inside_map(spot.fit, points[k][in_cone]))
+        assert k in sun.draws[0]
+        assert sun.fit is not None and np.all(_inside_map(sun.fit, points[k]))
+        rel = points[k] - lights[2].position
+        if point.fit is not None:
+            D = np.max(np.abs(rel), axis=1)
+            assert np.all((float(point.fit.near) <= D) & (float(point.fit.far) >= D))
+        for face, (ax, sign) in enumerate(((0, 1), (0, -1), (1, 1), (1, -1), (2, 1), (2, -1))):
+            seen = np.all(sign * rel[:, ax, None] >= np.abs(np.delete(rel, ax, axis=1)), axis=1)
+            if k not in point.draws[face]:
+                assert not np.any(seen)
