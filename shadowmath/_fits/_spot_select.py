@@ -3,6 +3,12 @@
 
 The frame is the fit's own (:func:`._fit_formulas.fit_axes` of the cone's axis and
 ``up``), so the pyramid the casters are clipped to is the one the map is clipped to.
+
+Triangles are clipped by the compiled loop (:mod:`shadowmath._math._spot_loop`) for
+one NumPy light with Numba (:func:`clipped`), by
+:func:`._spot_casters.select_triangles` for other NumPy input (only the straddling
+triangles through the 19 candidates), and by :func:`._spot_casters.clip_triangles`
+(static shapes) under JAX. The first two hand the fit the kept points only.
 """
 
 from __future__ import annotations
@@ -41,9 +47,9 @@ def spot_selection(
             return sc.to_local(xp, B, sc.empty_square(xp, position, axes, t, depth))
 
         if xp is np and triangles:
-            if _kernels.available() and casters.ndim == 3 and planes.ndim == 2:
-                if bool(np.all(np.isfinite(planes))):
-                    return clipped(planes, casters, square, ctx.eps)
+            one = casters.ndim == 3 and planes.ndim == 2  # one light, unbatched casters
+            if _kernels.available() and one and bool(np.all(np.isfinite(planes))):
+                return clipped(planes, casters, square, ctx.eps)
             return sc.select_triangles(planes, casters, square, ctx.eps)
         if xp is np and _all_kept(planes, points, ctx.eps):  # the common case
             shape = np.broadcast_shapes(planes.shape[:-2], points.shape[:-2])

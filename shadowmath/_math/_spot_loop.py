@@ -124,11 +124,10 @@ def _spot_dropped(g: Any, tau: float) -> bool:
         if g0[k] < -2.0 * tau and g1[k] < -2.0 * tau and g2[k] < -2.0 * tau:
             return True
     behind = -8.0 * tau
-    return (
-        g0[0] + g0[1] + g0[2] + g0[3] < behind
-        and g1[0] + g1[1] + g1[2] + g1[3] < behind
-        and g2[0] + g2[1] + g2[2] + g2[3] < behind
-    )
+    s0: float = g0[0] + g0[1] + g0[2] + g0[3]
+    s1: float = g1[0] + g1[1] + g1[2] + g1[3]
+    s2: float = g2[0] + g2[1] + g2[2] + g2[3]
+    return s0 < behind and s1 < behind and s2 < behind
 
 
 def spot_clip_loop(T: Any, P: Any, eps: float, start: int, out: Any, at: int) -> Any:
@@ -140,6 +139,15 @@ def spot_clip_loop(T: Any, P: Any, eps: float, start: int, out: Any, at: int) ->
     Returns ``(stop, at, kept)``: the first triangle not done (``M`` when all are; the
     loop stops before a triangle when fewer than 19 rows are left), the next free row
     and the number of triangles of this call that stored a point.
+
+    Example (run by Python; :func:`shadowmath._backends._kernels.loops` compiles it):
+        >>> from shadowmath._math._spot_casters import pyramid_planes
+        >>> planes = pyramid_planes(np, np.zeros(3), np.eye(3), np.array(1.0))  # |x|, |y| <= z
+        >>> tri = np.array([0.0, 1.0, -1.0, 0.5, 1.0, 3.0, -0.5, 1.0, 3.0])  # y = 1, across y = z
+        >>> out = np.empty((19, 3))
+        >>> stop, at, kept = spot_clip_loop(tri, planes, 2.0**-52, 0, out, 0)
+        >>> stop, kept, float(out[:at, 2].min()), float(out[:at, 2].max())  # clipped at z = 1
+        (1, 1, 1.0, 3.0)
     """
     S = _spot_sides(P)
     M = len(T) // 9
