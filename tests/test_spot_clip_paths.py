@@ -169,15 +169,35 @@ def test_the_array_form_keeps_what_clip_triangles_keeps(scene: tuple[Any, ...]) 
     position, axes, planes, eps = _planes(light)
     ref = sc.clip_triangles(np, planes, tris, SQUARE, eps)
     got = sc.select_triangles(planes, tris, _square, eps)
+    with _block(3):
+        few = sc.select_triangles(planes, tris, _square, eps)
+    assert int(few.kept) == int(ref.kept)
+    _assert_same(_summary(few.points, position, axes), _summary(got.points, position, axes), dtype)
     assert int(got.kept) == int(ref.kept)
     _assert_same(_summary(got.points, position, axes), _summary(ref.points, position, axes), dtype)
 
 
+@contextlib.contextmanager
+def _block(size: int) -> Iterator[None]:
+    """:func:`sc.select_triangles` classifying ``size`` triangles at a time."""
+    old = sc.BLOCK
+    sc.BLOCK = size
+    try:
+        yield
+    finally:
+        sc.BLOCK = old
+
+
 @settings(max_examples=40, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), dtype=st.sampled_from(DTYPES))
-def test_batched_lights_and_casters_keep_each_entrys_points(seed: int, dtype: Any) -> None:
+@given(
+    seed=st.integers(0, 2**32 - 1), dtype=st.sampled_from(DTYPES), block=st.sampled_from([5, 2048])
+)
+def test_batched_lights_and_casters_keep_each_entrys_points(
+    seed: int, dtype: Any, block: int
+) -> None:
     """Lights ``(2, 3)`` over shared casters, and over casters per light: each entry holds
-    its own kept points (padded with its first), or its square when it keeps none."""
+    its own kept points (padded with its first), or its square when it keeps none; alike
+    when the triangles are classified a few at a time."""
     rng = np.random.default_rng(seed)
     lights = np.array([_light(rng) for _ in range(6)]).reshape(2, 3, 8)
     shared = _triangles(rng, list(rng.choice(KINDS[:5], size=12)), lights[1, 2])
@@ -189,7 +209,8 @@ def test_batched_lights_and_casters_keep_each_entrys_points(seed: int, dtype: An
         ctx, _ = convert(light=lights.astype(dtype))
         position, axes, t = _frame(ctx, lights.astype(dtype), None)
         planes = sc.pyramid_planes(np, position, axes, t)
-        got = sc.select_triangles(planes, casters.astype(dtype), lambda: squares, ctx.eps)
+        with _block(block):
+            got = sc.select_triangles(planes, casters.astype(dtype), lambda: squares, ctx.eps)
         assert got.points.shape[:2] == (2, 3) and got.kept.shape == (2, 3)
         for i in np.ndindex(2, 3):
             tris = (casters if casters.ndim == 3 else casters[i]).astype(dtype)

@@ -259,10 +259,12 @@ def classify(G: Array, eps: float) -> tuple[Array, Array]:
     return inside, ~inside & ~(finite & (outside | behind))
 
 
-#: Triangles classified at a time by :func:`select_triangles`: the corners' values of a
-#: block (``12 x 8192`` floats) and their temporaries stay in cache and reuse memory (one
-#: pass over the whole ``(12, M)`` array writes fresh pages: about twice the time).
-BLOCK = 8192
+#: Triangles classified at a time by :func:`select_triangles`. A block's corner values
+#: (``12 x 2048`` floats) and their temporaries stay in cache and reuse memory (one pass
+#: over the whole ``(12, M)`` array writes fresh pages: about twice the time), and its
+#: product ``(12, 9) @ (9, 2048)`` stays under OpenBLAS's bound for threads (``m n k <=
+#: 65536 * 4``): on a loaded machine its threads made blocks of 8192 five times slower.
+BLOCK = 2048
 
 
 def select_triangles(
@@ -288,7 +290,7 @@ def select_triangles(
     g_st, c_st, e_st = [], [], []  # the straddling triangles' values, corners, entries
     for start in range(0, count, BLOCK):
         part = slice(start, start + BLOCK)
-        G = corner_values(planes, corners[..., part, :, :])  # (*batch, 3, 4, BLOCK)
+        G = corner_values(planes, corners[..., part, :, :])  # (*batch, 3, 4, <= BLOCK)
         inside[..., part], straddle = classify(G, eps)
         inside[..., part] |= ~finite
         straddle &= finite
