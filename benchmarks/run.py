@@ -34,6 +34,10 @@ Sections (``--only NAME``, repeatable or comma-separated):
   moved over frames of small motion.
 * ``cube``: ``benchmarks/bench_cube_depth.py``, ``cube_depth_range`` on 1,000, 5,000 and 50,000
   caster triangles against one flat NumPy read of the same array (and jitted JAX on 5,000).
+* ``spot``: ``benchmarks/bench_spot.py``, one spot light's ``fit_shadow`` over 43,212 caster
+  triangles of 50 gathered meshes (its cone covering part of them), with the ``fast`` extra
+  and with NumPy alone, against a directional light's fit of the same triangles; the former
+  selection (19 candidates per triangle) timed alone.
 * ``pygfx``: ``benchmarks/bench_pygfx.py``, ``shadowmath.integrations.pygfx.fit_scene_shadows``
   once a frame on an animated scene (14 meshes, a sun, a spot and a point light) against the
   time pygfx takes to draw that frame offscreen (skipped without pygfx or a wgpu adapter).
@@ -70,6 +74,7 @@ import bench_cascades
 import bench_cube_depth
 import bench_pygfx
 import bench_scene
+import bench_spot
 import bench_sweep
 from speed import SECTIONS as SPEED_SECTIONS
 from speed._timing import Config, Section, table, target_line, targets
@@ -80,6 +85,7 @@ SECTIONS: dict[str, ModuleType] = {
     bench_sweep.NAME: bench_sweep,
     bench_atlas.NAME: bench_atlas,
     bench_cube_depth.NAME: bench_cube_depth,
+    bench_spot.NAME: bench_spot,
     bench_pygfx.NAME: bench_pygfx,
     bench_scene.NAME: bench_scene,
 }

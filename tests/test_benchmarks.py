@@ -31,6 +31,7 @@ EXPECTED = [
     "sweep",
     "atlas",
     "cube",
+    "spot",
     "pygfx",
     "scene",
 ]

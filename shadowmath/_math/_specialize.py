@@ -4,9 +4,10 @@ The formulas of :mod:`._formulas` and :mod:`._fit_formulas` (and the loops of
 :mod:`._loops` that drive them per entry, and fit_cascades' steps, :mod:`._cascade_steps`)
 are written with five primitives (``where``, ``sqrt``, ``fabs``, ``rint``, ``isfinite``;
 the cascades' steps also ``log2``, ``alloc``, ``flag`` and ``take_last``). :func:`specialize`
-copies every one of them into one namespace where those names mean one backend's
-functions, so a specialized formula calls specialized formulas: the frame, the
-frustum, the fits and the matrices are written once and the backends cannot drift.
+copies every one of them (and a spot light's triangle clipping, :mod:`._spot_loop`) into
+one namespace where those names mean one backend's functions, so a specialized formula
+calls specialized formulas: the frame, the frustum, the fits and the matrices are written
+once and the backends cannot drift.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from . import (
     _loops,
     _pcss,
     _rows,
+    _spot_loop,
     _vertex_passes,
 )
 
@@ -45,6 +47,7 @@ _MODULES = (
     (_cascade_steps, _cascade_steps.FUNCTIONS),
     (_cascade_bounds, _cascade_bounds.FUNCTIONS),
     (_pcss, _pcss.FUNCTIONS),
+    (_spot_loop, _spot_loop.FUNCTIONS),
 )
 
 
