@@ -457,17 +457,32 @@ def _hand_over(light: Any, result: LightShadows, items: list[DrawItem]) -> Light
     return LightFit(light, fit, "", draws)
 
 
-#: A geometry's data version: ``(positions.rev, indices.rev or -1, sum of positions)``.
-_Version = tuple[int, int, float]
+#: A geometry's data version: ``positions.rev``, ``indices.rev`` (or -1) and the
+#: :func:`_fingerprint` of each.
+_Version = tuple[int, int, float, float]
+
+_WEIGHTS = np.zeros(0)
+
+
+def _fingerprint(data: Any) -> float:
+    """A weighted sum of an array's values, with fixed pseudo-random weights: it changes
+    when values change (in place too), with probability 1; NaN when one is NaN."""
+    global _WEIGHTS
+    flat = np.asarray(data).reshape(-1)
+    if len(flat) > len(_WEIGHTS):
+        _WEIGHTS = np.random.default_rng(2026).uniform(0.5, 1.5, max(len(flat), 2 * len(_WEIGHTS)))
+    return float(np.dot(flat, _WEIGHTS[: len(flat)]))
 
 
 class _SceneState:
     """What :func:`fit_scene_shadows` keeps of one pygfx scene between calls.
 
     ``summaries`` maps a geometry's data version (:data:`_Version`: pygfx's revision
-    numbers, globally unique and renewed by every ``update_range``, ``update_full`` or
-    ``set_data``, and the sum of the positions, which catches most edits made without
-    them) to its summary (None: no faces); ``key`` is the structure the
+    numbers, globally unique, and a fingerprint of the positions' and indices' values:
+    pygfx 0.17 renews ``rev`` on ``update_range``/``update_full`` only once the buffer has
+    been uploaded, so an edit before the first draw, or one without telling pygfx, is
+    seen by the fingerprint alone) to its summary (None: no faces); ``key`` is the
+    structure the
     :class:`ShadowScene` was built for: per mesh in scene order, ``(version,
     cast_shadow, receive_shadow, instance count)``, and ``refs`` the meshes themselves
     (weakly: the cache must not keep a scene alive).
@@ -487,17 +502,21 @@ class _SceneState:
         flags, instance counts or geometry versions changed; its transforms set), or None
         when nothing casts."""
         meshes, key = [], []
-        sums: dict[int, float] = {}  # this frame's, per positions buffer
+        sums: dict[int, _Version] = {}  # this frame's, per geometry
         for mesh in root.iter(lambda o: isinstance(o, gfx.Mesh), skip_invisible=True):
             cast, receive = bool(mesh.cast_shadow), bool(mesh.receive_shadow)
             if not (cast or receive):
                 continue
             geometry = mesh.geometry
             positions, indices = geometry.positions, getattr(geometry, "indices", None)
-            total = sums.get(id(positions))
-            if total is None:
-                total = sums[id(positions)] = float(np.sum(positions.data, dtype=np.float64))
-            version = (positions.rev, -1 if indices is None else indices.rev, total)
+            version = sums.get(id(geometry))
+            if version is None:
+                version = sums[id(geometry)] = (
+                    positions.rev,
+                    -1 if indices is None else indices.rev,
+                    _fingerprint(positions.data),
+                    0.0 if indices is None else _fingerprint(indices.data),
+                )
             count = mesh.instance_buffer.nitems if isinstance(mesh, gfx.InstancedMesh) else 1
             meshes.append(mesh)
             key.append((version, cast, receive, count))
