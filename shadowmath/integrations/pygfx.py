@@ -36,6 +36,34 @@ shadow object's camera and the matrices pygfx draws and samples with change.
   ``look_at`` of a direction parallel to the camera's up (0, 1, 0) leaves that face
   looking down -Z, which loses every shadow cast toward +Y.
 
+**The cache.** :func:`fit_scene_shadows` keeps, per pygfx scene (a
+:class:`weakref.WeakKeyDictionary` keyed by the object it is given: dropped with it), an
+:class:`shadowmath.ShadowScene`: one object per visible ``gfx.Mesh`` with
+``cast_shadow`` or ``receive_shadow`` (one per instance of a ``gfx.InstancedMesh``,
+placed by its world matrix times the instance's), each geometry summarized once (its
+own triangles when few, else its 26-DOP's surface). A call reads the meshes, their flags,
+instance counts and geometries' versions; if any of these changed (a mesh added, removed,
+hidden or shown, a flag or an instance count changed, a geometry's data edited) the
+``ShadowScene`` is rebuilt, reusing the summaries of the geometries whose data did not
+change. Then the world matrices (and instance matrices) are read and set with
+``set_transforms``, and every light is fitted through ``ShadowScene.fit``. A geometry's
+version is pygfx's ``rev`` of its ``positions`` and ``indices`` buffers (globally
+unique, renewed by ``update_range``, ``update_full`` and ``set_data``, but in pygfx 0.17
+only once the buffer has been uploaded to the GPU) with a fingerprint of their values (a
+weighted sum, computed each call: about 1 ms per million floats), so an edit made before
+the first draw, or made in place without telling pygfx, is seen too. A new ``Buffer``
+assigned to ``geometry.positions`` is a new version.
+
+**Draw lists.** Each :class:`LightFit` lists, per map, the meshes (and instances) that
+can cast into it: ``ShadowScene``'s culling by bounding spheres (a spot light's cone, a
+cube face's pyramid). pygfx 0.17 cannot use them: its shadow pass
+(``renderers/wgpu/engine/shadowutil.py``, ``render_shadow_maps``) draws every
+shadow-casting object, all its instances, into every map of every shadow-casting light
+(one pass per sun or spot, six per point light). A renderer that honoured the lists would
+skip the other draws; in the 50-mesh scene of ``benchmarks/bench_pygfx.py`` (1 sun, 6
+spots, 4 point lights: 35 maps) they hold about 385 of the 2,015 (object, map) draws,
+81 % saved.
+
 The map size is one module-level constant in pygfx's private renderer code, the same
 for every light; fit with ``map_size=PYGFX_SHADOW_MAP_SIZE``, ``pcf_radius=2`` and
 ``pcf_filter="bilinear"`` (pygfx filters with 17 taps up to 2 texels away through a
