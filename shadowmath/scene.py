@@ -207,6 +207,12 @@ class ShadowScene:
         self._geometries.append(_Geometry(summary, len(summary.triangles)))
         return len(self._geometries) - 1
 
+    def _add_summary(self, summary: Summary) -> int:
+        """Add a geometry by a summary computed earlier (by :func:`summarize`, of a trusted
+        geometry): a cache that rebuilds its scene (``integrations.pygfx``) reuses it."""
+        self._geometries.append(_Geometry(summary, len(summary.triangles)))
+        return len(self._geometries) - 1
+
     def add_objects(
         self,
         geometry: int,

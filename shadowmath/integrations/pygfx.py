@@ -36,6 +36,34 @@ shadow object's camera and the matrices pygfx draws and samples with change.
   ``look_at`` of a direction parallel to the camera's up (0, 1, 0) leaves that face
   looking down -Z, which loses every shadow cast toward +Y.
 
+**The cache.** :func:`fit_scene_shadows` keeps, per pygfx scene (a
+:class:`weakref.WeakKeyDictionary` keyed by the object it is given: dropped with it), an
+:class:`shadowmath.ShadowScene`: one object per visible ``gfx.Mesh`` with
+``cast_shadow`` or ``receive_shadow`` (one per instance of a ``gfx.InstancedMesh``,
+placed by its world matrix times the instance's), each geometry summarized once (its
+own triangles when few, else its 26-DOP's surface). A call reads the meshes, their flags,
+instance counts and geometries' versions; if any of these changed (a mesh added, removed,
+hidden or shown, a flag or an instance count changed, a geometry's data edited) the
+``ShadowScene`` is rebuilt, reusing the summaries of the geometries whose data did not
+change. Then the world matrices (and instance matrices) are read and set with
+``set_transforms``, and every light is fitted through ``ShadowScene.fit``. A geometry's
+version is pygfx's ``rev`` of its ``positions`` and ``indices`` buffers (globally
+unique, renewed by ``update_range``, ``update_full`` and ``set_data``, but in pygfx 0.17
+only once the buffer has been uploaded to the GPU) with a fingerprint of their values (a
+weighted sum, computed each call: about 1 ms per million floats), so an edit made before
+the first draw, or made in place without telling pygfx, is seen too. A new ``Buffer``
+assigned to ``geometry.positions`` is a new version.
+
+**Draw lists.** Each :class:`LightFit` lists, per map, the meshes (and instances) that
+can cast into it: ``ShadowScene``'s culling by bounding spheres (a spot light's cone, a
+cube face's pyramid). pygfx 0.17 cannot use them: its shadow pass
+(``renderers/wgpu/engine/shadowutil.py``, ``render_shadow_maps``) draws every
+shadow-casting object, all its instances, into every map of every shadow-casting light
+(one pass per sun or spot, six per point light). A renderer that honoured the lists would
+skip the other draws; in the 50-mesh scene of ``benchmarks/bench_pygfx.py`` (1 sun, 6
+spots, 4 point lights: 35 maps) they hold about 385 of the 2,015 (object, map) draws,
+81 % saved.
+
 The map size is one module-level constant in pygfx's private renderer code, the same
 for every light; fit with ``map_size=PYGFX_SHADOW_MAP_SIZE``, ``pcf_radius=2`` and
 ``pcf_filter="bilinear"`` (pygfx filters with 17 taps up to 2 texels away through a
@@ -51,6 +79,7 @@ from __future__ import annotations
 
 import math
 import warnings
+import weakref
 from typing import Any, Final, NamedTuple
 
 import numpy as np
@@ -59,7 +88,10 @@ from shadowmath import (
     CubeDepthRange,
     DirectionalLight,
     Mesh,
+    PointLight,
     ShadowCamera,
+    ShadowMapSpec,
+    ShadowScene,
     ShadowSetup,
     SpotLight,
     cube_depth_range,
@@ -67,6 +99,8 @@ from shadowmath import (
     gather_meshes,
     shadow_camera,
 )
+from shadowmath._scene._summary import Summary, summarize
+from shadowmath.scene import LightShadows, _geometry_arrays
 
 try:
     import pygfx as gfx
@@ -81,6 +115,7 @@ except ImportError as err:  # pragma: no cover - the extra is part of `dev`
 __all__ = [
     "PYGFX_SHADOW_MAP_SIZE",
     "TESTED_PYGFX",
+    "DrawItem",
     "LightFit",
     "SceneSurfaces",
     "fit_scene_shadows",
@@ -195,6 +230,11 @@ class SceneSurfaces(NamedTuple):
     receivers: Mesh
 
 
+#: One entry of a draw list: ``(mesh, instance)``, a ``gfx.Mesh`` and None, or a
+#: ``gfx.InstancedMesh`` and the index of one of its instances.
+DrawItem = tuple[Any, int | None]
+
+
 class LightFit(NamedTuple):
     """What :func:`fit_scene_shadows` did for one shadow-casting light.
 
@@ -205,11 +245,18 @@ class LightFit(NamedTuple):
         skipped: "" when fitted; else why not (the fit's ``ValueError`` message, or that
             the scene casts no shadow). A skipped light draws with pygfx's own shadow
             camera, as if never fitted.
+        draws: one draw list per shadow map (one for a sun or a spot, six cube faces
+            ``+X, -X, +Y, -Y, +Z, -Z`` for a point light): the :data:`DrawItem` that can
+            cast into that map, in scene order (``sm.ShadowScene``'s culling); the others
+            cast nothing a texel of it samples. pygfx 0.17 draws every caster into every
+            map, so these are information only (see the module docstring). Empty for a
+            skipped light.
     """
 
     light: Any
     fit: ShadowSetup | CubeDepthRange | None
     skipped: str
+    draws: tuple[tuple[DrawItem, ...], ...] = ()
 
 
 def gather_scene(scene: Any) -> SceneSurfaces:
@@ -283,20 +330,31 @@ def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
     """Fit the shadow camera of every shadow-casting light of a pygfx scene: one call
     per frame, before drawing it.
 
-    The scene's casters and receivers come from :func:`gather_scene`. Each visible light
-    with ``cast_shadow`` (sun, spot or point) is fitted as pygfx lights it this frame,
-    and handed to :func:`set_shadow_camera`:
+    The scene's casters and receivers are kept between calls in an
+    :class:`shadowmath.ShadowScene` cached for ``scene`` (see "The cache" in the module
+    docstring): each visible ``gfx.Mesh`` with ``cast_shadow`` or ``receive_shadow`` is
+    one object (a ``gfx.InstancedMesh`` one per instance, placed by its world matrix
+    times the instance's), its geometry summarized once. Each call reads the world
+    matrices and each visible light with ``cast_shadow`` (sun, spot or point) as pygfx
+    lights it this frame, fits it through :meth:`shadowmath.ShadowScene.fit`, and hands
+    the fit to :func:`set_shadow_camera`:
 
-    * ``gfx.DirectionalLight``: :func:`shadowmath.fit_shadow` of
-      ``sm.DirectionalLight(position - target)`` (the camera's view direction for a light
-      parented to a camera, as pygfx does);
-    * ``gfx.SpotLight``: ``fit_shadow`` of ``sm.SpotLight(position, target - position,
-      angle)``; both with the casters' triangles (a spot light keeps what reaches into
-      its cone, clipped exactly: :func:`shadowmath.fit_shadow`'s selection), ``receivers=``
-      the receivers' triangles,
-      :data:`PYGFX_SHADOW_MAP_SIZE`, ``pcf_radius`` and ``api="webgpu"``;
+    * ``gfx.DirectionalLight``: ``sm.DirectionalLight(position - target)`` (the camera's
+      view direction for a light parented to a camera, as pygfx does);
+    * ``gfx.SpotLight``: ``sm.SpotLight(position, target - position, angle)``, fitted to
+      the casters whose bounding sphere reaches into its cone (clipped exactly:
+      :func:`shadowmath.fit_shadow`'s selection); both with the receivers,
+      :data:`PYGFX_SHADOW_MAP_SIZE`, ``pcf_radius``, ``pcf_filter="bilinear"`` and
+      ``api="webgpu"``;
     * ``gfx.PointLight``: :func:`shadowmath.cube_depth_range` at its position, of the
-      casters' triangles, with the receivers.
+      casters, with the receivers (no border ring: pygfx's cube faces are exact
+      90-degree frustums).
+
+    The fits read each geometry's summary (its own triangles when they are few, else its
+    26-DOP's surface, which holds it): every caster lies in its map, which may be a
+    little larger than one fitted to every triangle (equal where the summaries are the
+    triangles, as for boxes). Each :class:`LightFit` also lists, per map, the meshes and
+    instances that can cast into it (``draws``).
 
     The lights themselves are read, never written: position, target, angle, distance,
     intensity and every other setting stay what the application set (only each light's
@@ -331,12 +389,252 @@ def fit_scene_shadows(scene: Any, *, pcf_radius: int = 2) -> list[LightFit]:
         [('DirectionalLight', ''), ('SpotLight', '')]
         >>> int(fits[1].fit.casters_used)  # the cube's triangles that reach into the cone
         10
+        >>> fits[1].draws == (((cube, None),),)  # one map, the cube drawn into it
+        True
         >>> sun.local.position.tolist()  # the user's light, untouched
         [3.0, -1.5, 3.5]
     """
     _check_pygfx()
     if isinstance(pcf_radius, bool) or not isinstance(pcf_radius, int) or pcf_radius < 0:
         raise ValueError(f"pcf_radius: expected an integer >= 0, got {pcf_radius!r}")
+    kinds = (gfx.DirectionalLight, gfx.SpotLight, gfx.PointLight)
+    lights = list(scene.iter(lambda o: isinstance(o, kinds) and o.cast_shadow, skip_invisible=True))
+    state = _CACHE.get(scene)
+    if state is None:
+        state = _CACHE[scene] = _SceneState()
+    shadow_scene = state.update(scene)
+    if shadow_scene is None:
+        for light in lights:
+            _release(light)
+        return [LightFit(light, None, _NO_CASTER) for light in lights]
+    spec = ShadowMapSpec(
+        PYGFX_SHADOW_MAP_SIZE, pcf_radius=pcf_radius, pcf_filter="bilinear", api="webgpu"
+    )
+    converted = [_sm_light(light) for light in lights]
+    flat = [i for i, c in enumerate(converted) if isinstance(c, SpotLight | DirectionalLight)]
+    cube = [i for i, c in enumerate(converted) if type(c) is PointLight]
+    fits: dict[int, LightShadows] = {}
+    for group, group_spec in ((flat, spec), (cube, _CUBE_SPEC)):
+        ready = [converted[i] for i in group]
+        done = shadow_scene.fit(ready, group_spec) if ready else []  # type: ignore[arg-type]
+        fits.update(zip(group, done, strict=True))
+    reports = []
+    for i, light in enumerate(lights):
+        sm_light = converted[i]
+        if isinstance(sm_light, str):
+            _release(light)
+            reports.append(LightFit(light, None, sm_light))
+            continue
+        result = fits[i]
+        if result.fit is None and isinstance(sm_light, SpotLight) and result.skipped == _NO_REACH:
+            result = _empty_spot(shadow_scene, result, spec)
+        reports.append(_hand_over(light, result, state.items))
+    return reports
+
+
+_NO_CASTER: Final = "the scene has no visible mesh with cast_shadow"
+_NO_REACH: Final = "no caster in the light's reach"  # ShadowScene.fit's
+#: A point light's cube map: the size pygfx draws, no border (its faces are exact).
+_CUBE_SPEC: Final = ShadowMapSpec(PYGFX_SHADOW_MAP_SIZE, border_texels=0)
+
+
+def _sm_light(light: Any) -> PointLight | SpotLight | DirectionalLight | str:
+    """The shadowmath light pygfx lights with this frame, or why there is none."""
+    position = np.asarray(light.world.position, dtype=np.float64)
+    if not np.all(np.isfinite(position)):
+        return "the light's world position contains non-finite values (NaN or inf)"
+    if isinstance(light, gfx.PointLight):
+        return PointLight(position)
+    aim = np.asarray(_aimed_at(light), dtype=np.float64) - position
+    if not np.all(np.isfinite(aim)):
+        return "the light's target contains non-finite values (NaN or inf)"
+    if not np.any(aim):  # pygfx's light shines down -z then
+        aim = np.array([0.0, 0.0, -1.0])
+    if isinstance(light, gfx.DirectionalLight):
+        return DirectionalLight(-aim)
+    angle = np.float64(light.angle)
+    if not np.isfinite(angle):
+        return "the spot light's angle is not finite"
+    return SpotLight(position, aim, angle)
+
+
+def _empty_spot(scene: ShadowScene, result: LightShadows, spec: ShadowMapSpec) -> LightShadows:
+    """A spot light none of whose casters' spheres reach its cone: the fit of every
+    caster's summary, as the per-frame path made it (its selection keeps none: an empty
+    map that shadows nothing; or the ``ValueError`` that path reported)."""
+    casters = scene._triangles(scene._casts)  # shadowmath's own class
+    try:
+        fit = fit_shadow(result.light, casters, spec)
+    except ValueError as err:
+        return LightShadows(result.light, None, result.draws, str(err))
+    return LightShadows(result.light, fit, result.draws, "")
+
+
+def _hand_over(light: Any, result: LightShadows, items: list[DrawItem]) -> LightFit:
+    """One light's fit set on it (and its draw lists), or the light released."""
+    fit = result.fit
+    if fit is None:
+        _release(light)
+        return LightFit(light, None, result.skipped)
+    try:
+        set_shadow_camera(light, fit)
+    except ValueError as err:
+        _release(light)
+        return LightFit(light, None, str(err))
+    draws = tuple(tuple([items[k] for k in d.tolist()]) for d in result.draws)
+    return LightFit(light, fit, "", draws)
+
+
+#: A geometry's data version: ``positions.rev``, ``indices.rev`` (or -1) and the
+#: :func:`_fingerprint` of each.
+_Version = tuple[int, int, float, float]
+
+_WEIGHTS = np.zeros(0)
+
+
+def _fingerprint(data: Any) -> float:
+    """A weighted sum of an array's values, with fixed pseudo-random weights: it changes
+    when values change (in place too), with probability 1; NaN when one is NaN."""
+    global _WEIGHTS
+    flat = np.asarray(data).reshape(-1)
+    if len(flat) > len(_WEIGHTS):
+        _WEIGHTS = np.random.default_rng(2026).uniform(0.5, 1.5, max(len(flat), 2 * len(_WEIGHTS)))
+    return float(np.dot(flat, _WEIGHTS[: len(flat)]))
+
+
+class _SceneState:
+    """What :func:`fit_scene_shadows` keeps of one pygfx scene between calls.
+
+    ``summaries`` maps a geometry's data version (:data:`_Version`: pygfx's revision
+    numbers, globally unique, and a fingerprint of the positions' and indices' values:
+    pygfx 0.17 renews ``rev`` on ``update_range``/``update_full`` only once the buffer has
+    been uploaded, so an edit before the first draw, or one without telling pygfx, is
+    seen by the fingerprint alone) to its summary (None: no faces); ``key`` is the
+    structure the
+    :class:`ShadowScene` was built for: per mesh in scene order, ``(version,
+    cast_shadow, receive_shadow, instance count)``, and ``refs`` the meshes themselves
+    (weakly: the cache must not keep a scene alive).
+    """
+
+    def __init__(self) -> None:
+        self.summaries: dict[_Version, Summary | None] = {}
+        self.refs: list[weakref.ref[Any]] = []
+        self.key: list[tuple[_Version, bool, bool, int]] = []
+        self.scene: ShadowScene | None = None
+        self.items: list[DrawItem] = []  # per ShadowScene object: its mesh and instance
+        self.meshes: list[Any] = []  # those with an object, in scene order
+        self.rebuilds = 0
+
+    def update(self, root: Any) -> ShadowScene | None:
+        """The scene's :class:`ShadowScene` for this frame (rebuilt if its meshes, their
+        flags, instance counts or geometry versions changed; its transforms set), or None
+        when nothing casts."""
+        meshes, key = [], []
+        sums: dict[int, _Version] = {}  # this frame's, per geometry
+        for mesh in root.iter(lambda o: isinstance(o, gfx.Mesh), skip_invisible=True):
+            cast, receive = bool(mesh.cast_shadow), bool(mesh.receive_shadow)
+            if not (cast or receive):
+                continue
+            geometry = mesh.geometry
+            positions, indices = geometry.positions, getattr(geometry, "indices", None)
+            version = sums.get(id(geometry))
+            if version is None:
+                version = sums[id(geometry)] = (
+                    positions.rev,
+                    -1 if indices is None else indices.rev,
+                    _fingerprint(positions.data),
+                    0.0 if indices is None else _fingerprint(indices.data),
+                )
+            count = mesh.instance_buffer.nitems if isinstance(mesh, gfx.InstancedMesh) else 1
+            meshes.append(mesh)
+            key.append((version, cast, receive, count))
+        same = key == self.key and all(r() is m for r, m in zip(self.refs, meshes, strict=True))
+        if not same:
+            self._rebuild(root, meshes, key)
+        scene = self.scene
+        if scene is None:
+            return None
+        try:
+            scene.set_transforms(self._transforms())
+        except ValueError:
+            gather_scene(root)  # raises the per-entry message (a projective matrix...)
+            raise
+        return scene
+
+    def _transforms(self) -> np.ndarray:
+        """``(N, 4, 4)`` every object's world matrix this frame."""
+        out = [_world_matrices(mesh) for mesh in self.meshes]
+        return np.concatenate(out) if out else np.zeros((0, 4, 4))
+
+    def _rebuild(self, root: Any, meshes: list[Any], key: list[Any]) -> None:
+        self.rebuilds += 1
+        summaries: dict[_Version, Summary | None] = {}
+        scene, items, placed, index = ShadowScene(), [], [], {}
+        casting = False
+        for mesh, (version, cast, receive, count) in zip(meshes, key, strict=True):
+            if version not in summaries:
+                known = version in self.summaries
+                summaries[version] = (
+                    self.summaries[version] if known else _summarize(root, mesh.geometry)
+                )
+            summary = summaries[version]
+            if summary is None or count == 0:
+                continue  # no faces or no instances: nothing drawn, nothing to fit
+            if version not in index:
+                index[version] = scene._add_summary(summary)
+            try:
+                scene.add_objects(index[version], _world_matrices(mesh), casts=cast,
+                                  receives=receive)  # fmt: skip
+            except ValueError:
+                gather_scene(root)  # raises the per-entry message (a projective matrix...)
+                raise
+            instanced = isinstance(mesh, gfx.InstancedMesh)
+            items += [(mesh, k if instanced else None) for k in range(count)]
+            placed.append(mesh)
+            casting = casting or cast
+        self.summaries = summaries  # those of the scene's geometries only
+        self.refs = [weakref.ref(m) for m in meshes]
+        self.key, self.items, self.meshes = key, items, placed
+        self.scene = scene if casting else None
+
+
+#: The per-scene caches of :func:`fit_scene_shadows`, dropped with their scene.
+_CACHE: weakref.WeakKeyDictionary[Any, _SceneState] = weakref.WeakKeyDictionary()
+
+
+def _summarize(root: Any, geometry: Any) -> Summary | None:
+    """A pygfx geometry's summary (None: no faces), or gather_scene's ValueError."""
+    positions = np.asarray(geometry.positions.data)[:, :3]
+    indices = getattr(geometry, "indices", None)
+    faces = (
+        np.arange(len(positions) - len(positions) % 3)
+        if indices is None
+        else np.asarray(indices.data)
+    ).reshape(-1, 3)
+    if len(faces) == 0:
+        return None
+    try:
+        vertices, triangles = _geometry_arrays(Mesh(positions, faces.astype(np.int64)))
+    except ValueError:
+        gather_scene(root)  # raises the per-entry message (non-finite positions...)
+        raise
+    return summarize(vertices, triangles)
+
+
+def _world_matrices(mesh: Any) -> np.ndarray:
+    """``(K, 4, 4)`` a mesh's world matrix times each instance's (one for a plain mesh)."""
+    world = np.asarray(mesh.world.matrix, dtype=np.float64)
+    if not isinstance(mesh, gfx.InstancedMesh):
+        return world[None]
+    count = mesh.instance_buffer.nitems
+    local = np.asarray(mesh.instance_buffer.data["matrix"][:count], dtype=np.float64)
+    return world @ local.transpose(0, 2, 1)
+
+
+def _fit_gathered(scene: Any, pcf_radius: int = 2) -> list[LightFit]:
+    """The per-frame path that :func:`fit_scene_shadows` replaced: gather every triangle
+    in world space (:func:`gather_scene`) and fit each light over all of them. Kept for the
+    benchmark and the tests that compare the two."""
     surfaces = gather_scene(scene)
     kinds = (gfx.DirectionalLight, gfx.SpotLight, gfx.PointLight)
     lights = scene.iter(lambda o: isinstance(o, kinds) and o.cast_shadow, skip_invisible=True)

@@ -235,8 +235,27 @@ def test_the_report_fits_every_light_and_selects_the_spots_casters(fitted):
     """No light skipped; suns use every caster triangle, point lights get their depth
     range, and every spot's count lies within its geometric bounds (cone_bounds): none
     for 18 (every caster behind or beside it) and 19 (every caster outside its narrow
-    cone), some but not all for 16 and 17 (a box behind 16, a box crossing 17's plane)."""
-    _, lights, reports = fitted
+    cone), some but not all for 16 and 17 (a box behind 16, a box crossing 17's plane).
+
+    The counts are of the per-frame path that fits every triangle (``_fit_gathered``,
+    what fit_scene_shadows did before its cache): the cached path fits the geometries'
+    summaries (the torus' 26-DOP), so its ``casters_used`` counts summary triangles. Of
+    the cached path: no light skipped, suns draw every caster object, and spots 18 and
+    19 use none (their draw lists, from bounding spheres, may still hold a box beside
+    them)."""
+    from shadowmath.integrations.pygfx import _fit_gathered, fit_scene_shadows
+
+    scene, lights, cached = fitted
+    assert [r.light for r in cached] == lights
+    assert [r.skipped for r in cached] == [""] * len(ALL)
+    casting = {item for r in cached for d in r.draws for item in d}
+    for i, (light, report) in enumerate(zip(ALL, cached, strict=True)):
+        if isinstance(light, sm.DirectionalLight):
+            assert set(report.draws[0]) == casting, i
+        if i in (18, 19):
+            assert int(report.fit.casters_used) == 0, i
+    reports = _fit_gathered(scene)
+    fit_scene_shadows(scene)  # the cached fits back on the lights, for the other tests
     assert [r.light for r in reports] == lights
     assert [r.skipped for r in reports] == [""] * len(ALL)
     world = [world_mesh(b) for b, c in zip(BODIES, CASTS, strict=True) if c]
