@@ -179,6 +179,9 @@ class ShadowScene:
         self._M = np.zeros((0, 4, 4))
         self._offsets = np.zeros(1, dtype=np.int64)
         self._world = np.zeros((0, 3, 3))  # every object's summary triangles, world space
+        self._local = np.zeros((0, 3, 3))  # the same, local (one copy per instance)
+        self._local_center = np.zeros((0, 3))
+        self._local_radius = np.zeros(0)
         self._owner = np.zeros(0, dtype=np.int64)
         self._center = np.zeros((0, 3))
         self._radius = np.zeros(0)
@@ -257,6 +260,10 @@ class ShadowScene:
         ends = self._offsets[-1] + g.triangles * np.arange(1, K + 1)
         self._offsets = np.concatenate([self._offsets, ends])
         self._world = np.concatenate([self._world, np.zeros((K * g.triangles, 3, 3))])
+        local = np.broadcast_to(g.summary.triangles, (K, *g.summary.triangles.shape))
+        self._local = np.concatenate([self._local, local.reshape(-1, 3, 3)])
+        self._local_center = np.concatenate([self._local_center, np.tile(g.summary.center, (K, 1))])
+        self._local_radius = np.concatenate([self._local_radius, np.full(K, g.summary.radius)])
         self._owner = np.concatenate(
             [self._owner, np.repeat(np.arange(first, first + K), g.triangles)]
         )
@@ -470,30 +477,43 @@ class ShadowScene:
 
     # -- the steps ------------------------------------------------------------------
     def _place(self, objects: IntArray) -> None:
-        """Move the summaries, spheres and boxes of ``objects`` to the world."""
-        geometry_of = self._geometry_of[objects]
-        for g in np.unique(geometry_of):
-            ids = objects[geometry_of == g]
-            s = self._geometries[g].summary
-            M = self._M[ids]
-            tris = np.einsum("nij,tcj->ntci", M[:, :3, :3], s.triangles) + M[:, None, None, :3, 3]
-            rows = self._offsets[ids][:, None] + np.arange(len(s.triangles))
-            self._world[rows] = tris
-            self._bounds[ids] = np.stack([tris.min(axis=(1, 2)), tris.max(axis=(1, 2))], axis=1)
-            c, r = _cull.world_spheres(M, np.broadcast_to(s.center, (len(ids), 3)),
-                                       np.full(len(ids), s.radius))  # fmt: skip
-            self._center[ids], self._radius[ids] = c, r
+        """Move the summaries, spheres and boxes of ``objects`` (increasing indices) to the
+        world, all at once: each triangle row by its object's matrix."""
+        if len(objects) == 0:
+            return
+        picked = np.zeros(len(self._M), dtype=bool)
+        picked[objects] = True
+        rows = np.flatnonzero(picked[self._owner])
+        owner = self._owner[rows]
+        M = self._M[owner]
+        world = self._local[rows] @ np.swapaxes(M[:, :3, :3], -1, -2) + M[:, None, :3, 3]
+        self._world[rows] = world
+        starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+        self._bounds[objects, 0] = np.minimum.reduceat(world.min(axis=1), starts)
+        self._bounds[objects, 1] = np.maximum.reduceat(world.max(axis=1), starts)
+        c, r = _cull.world_spheres(self._M[objects], self._local_center[objects],
+                                   self._local_radius[objects])  # fmt: skip
+        self._center[objects], self._radius[objects] = c, r
+
+    def _rows(self, objects: np.ndarray) -> IntArray:
+        """The triangle rows of the objects where the mask ``objects`` holds, in order: each
+        object's ``offsets[k] .. offsets[k + 1]`` (a cost by the rows kept, not by all)."""
+        k = np.flatnonzero(objects)
+        starts, lengths = self._offsets[k], self._offsets[k + 1] - self._offsets[k]
+        shift = np.repeat(starts - (np.cumsum(lengths) - lengths), lengths)
+        rows: IntArray = np.arange(int(lengths.sum())) + shift
+        return rows
 
     def _triangles(self, objects: np.ndarray, light: np.ndarray | None = None) -> Triangles:
         """The world summary triangles of the objects where ``objects`` (a mask) holds; for
         those whose bounding sphere holds the point ``light``, their own triangles instead
         (a summary around a light would hold the light: a torus around it)."""
         if light is None:
-            return Triangles(self._world[objects[self._owner]])
+            return Triangles(self._world[self._rows(objects)])
         around = objects & (np.linalg.norm(self._center - light, axis=1) <= self._radius)
         if not around.any():
-            return Triangles(self._world[objects[self._owner]])
-        parts = [self._world[(objects & ~around)[self._owner]]]
+            return Triangles(self._world[self._rows(objects)])
+        parts = [self._world[self._rows(objects & ~around)]]
         for k in np.flatnonzero(around):
             own, M = self._geometries[self._geometry_of[k]].summary.own, self._M[k]
             parts.append(np.einsum("ij,tcj->tci", M[:3, :3], own) + M[:3, 3])
