@@ -247,3 +247,35 @@ def test_a_spot_rule_too_aggressive_loses_the_beams_shadow(gl, monkeypatch):
     print(f"spot_visible with its radius halved: {lost} pixels off the band differ from "
           f"the ray caster per frame; {same} from the every-caster picture")  # fmt: skip
     assert min(lost) > 30
+
+
+def test_pcss_tiles_draw_the_same_from_the_draw_lists(gl):
+    """With ``light_size`` (PCSS: the atlas allocated again with the search's border and the
+    scene fitted again) the tiles of the point lights and spots drawn from their lists give
+    the same masks as every caster."""
+    frames = [render_atlas(bodies(1), lights(1)[:4], VIEW, PROJECTION, scene_fit=scene_fit,
+                           light_size=[0.2, 0.2, 0.1, 0.1], **ATLAS)
+              for scene_fit in ("draw_lists", "every_caster")]  # fmt: skip
+    lists, every = frames
+    assert lists.atlas.light_border.min() > sm.pcf_border_texels(1)  # allocated again
+    assert sum(len(d) for d in lists.draws) < sum(len(d) for d in every.draws)
+    assert int((lists.shadow != every.shadow).sum()) == 0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"scene_fit": "lists"}, "scene_fit: expected None"),
+        ({"scene_fit": "draw_lists", "scene_bounds": [[-9, -9, 0], [9, 9, 9]]}, "scene_bounds"),
+        ({"scene_fit": "draw_lists", "warp": "lispsm"}, "no warp"),
+        ({"scene_fit": "draw_lists", "light_size": 0.01}, "only stable cascades"),
+    ],
+)
+def test_the_cascades_refuse_what_the_draw_lists_do_not_cover(gl, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        render_cascades(bodies(0), SUN, CAMERA, CAMERA_PROJECTION, **{**CASCADES, **kwargs})
+
+
+def test_the_atlas_refuses_an_unknown_scene_fit(gl):
+    with pytest.raises(ValueError, match="scene_fit: expected None"):
+        render_atlas(bodies(0), lights(0), VIEW, PROJECTION, scene_fit="lists", **ATLAS)
