@@ -21,7 +21,12 @@ with the number of triangles:
 The fits keep every caster (a summary holds its geometry), so a renderer that draws
 only the draw lists draws the same shadows as one that draws every caster into every
 map; the maps may be slightly larger than those fitted to every triangle (by how much:
-``docs/scenes.md``).
+``docs/scenes.md``). The rules cull to the region a map's lit points see (a spot's cone,
+a cube face's pyramid, a cascade's whole map): a filtered lookup (PCF, the normal offset,
+PCSS's search) within a few texels of a cone's rim or a cube face's seam may read texels
+of the square's corners or the face's ring where only culled casters fall
+(``docs/scenes.md``, "In the reference renderer"; the reference renderer draws from the
+lists with ``scene_fit="draw_lists"``).
 """
 
 from __future__ import annotations

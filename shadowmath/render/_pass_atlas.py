@@ -6,11 +6,13 @@ gives each light its tile(s) (a point light's cube map six face tiles) and
 drawn into each tile's viewport (scissored to it) with a polygon offset; the camera-view
 pass (``shaders/atlas.frag``) picks each light's tile (a cube light's face by
 :func:`shadowmath.cube_face`'s rule) and compares with PCF, every tap clamped into the tile.
+With ``scene_fit="draw_lists"`` the bodies become a :class:`shadowmath.ShadowScene`, fitted
+by :meth:`shadowmath.ShadowScene.fit_atlas`, and each tile is drawn only its draw list.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, Literal, NamedTuple
 
 import moderngl
@@ -44,6 +46,15 @@ NORMAL_OFFSET = 0.5
 #: The atlas lights' kinds, as :func:`render_atlas` takes them.
 AtlasLight = sm.PointLight | sm.SpotLight | sm.DirectionalLight
 
+#: Where the atlas's fit and each tile's draws come from (``scene_fit``): None, every
+#: caster's triangles and every caster in every tile; ``"draw_lists"``, a
+#: :class:`shadowmath.ShadowScene` of the bodies and each tile's draw list;
+#: ``"every_caster"``, that scene's fit with every caster in every tile.
+SceneFit = Literal["draw_lists", "every_caster"] | None
+
+#: Body indices, one integer array per map (a tile, a cascade).
+DrawLists = tuple[NDArray[np.int64], ...]
+
 
 class AtlasFrame(NamedTuple):
     """What :func:`render_atlas` returns; images have row 0 at the *top* (as saved).
@@ -60,6 +71,9 @@ class AtlasFrame(NamedTuple):
         fit: the :class:`shadowmath.AtlasFit` the tiles were drawn and sampled with.
         shadow_map: ``(A, A)`` float32 window depths of the whole atlas, row 0 its first
             row in memory (``t = 0``); 1 where nothing was drawn.
+        draws: the bodies drawn into each tile (one integer array of body indices per
+            tile, in the atlas's tile order): each tile's draw list with
+            ``scene_fit="draw_lists"``, else every caster.
     """
 
     color: NDArray[np.float32]
@@ -70,6 +84,7 @@ class AtlasFrame(NamedTuple):
     atlas: sm.ShadowAtlas
     fit: sm.AtlasFit
     shadow_map: NDArray[np.float32]
+    draws: DrawLists = ()
 
 
 class _Options(NamedTuple):
@@ -109,6 +124,7 @@ def render_atlas(
     image_size: int | tuple[int, int] = (512, 384),
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.06, 0.07, 0.09),
+    scene_fit: SceneFit = None,
     ctx: moderngl.Context | None = None,
 ) -> AtlasFrame:
     r"""Render bodies under many shadowed lights whose maps share one atlas.
@@ -118,10 +134,14 @@ def render_atlas(
        :func:`shadowmath.pcf_border_texels` of the kernel), then
        :func:`shadowmath.fit_atlas` of the casters' world triangles
        (:class:`shadowmath.Triangles`: a cube face's near counts their whole surfaces),
-       every body's triangles as receivers (they push ``far``), OpenGL conventions.
+       every body's triangles as receivers (they push ``far``), OpenGL conventions; or,
+       with ``scene_fit``, :meth:`shadowmath.ShadowScene.fit_atlas` of a scene of the
+       bodies (each body one object: its mesh, its ``to_world``; casting per
+       ``casters``; every body receives).
     2. One depth texture of ``atlas_size``\ ² texels, cleared to 1: per tile ``t``, the
-       viewport and scissor ``viewports[t]``, every caster through ``world_to_clip[t]``
-       with ``glPolygonOffset(*depth_bias)``.
+       viewport and scissor ``viewports[t]``, every caster (with
+       ``scene_fit="draw_lists"``, the bodies of the tile's draw list) through
+       ``world_to_clip[t]`` with ``glPolygonOffset(*depth_bias)``.
     3. The lit record, then per light its shadow mask (the point moved off a caster's
        face by the normal offset), and the picture: ``albedo
        (ambient + sum_l colour_l max(n . l, 0) (1 - shadow_l))``, a spot lighting only
@@ -158,6 +178,13 @@ def render_atlas(
             their taps to the tile.
         image_size: the picture's size in pixels.
         ambient, background: shading as in :func:`render_scene`.
+        scene_fit: None (default): the fit of every caster's triangles, every caster
+            drawn into every tile. ``"draw_lists"``: the renderer as a client of
+            :class:`shadowmath.ShadowScene`: the bodies added as one object each, fitted
+            by :meth:`~shadowmath.ShadowScene.fit_atlas` (from the geometries'
+            summaries: the matrices may differ slightly from None's), each tile drawn
+            only the bodies of its draw list. ``"every_caster"``: the same scene fit,
+            every caster drawn into every tile (what the draw lists are compared with).
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
 
     Returns:
@@ -191,18 +218,19 @@ def render_atlas(
         bodies, lights, view, projection, casters=casters, colors=colors, coverage=coverage,
         atlas_size=atlas_size, budget=budget, previous=previous, pcf_radius=pcf_radius,
         depth_bias=depth_bias, normal_offset=normal_offset, ambient=ambient,
-        light_size=light_size,
+        light_size=light_size, scene_fit=scene_fit,
     )  # fmt: skip
     size = _image_size("image_size", image_size)
     atlas, fit, cast = scene.atlas, scene.fit, scene.cast
     gl = resolve_context(ctx)
     clip = scene.projection @ scene.view
     with GpuScene(gl, scene.bodies, (), [], clip, size=size, map_size=fit.texture_size) as gpu:
-        depths = draw_atlas(gpu, fit, cast, scene.bias, back_faces=scene.pcss is not None)
+        depths = draw_atlas(gpu, fit, scene.draws, scene.bias, back_faces=scene.pcss is not None)
         options = _Options(cast, scene.pcf_radius, scene.normal_offset, scene.ambient, background)
-        return _shade_all(
+        frame = _shade_all(
             gpu, scene.lights, atlas, fit, depths=depths, options=options, pcss=scene.pcss
         )
+    return frame._replace(draws=scene.draws)
 
 
 class AtlasScene(NamedTuple):
@@ -221,6 +249,8 @@ class AtlasScene(NamedTuple):
     fit: sm.AtlasFit
     #: Each tile's PCSS ``K`` and ``d_near`` (atlas texels), None without ``light_size``.
     pcss: sm.PcssParameters | None = None
+    #: The bodies to draw into each tile (:attr:`AtlasFrame.draws`).
+    draws: DrawLists = ()
 
 
 def prepare_atlas(
@@ -241,9 +271,12 @@ def prepare_atlas(
     ambient: float = 0.15,
     api: Literal["opengl", "webgpu"] = "opengl",
     light_size: Any = None,
+    scene_fit: SceneFit = None,
 ) -> AtlasScene:
     """Check the bodies, lights, camera (OpenGL conventions) and options of an atlas pass;
-    allocate the atlas and fit it in ``api``'s conventions (step 1 of :func:`render_atlas`)."""
+    allocate the atlas and fit it in ``api``'s conventions, from every caster's triangles
+    or, with ``scene_fit``, from a :class:`shadowmath.ShadowScene` of the bodies (step 1 of
+    :func:`render_atlas`); each tile's bodies to draw."""
     prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
     if not prepared:
         raise ValueError("bodies: expected at least one body")
@@ -258,32 +291,93 @@ def prepare_atlas(
         raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
     if not (np.isfinite(ambient) and ambient >= 0):
         raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
+    if scene_fit not in (None, "draw_lists", "every_caster"):
+        raise ValueError(
+            f"scene_fit: expected None, 'draw_lists' or 'every_caster', got {scene_fit!r}"
+        )
     v, p = check_matrix("view", view), check_camera_projection(projection)
+    fit_tiles = _triangle_fit(prepared, cast, lights, k, api)
+    if scene_fit is not None:
+        fit_tiles = _scene_fit(prepared, cast, lights, k, api, scene_fit)
+
+    def allocate_and_fit(border: int) -> tuple[sm.ShadowAtlas, sm.AtlasFit, DrawLists]:
+        atlas = sm.allocate_atlas(
+            np.ones(len(table.cube)) if coverage is None else coverage, atlas_size=atlas_size,
+            cube=table.cube, border_texels=border, previous=previous, budget=budget,
+        )  # fmt: skip
+        return (atlas, *fit_tiles(atlas))
+
+    border = sm.pcf_border_texels(k)
+    atlas, fit, draws = allocate_and_fit(border)
+    pcss = None
+    if sizes is not None:  # the border holds the widest search (K only shrinks with it)
+        pcss = sm.pcss_parameters(fit, light_radius=sizes[np.asarray(atlas.tile_light)])
+        if sm.pcss_border_texels(pcss) > border:
+            atlas, fit, draws = allocate_and_fit(sm.pcss_border_texels(pcss))
+            pcss = sm.pcss_parameters(fit, light_radius=sizes[np.asarray(atlas.tile_light)])
+    return AtlasScene(prepared, cast, table, v, p, k, bias, float(normal_offset), float(ambient),
+                      atlas, fit, pcss, draws)  # fmt: skip
+
+
+#: An allocated atlas's fit and each tile's bodies to draw.
+_FitTiles = Callable[[sm.ShadowAtlas], tuple[sm.AtlasFit, DrawLists]]
+
+
+def _triangle_fit(
+    prepared: Sequence[Prepared],
+    cast: Sequence[bool],
+    lights: Sequence[AtlasLight],
+    k: int,
+    api: Literal["opengl", "webgpu"],
+) -> _FitTiles:
+    """:func:`shadowmath.fit_atlas` of every caster's world triangles; every caster in
+    every tile."""
     world = [b.world_vertices()[b.triangles] for b in prepared]  # (T, 3, 3) each
     # The casters as surfaces: a cube light's near counts a triangle passing nearer the
     # light than its corners. Every body's triangles hold what the shadows fall on: a
     # ground's corners may lie outside a light's map while its middle is under the casters.
     casting = sm.Triangles(np.concatenate([t for t, c in zip(world, cast, strict=True) if c]))
     surfaces = sm.Triangles(np.concatenate(world))
+    every = np.flatnonzero(cast)
 
-    def allocate_and_fit(border: int) -> tuple[sm.ShadowAtlas, sm.AtlasFit]:
-        atlas = sm.allocate_atlas(
-            np.ones(len(table.cube)) if coverage is None else coverage, atlas_size=atlas_size,
-            cube=table.cube, border_texels=border, previous=previous, budget=budget,
-        )  # fmt: skip
+    def fit_tiles(atlas: sm.ShadowAtlas) -> tuple[sm.AtlasFit, DrawLists]:
         fit = sm.fit_atlas(list(lights), casting, atlas, receivers=surfaces, pcf_radius=k, api=api)
-        return atlas, fit
+        return fit, tuple(every for _ in range(len(atlas.tile_light)))
 
-    border = sm.pcf_border_texels(k)
-    atlas, fit = allocate_and_fit(border)
-    pcss = None
-    if sizes is not None:  # the border holds the widest search (K only shrinks with it)
-        pcss = sm.pcss_parameters(fit, light_radius=sizes[np.asarray(atlas.tile_light)])
-        if sm.pcss_border_texels(pcss) > border:
-            atlas, fit = allocate_and_fit(sm.pcss_border_texels(pcss))
-            pcss = sm.pcss_parameters(fit, light_radius=sizes[np.asarray(atlas.tile_light)])
-    return AtlasScene(prepared, cast, table, v, p, k, bias, float(normal_offset), float(ambient),
-                      atlas, fit, pcss)  # fmt: skip
+    return fit_tiles
+
+
+def _scene_fit(
+    prepared: Sequence[Prepared],
+    cast: Sequence[bool],
+    lights: Sequence[AtlasLight],
+    k: int,
+    api: Literal["opengl", "webgpu"],
+    scene_fit: Literal["draw_lists", "every_caster"],
+) -> _FitTiles:
+    """:meth:`shadowmath.ShadowScene.fit_atlas` of :func:`body_scene`; each tile's draw
+    list (``"draw_lists"``) or every caster (``"every_caster"``)."""
+    scene = body_scene(prepared, cast)
+    every = np.flatnonzero(cast)
+
+    def fit_tiles(atlas: sm.ShadowAtlas) -> tuple[sm.AtlasFit, DrawLists]:
+        fitted = scene.fit_atlas(list(lights), atlas, pcf_radius=k, api=api)
+        if scene_fit == "every_caster":
+            return fitted.fit, tuple(every for _ in fitted.draws)
+        return fitted.fit, tuple(np.asarray(d, dtype=np.int64) for d in fitted.draws)
+
+    return fit_tiles
+
+
+def body_scene(prepared: Sequence[Prepared], cast: Sequence[bool]) -> sm.ShadowScene:
+    """A :class:`shadowmath.ShadowScene` of the bodies, object ``i`` body ``i``: its mesh in
+    local coordinates placed by its ``to_world``, casting per ``cast``, every body
+    receiving."""
+    scene = sm.ShadowScene()
+    for body, casts in zip(prepared, cast, strict=True):
+        geometry = scene.add_geometry(sm.Mesh(body.vertices, body.triangles))
+        scene.add_objects(geometry, body.to_world, casts=bool(casts))
+    return scene
 
 
 def _light_sizes(light_size: Any, table: LightTable) -> NDArray[np.float64]:
@@ -357,14 +451,15 @@ def _light_rows(i: int, light: Any, rows: NDArray[np.float64]) -> NDArray[np.flo
 def draw_atlas(
     scene: GpuScene,
     fit: sm.AtlasFit,
-    cast: Sequence[bool],
+    draws: DrawLists,
     bias: tuple[float, float],
     *,
     back_faces: bool = False,
 ) -> moderngl.Texture:
-    """Every caster's depth into each tile's viewport (scissored) of one depth texture of
-    ``fit.texture_size``, cleared to 1; returns the texture (released with the scene).
-    ``back_faces``: only the faces turned from the light (:func:`cull_faces_toward_light`)."""
+    """The depth of the bodies ``draws[t]`` (in body order) into each tile ``t``'s viewport
+    (scissored) of one depth texture of ``fit.texture_size``, cleared to 1; returns the
+    texture (released with the scene). ``back_faces``: only the faces turned from the
+    light (:func:`cull_faces_toward_light`)."""
     gl = scene.ctx
     tex: moderngl.Texture = scene.keep(gl.depth_texture(fit.texture_size))
     fbo = scene.keep(gl.framebuffer(depth_attachment=tex))
@@ -374,12 +469,12 @@ def draw_atlas(
         begin_depth_pass(gl, fbo, bias)
         for t, port in enumerate(np.asarray(fit.viewports)):
             fbo.viewport = fbo.scissor = tuple(int(c) for c in port)
-            for body, mesh, casts in zip(scene.bodies, scene.meshes, cast, strict=True):
-                if casts:
-                    if back_faces:
-                        cull_faces_toward_light(gl, clip[t] @ body.to_world)
-                    set_matrix(prog, "body_to_clip", clip[t] @ body.to_world)
-                    mesh.render(prog)
+            for i in draws[t].tolist():
+                body, mesh = scene.bodies[i], scene.meshes[i]
+                if back_faces:
+                    cull_faces_toward_light(gl, clip[t] @ body.to_world)
+                set_matrix(prog, "body_to_clip", clip[t] @ body.to_world)
+                mesh.render(prog)
     finally:
         gl.polygon_offset = (0.0, 0.0)
         gl.disable(moderngl.CULL_FACE)

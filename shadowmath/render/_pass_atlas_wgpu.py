@@ -3,9 +3,10 @@
 The WebGPU counterpart of :func:`render_atlas`, a client of the public API:
 :func:`shadowmath.allocate_atlas` and :func:`shadowmath.fit_atlas` with ``api="webgpu"``
 (clip depth ``0..w``, texture and viewport origin at the first row in memory); every
-caster's depth is drawn into each tile's viewport (scissored to it) of one
-``depth32float`` texture with the pipeline's depth bias, and the camera pass
-``shaders/atlas.wgsl`` picks each light's tile, biases and filters as
+caster's depth (with ``scene_fit="draw_lists"``, each tile's draw list of a
+:class:`shadowmath.ShadowScene` of the bodies) is drawn into each tile's viewport
+(scissored to it) of one ``depth32float`` texture with the pipeline's depth bias, and the
+camera pass ``shaders/atlas.wgsl`` picks each light's tile, biases and filters as
 ``shaders/atlas.frag`` does.
 """
 
@@ -22,7 +23,14 @@ import shadowmath as sm
 from shadowmath import api_convention, column_major_bytes
 
 from ._context import image_size as _image_size
-from ._pass_atlas import NORMAL_OFFSET, AtlasLight, AtlasScene, prepare_atlas
+from ._pass_atlas import (
+    NORMAL_OFFSET,
+    AtlasLight,
+    AtlasScene,
+    DrawLists,
+    SceneFit,
+    prepare_atlas,
+)
 from ._pass_wgpu import (
     adapter_description,
     depth_pipeline,
@@ -43,7 +51,7 @@ class WgpuAtlasFrame(NamedTuple):
     """What :func:`render_atlas_wgpu` returns; images have row 0 at the *top*.
 
     Attributes:
-        shadow, position, normal, body, atlas: as in :class:`AtlasFrame`.
+        shadow, position, normal, body, atlas, draws: as in :class:`AtlasFrame`.
         fit: the :class:`shadowmath.AtlasFit` (``api="webgpu"``) drawn and sampled.
         shadow_map: ``(A, A)`` float32 depths of the whole atlas, row 0 its first row in
             memory (WebGPU's ``t = 0``); 1 where nothing was drawn.
@@ -58,6 +66,7 @@ class WgpuAtlasFrame(NamedTuple):
     fit: sm.AtlasFit
     shadow_map: NDArray[np.float32]
     adapter: str
+    draws: DrawLists = ()
 
 
 def render_atlas_wgpu(
@@ -76,6 +85,7 @@ def render_atlas_wgpu(
     normal_offset: float = NORMAL_OFFSET,
     image_size: int | tuple[int, int] = (512, 384),
     light_size: Any = None,
+    scene_fit: SceneFit = None,
 ) -> WgpuAtlasFrame:
     """Render each light's shadow on the bodies through one shadow atlas, in WebGPU.
 
@@ -89,7 +99,7 @@ def render_atlas_wgpu(
 
     Arguments:
         bodies, lights, view, projection, casters, coverage, atlas_size, budget, previous,
-            pcf_radius, normal_offset, image_size: as in :func:`render_atlas`.
+            pcf_radius, normal_offset, image_size, scene_fit: as in :func:`render_atlas`.
         depth_bias: ``(factor, units)`` as in :func:`render_atlas`: the pipeline's
             ``depthBiasSlopeScale`` and ``depthBias`` (an integer in WebGPU: ``units`` is
             rounded; its unit is ``2^(e - 23)`` at a triangle's largest depth ``z`` with
@@ -126,7 +136,7 @@ def render_atlas_wgpu(
         bodies, lights, view, projection, casters=casters, colors=None, coverage=coverage,
         atlas_size=atlas_size, budget=budget, previous=previous, pcf_radius=pcf_radius,
         depth_bias=depth_bias, normal_offset=normal_offset, light_size=light_size,
-        api="webgpu",
+        api="webgpu", scene_fit=scene_fit,
     )  # fmt: skip
     size = _image_size("image_size", image_size)
     device = wgpu_device()
@@ -147,12 +157,14 @@ def render_atlas_wgpu(
         fit=scene.fit,
         shadow_map=read_wgpu_texture(device, texture, scene.fit.texture_size, 1)[..., 0],
         adapter=adapter_description(),
+        draws=scene.draws,
     )
 
 
 def _draw_atlas(device: Any, scene: AtlasScene, buffers: Sequence[tuple[Any, int]]) -> Any:
-    """Every caster's depth into each tile's viewport (scissored) of one ``depth32float``
-    texture cleared to 1, with the polygon offset ``scene.bias``; returns the texture."""
+    """The depth of the bodies ``scene.draws[t]`` into each tile ``t``'s viewport
+    (scissored) of one ``depth32float`` texture cleared to 1, with the polygon offset
+    ``scene.bias``; returns the texture."""
     width, height = scene.fit.texture_size
     usage = wgpu.TextureUsage
     texture = device.create_texture(
@@ -163,10 +175,8 @@ def _draw_atlas(device: Any, scene: AtlasScene, buffers: Sequence[tuple[Any, int
     pipelines = {c: depth_pipeline(device, scene.bias, c) for c in ("none", "back", "front")}
     draw_depth(device, pipelines["none"], target, [])  # clear
     clip = np.asarray(scene.fit.world_to_clip, dtype=np.float64)
-    casting = [(b, vbo, n) for b, (vbo, n), c in zip(scene.bodies, buffers, scene.cast, strict=True)
-               if c]  # fmt: skip
     for t, port in enumerate(np.asarray(scene.fit.viewports, dtype=np.int64)):
-        draws = [(clip[t] @ b.to_world, vbo, n) for b, vbo, n in casting]
+        draws = [(clip[t] @ scene.bodies[i].to_world, *buffers[i]) for i in scene.draws[t].tolist()]
         x, y, w, h = (int(c) for c in port)
         if scene.pcss is None:
             draw_depth(device, pipelines["none"], target, draws, (x, y, w, h))

@@ -7,7 +7,9 @@ tile of an atlas) with ``world_to_clip[i]``; the camera-view pass picks the casc
 the fragment's view depth, blends across the band, biases with shadowmath's normal
 offset and slope-scaled bias and compares with PCF (``shaders/cascades.frag``). Every
 body casts and receives, as with ``render_scene(..., method="depth")``, whose lit and
-subtractive passes it shares.
+subtractive passes it shares. With ``scene_fit="draw_lists"`` the bodies become a
+:class:`shadowmath.ShadowScene`, fitted by :meth:`shadowmath.ShadowScene.fit_cascades`,
+and each cascade's map is drawn only its draw list.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from ._context import (
     uniform,
 )
 from ._context import image_size as _image_size
+from ._pass_atlas import DrawLists, SceneFit, body_scene
 from ._pass_depth import (
     begin_depth_pass,
     cull_faces_toward_light,
@@ -91,6 +94,9 @@ class CascadeFrame(NamedTuple):
         cascades: the :class:`shadowmath.Cascades` the maps were drawn and sampled with.
         shadow_maps: ``(layers, h, w)`` float32 window depths, row 0 is ``t = 0`` (1 where
             nothing was drawn): one layer per cascade, or the whole atlas as one layer.
+        draws: the bodies drawn into each cascade's map (one integer array of body
+            indices per cascade): its draw list with ``scene_fit="draw_lists"``, else
+            every body.
     """
 
     color: NDArray[np.float32]
@@ -102,6 +108,7 @@ class CascadeFrame(NamedTuple):
     body: NDArray[np.int32]
     cascades: sm.Cascades
     shadow_maps: NDArray[np.float32]
+    draws: DrawLists = ()
 
 
 class CascadeOptions(NamedTuple):
@@ -143,14 +150,19 @@ def render_cascades(
     ambient: float = 0.15,
     background: tuple[float, float, float] = (0.06, 0.07, 0.09),
     light_size: float = 0.0,
+    scene_fit: SceneFit = None,
     ctx: moderngl.Context | None = None,
 ) -> CascadeFrame:
     r"""Render bodies under a sun with cascaded shadow maps fitted to the camera.
 
     1. :func:`shadowmath.fit_cascades` (``light.direction``, ``view``, ``projection``,
        ``scene_bounds``, ``map_size`` and the split, band, stability, layout and
-       ``pcf_radius`` options, OpenGL conventions).
-    2. Per cascade ``i``: every body's depth through ``world_to_clip[i]`` (no polygon
+       ``pcf_radius`` options, OpenGL conventions); or, with ``scene_fit``,
+       :meth:`shadowmath.ShadowScene.fit_cascades` of a scene of the bodies (each body
+       one object: its mesh, its ``to_world``) with the same options over the scene's
+       bounds.
+    2. Per cascade ``i``: every body's depth (with ``scene_fit="draw_lists"``, the
+       bodies of the cascade's draw list) through ``world_to_clip[i]`` (no polygon
        offset), into layer ``i`` of an ``(n, h, w)`` float texture array
        (``layout="layers"``), or into tile ``viewports[i]`` of one atlas.
     3. The lit pass, then the mask: each visible point's view depth
@@ -200,6 +212,15 @@ def render_cascades(
         cascade_colors: also render the cascade-coloured picture.
         ambient, background: shading as in :func:`render_scene`.
         light_size: the sun's angular radius in radians, ``>= 0``: PCSS when ``> 0``.
+        scene_fit: None (default): :func:`shadowmath.fit_cascades` over ``scene_bounds``,
+            every body drawn into every cascade. ``"draw_lists"``: the renderer as a client
+            of :class:`shadowmath.ShadowScene`: the bodies added as one object each, the
+            cascades of :meth:`~shadowmath.ShadowScene.fit_cascades` (over the scene's
+            bounds: no ``scene_bounds``), each cascade drawn only the bodies of its draw
+            list. Not with ``warp`` nor with ``light_size > 0`` unless ``stable`` (the
+            lists are culled to the unwarped, unwidened maps). ``"every_caster"``: the
+            same scene fit, every body drawn into every cascade (what the draw lists are
+            compared with).
         ctx: a moderngl context; default the shared EGL :func:`standalone_context`.
 
     Returns:
@@ -207,8 +228,9 @@ def render_cascades(
 
     Raises:
         ValueError: bad bodies, matrices, sizes or options; a light that is not
-            directional; more than :data:`MAX_CASCADES` cascades; and whatever
-            :func:`shadowmath.fit_cascades` raises.
+            directional; more than :data:`MAX_CASCADES` cascades; ``scene_fit`` with
+            ``scene_bounds``, or ``"draw_lists"`` with ``warp`` or an unstable
+            ``light_size > 0``; and whatever :func:`shadowmath.fit_cascades` raises.
         GLUnavailableError: no OpenGL context could be created.
 
     Example:
@@ -234,14 +256,15 @@ def render_cascades(
         "stable": stable, "warp": warp, "orientation": orientation,
     }  # fmt: skip
     scene = prepare_cascades(
-        bodies, light, view, projection, options=options, fit_options=fit_options
-    )
+        bodies, light, view, projection, options=options, fit_options=fit_options,
+        scene_fit=scene_fit,
+    )  # fmt: skip
     size = _image_size("image_size", image_size)
     texels = _image_size("map_size", map_size)
     gl = resolve_context(ctx)
     v, p = scene.view, scene.projection
     with GpuScene(gl, scene.bodies, (), [scene.sun], p @ v, size=size, map_size=texels) as gpu:
-        return _draw(gpu, v, scene.fit, options)
+        return _draw(gpu, v, scene.fit, options, scene.draws)
 
 
 class CascadeScene(NamedTuple):
@@ -252,6 +275,8 @@ class CascadeScene(NamedTuple):
     view: NDArray[np.float64]
     projection: NDArray[np.float64]
     fit: sm.Cascades
+    #: The bodies to draw into each cascade's map (:attr:`CascadeFrame.draws`).
+    draws: DrawLists = ()
 
 
 def cascade_options(
@@ -288,12 +313,14 @@ def prepare_cascades(
     options: CascadeOptions,
     fit_options: dict[str, Any],
     api: Literal["opengl", "webgpu"] = "opengl",
+    scene_fit: SceneFit = None,
 ) -> CascadeScene:
     """Check the bodies, the sun and the camera (OpenGL conventions); fit the cascades with
     :func:`shadowmath.fit_cascades` in ``api``'s conventions, given the projection in
     ``api``'s (``fit_options``: its keywords, ``scene_bounds`` defaulting to the bodies'
-    box), widened by :func:`shadowmath.widen_cascades` for PCSS (``options.light_size >
-    0``, unless ``stable``)."""
+    box), or with ``scene_fit`` :meth:`shadowmath.ShadowScene.fit_cascades` of
+    :func:`body_scene`; widened by :func:`shadowmath.widen_cascades` for PCSS
+    (``options.light_size > 0``, unless ``stable``); each cascade's bodies to draw."""
     prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
     if not prepared:
         raise ValueError("bodies: expected at least one body")
@@ -303,18 +330,48 @@ def prepare_cascades(
     v, p = check_matrix("view", view), check_camera_projection(projection)
     fit_options = dict(fit_options)
     bounds = fit_options.pop("scene_bounds")
-    bounds = _bounds(prepared) if bounds is None else bounds
+    widen = options.light_size > 0 and not fit_options.get("stable")
+    _check_scene_fit(scene_fit, bounds, warp=fit_options.get("warp"), widen=widen)
     map_size = fit_options.pop("map_size")
     # The projection in api's own clip conventions, as that API's renderer holds it.
     camera = sm.api_convention(api=api).gl_clip_to_clip @ p
-    fit = sm.fit_cascades(sun.position, v, camera, bounds, map_size, api=api,
-                          pcf_radius=options.pcf_radius, layout=options.layout,
-                          **fit_options)  # fmt: skip
-    if options.light_size > 0 and not fit_options.get("stable"):
+    keywords = {"api": api, "pcf_radius": options.pcf_radius, "layout": options.layout,
+                **fit_options}  # fmt: skip
+    every = np.arange(len(prepared))
+    if scene_fit is None:
+        bounds = _bounds(prepared) if bounds is None else bounds
+        fit = sm.fit_cascades(sun.position, v, camera, bounds, map_size, **keywords)
+        draws: DrawLists = tuple(every for _ in range(fit.splits.shape[-1] - 1))
+    else:
+        scene = body_scene(prepared, [True] * len(prepared))
+        fitted = scene.fit_cascades(sm.DirectionalLight(sun.position), v, camera, map_size,
+                                    **keywords)  # fmt: skip
+        fit = fitted.cascades
+        draws = tuple(np.asarray(d, np.int64) for d in fitted.draws)
+        if scene_fit == "every_caster":
+            draws = tuple(every for _ in draws)
+    if widen:
         fit = sm.widen_cascades(fit, angular_radius=options.light_size)
     if fit.splits.shape[-1] - 1 > MAX_CASCADES:
         raise ValueError(f"count: at most {MAX_CASCADES} cascades, got {fit.splits.shape[-1] - 1}")
-    return CascadeScene(prepared, sun, v, p, fit)
+    return CascadeScene(prepared, sun, v, p, fit, draws)
+
+
+def _check_scene_fit(scene_fit: SceneFit, bounds: Any, *, warp: Any, widen: bool) -> None:
+    """Refuse what ``scene_fit`` does not take (:func:`render_cascades`)."""
+    if scene_fit not in (None, "draw_lists", "every_caster"):
+        raise ValueError(
+            f"scene_fit: expected None, 'draw_lists' or 'every_caster', got {scene_fit!r}"
+        )
+    if scene_fit is not None and bounds is not None:
+        raise ValueError("scene_bounds: the scene's fit (scene_fit) is over the scene's bounds")
+    if scene_fit == "draw_lists" and warp is not None:
+        raise ValueError("scene_fit: the draw lists are culled to the unwarped maps: no warp")
+    if scene_fit == "draw_lists" and widen:
+        raise ValueError(
+            "scene_fit: the draw lists are culled to the unwidened maps: with light_size > 0, "
+            "only stable cascades (widen_cascades widens the others)"
+        )
 
 
 def _bounds(bodies: Sequence[Prepared]) -> NDArray[np.float64]:
@@ -324,13 +381,18 @@ def _bounds(bodies: Sequence[Prepared]) -> NDArray[np.float64]:
 
 
 def _draw(
-    scene: GpuScene, view: NDArray[np.float64], fit: sm.Cascades, options: CascadeOptions
+    scene: GpuScene,
+    view: NDArray[np.float64],
+    fit: sm.Cascades,
+    options: CascadeOptions,
+    draws: DrawLists,
 ) -> CascadeFrame:
-    """The maps, the lit pass, the mask and subtractive passes, the debug tint; read back."""
+    """The maps (cascade ``i`` the bodies ``draws[i]``), the lit pass, the mask and
+    subtractive passes, the debug tint; read back."""
     (sun,) = scene.lights
     draw_lit(scene, options.ambient, options.background)
     atlas = options.layout == "atlas"
-    depths = draw_cascade_maps(scene, fit, atlas, back_faces=options.light_size > 0)
+    depths = draw_cascade_maps(scene, fit, atlas, draws, back_faces=options.light_size > 0)
     maps = _depth_array(scene.ctx, depths)
     try:
         scene.clear_mask()
@@ -362,6 +424,7 @@ def _draw(
         body=body,
         cascades=fit,
         shadow_maps=depths,
+        draws=draws,
     )
 
 
@@ -379,9 +442,15 @@ def cascade_index(
 
 
 def draw_cascade_maps(
-    scene: GpuScene, fit: sm.Cascades, atlas: bool, *, back_faces: bool = False
+    scene: GpuScene,
+    fit: sm.Cascades,
+    atlas: bool,
+    draws: DrawLists,
+    *,
+    back_faces: bool = False,
 ) -> NDArray[np.float32]:
-    """Every body's depth into each cascade's map: ``(n, h, w)`` layers, or ``(1, H, W)``
+    """The depth of the bodies ``draws[i]`` (in body order) into each cascade ``i``'s map:
+    ``(n, h, w)`` layers, or ``(1, H, W)``
     the atlas (each cascade in its viewport), window depths, row 0 ``t = 0``; each layer
     ``fit.texture_size``; no polygon offset (``cascades.frag`` biases each receiver);
     ``back_faces``: only the faces turned from the sun (:func:`cull_faces_toward_light`)."""
@@ -400,7 +469,7 @@ def draw_cascade_maps(
             for i in group:
                 x, y, w, h = (int(c) for c in ports[i])
                 fbo.viewport = (x, y, w, h)
-                for body, mesh in zip(scene.bodies, scene.meshes, strict=True):
+                for body, mesh in ((scene.bodies[b], scene.meshes[b]) for b in draws[i].tolist()):
                     if back_faces:
                         cull_faces_toward_light(gl, clip[i] @ body.to_world)
                     set_matrix(prog, "body_to_clip", clip[i] @ body.to_world)

@@ -3,8 +3,9 @@
 The WebGPU counterpart of :func:`render_cascades`, a client of the public API:
 :func:`shadowmath.fit_cascades` with ``api="webgpu"`` gives every matrix and viewport in
 WebGPU's conventions (clip depth ``0..w``, texture and viewport origin at the first row
-in memory); each cascade's depth is drawn into a layer of a ``depth32float`` texture
-array (or a tile of one atlas layer, through ``viewports[i]``) with no depth bias, and the
+in memory); each cascade's depth (with ``scene_fit="draw_lists"``, of its draw list of a
+:class:`shadowmath.ShadowScene` of the bodies) is drawn into a layer of a ``depth32float``
+texture array (or a tile of one atlas layer, through ``viewports[i]``) with no depth bias, and the
 camera pass ``shaders/cascades.wgsl`` picks, blends, biases and filters as
 ``shaders/cascades.frag`` does.
 """
@@ -22,6 +23,7 @@ import shadowmath as sm
 from shadowmath import api_convention, column_major_bytes
 
 from ._context import image_size as _image_size
+from ._pass_atlas import DrawLists, SceneFit
 from ._pass_cascades import (
     MAX_CASCADES,
     NORMAL_OFFSET,
@@ -68,6 +70,7 @@ class WgpuCascadeFrame(NamedTuple):
         shadow_maps: ``(layers, h, w)`` float32 depths, row 0 is WebGPU's ``t = 0``: one
             layer per cascade, or the whole atlas as one layer.
         adapter: the adapter's description.
+        draws: as in :class:`CascadeFrame`.
     """
 
     shadow: NDArray[np.float32]
@@ -78,6 +81,7 @@ class WgpuCascadeFrame(NamedTuple):
     cascades: sm.Cascades
     shadow_maps: NDArray[np.float32]
     adapter: str
+    draws: DrawLists = ()
 
 
 def render_cascades_wgpu(
@@ -103,6 +107,7 @@ def render_cascades_wgpu(
     depth_bias: tuple[float, float] | None = None,
     normal_offset: float = NORMAL_OFFSET,
     light_size: float = 0.0,
+    scene_fit: SceneFit = None,
 ) -> WgpuCascadeFrame:
     """Render bodies under a sun with cascaded shadow maps, in WebGPU.
 
@@ -128,6 +133,9 @@ def render_cascades_wgpu(
             :func:`shadowmath.widen_cascades` unless ``stable``, the maps holding the faces
             turned from the sun, ``pcss.wgsl`` with each cascade's ``K`` and near depth of
             :func:`shadowmath.pcss_parameters`, taps clamped to the cascade's tile).
+        scene_fit: as in :func:`render_cascades`: ``"draw_lists"`` fits the cascades by
+            :meth:`shadowmath.ShadowScene.fit_cascades` (``api="webgpu"``) and draws each
+            cascade's draw list, ``"every_caster"`` the same fit with every body.
 
     Returns:
         :class:`WgpuCascadeFrame`.
@@ -157,8 +165,9 @@ def render_cascades_wgpu(
         "stable": stable, "warp": warp, "orientation": orientation,
     }  # fmt: skip
     scene = prepare_cascades(
-        bodies, light, view, projection, options=options, fit_options=fit_options, api="webgpu"
-    )
+        bodies, light, view, projection, options=options, fit_options=fit_options, api="webgpu",
+        scene_fit=scene_fit,
+    )  # fmt: skip
     size = _image_size("image_size", image_size)
     device = wgpu_device()
     buffers = vertex_buffers(device, scene.bodies)
@@ -176,6 +185,7 @@ def render_cascades_wgpu(
         cascades=scene.fit,
         shadow_maps=depths,
         adapter=adapter_description(),
+        draws=scene.draws,
     )
 
 
@@ -187,10 +197,10 @@ def _draw_maps(
     atlas: bool,
     back_faces: bool,
 ) -> tuple[Any, NDArray[np.float32]]:
-    """Every body's depth into each cascade's map: a ``depth32float`` texture array of one
-    layer per cascade, or of one atlas layer with each cascade in its viewport (only the
-    faces turned from the sun with ``back_faces``, as the 2D PCSS pass's map); the
-    texture and its ``(layers, h, w)`` depths read back."""
+    """The depth of the bodies ``scene.draws[i]`` into each cascade ``i``'s map: a
+    ``depth32float`` texture array of one layer per cascade, or of one atlas layer with
+    each cascade in its viewport (only the faces turned from the sun with ``back_faces``,
+    as the 2D PCSS pass's map); the texture and its ``(layers, h, w)`` depths read back."""
     fit = scene.fit
     ports = np.asarray(fit.viewports, dtype=np.int64)
     clip = np.asarray(fit.world_to_clip, dtype=np.float64)
@@ -202,8 +212,7 @@ def _draw_maps(
     )  # fmt: skip
     pipelines = {cull: depth_pipeline(device, cull_mode=cull) for cull in ("none", "back", "front")}
     for i, port in enumerate(ports):
-        draws = [(clip[i] @ b.to_world, vbo, n)
-                 for b, (vbo, n) in zip(scene.bodies, buffers, strict=True)]  # fmt: skip
+        draws = [(clip[i] @ scene.bodies[b].to_world, *buffers[b]) for b in scene.draws[i].tolist()]
         layer = 0 if atlas else i
         target = texture.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
         if not atlas or i == 0:
