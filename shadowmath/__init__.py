@@ -116,6 +116,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._math._frustum import NEAR_FAR_SLACK as NEAR_FAR_SLACK
     from ._math._frustum import Frustum as Frustum
     from ._math._frustum import OrthographicBox as OrthographicBox
+    from ._scene._summary import GeometrySummary as GeometrySummary
     from .gather import gather_meshes as gather_meshes
     from .lights import DirectionalLight as DirectionalLight
     from .lights import PointLight as PointLight
@@ -129,6 +130,7 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from .scene import ShadowScene as ShadowScene
     from .scene import SummaryFit as SummaryFit
     from .scene import fit_summaries as fit_summaries
+    from .scene import summarize_geometry as summarize_geometry
 
 # Each public name and the module that defines it, imported on first use (PEP 562): ``import
 # shadowmath`` costs a dictionary, not the package (tests/test_lazy_import.py checks that this
@@ -255,6 +257,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "Mesh",
         "Triangles",
     ),
+    "._scene._summary": ("GeometrySummary",),
     ".scene": (
         "LightShadows",
         "SceneAtlas",
@@ -263,6 +266,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "ShadowScene",
         "SummaryFit",
         "fit_summaries",
+        "summarize_geometry",
     ),
 }
 _WHERE = {name: module for module, names in _MODULES.items() for name in names}

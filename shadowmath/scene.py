@@ -11,22 +11,20 @@ with the number of triangles:
   geometry and shared by its instances;
 * each frame only the objects whose matrix changed are moved to the world (their
   summary triangles, bounding sphere and box);
-* each light first **culls** the objects that cannot cast into its maps, from their
-  bounding spheres (:mod:`shadowmath._scene._cull`: a spot light's cone, each cube
-  face of a point light, each cascade's box), then fits from the summaries of the
-  rest (:func:`fit_shadow`, :func:`cube_depth_range`, :func:`fit_cascades`);
-* each map gets its **draw list**: the indices of the objects to draw into it (an
-  empty list: nothing to draw, the map may be skipped).
+* each light's fit first **culls** what it need not read, from the objects' bounding
+  spheres (:mod:`shadowmath._scene._cull`: a spot light's cone, the objects that may
+  hold a cube map's nearest or farthest point, those that may bound a sun's box), then
+  fits from the summaries of the rest (:func:`fit_shadow`, :func:`cube_depth_range`,
+  :func:`fit_cascades`, :func:`fit_atlas`);
+* each map gets its **draw list**: the casters whose sphere reaches into the map's clip
+  volume (an empty list: nothing to draw, the map may be skipped).
 
-The fits keep every caster (a summary holds its geometry), so a renderer that draws
-only the draw lists draws the same shadows as one that draws every caster into every
-map; the maps may be slightly larger than those fitted to every triangle (by how much:
-``docs/scenes.md``). The rules cull to the region a map's lit points see (a spot's cone,
-a cube face's pyramid, a cascade's whole map): a filtered lookup (PCF, the normal offset,
-PCSS's search) within a few texels of a cone's rim or a cube face's seam may read texels
-of the square's corners or the face's ring where only culled casters fall
-(``docs/scenes.md``, "In the reference renderer"; the reference renderer draws from the
-lists with ``scene_fit="draw_lists"``).
+The fits keep every caster (a summary holds its geometry); the maps may be slightly
+larger than those fitted to every triangle (by how much: ``docs/scenes.md``). A caster
+left out of a draw list puts no fragment in the map, so a renderer that draws only the
+draw lists draws the same maps, texel for texel, as one that draws every caster into
+every map, and the same shadows whatever its filter (the reference renderer does, with
+``scene_fit="draw_lists"``).
 """
 
 from __future__ import annotations
@@ -36,6 +34,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ._api._cube_faces import cube_face_projection, cube_face_views
 from ._boundary._shapes import ArrayLike, Float, Int, Real
 from ._boundary._validate import Array, check_faces, is_jax
 from ._fits._atlas_allocate import ShadowAtlas
@@ -46,11 +45,12 @@ from ._fits._setup import fit_shadow
 from ._fits._shadow_setup import ShadowSetup
 from ._fits._spec import ShadowMapSpec
 from ._scene import _cull
-from ._scene._summary import Summary, summarize
+from ._scene._summary import GeometrySummary, summarize
 from .lights import DirectionalLight, PointLight, SpotLight
 from .receivers import Mesh, Triangles
 
 __all__ = [
+    "GeometrySummary",
     "LightShadows",
     "SceneAtlas",
     "SceneCascades",
@@ -58,6 +58,7 @@ __all__ = [
     "ShadowScene",
     "SummaryFit",
     "fit_summaries",
+    "summarize_geometry",
 ]
 
 IntArray = Int[np.ndarray, " K"]
@@ -71,9 +72,10 @@ class LightShadows(NamedTuple):
         fit: a :class:`ShadowSetup` (sun, spot) or a :class:`CubeDepthRange` (a point
             light's cube map), or None where ``skipped``.
         draws: one integer array of object indices per map: one map for a sun or a spot
-            light, six cube faces (``+X, -X, +Y, -Y, +Z, -Z``) for a point light. An
-            empty array: no caster reaches that map (draw nothing into it; cleared to
-            "far", it shadows nothing).
+            light, six cube faces (``+X, -X, +Y, -Y, +Z, -Z``) for a point light: the
+            casters whose bounding sphere reaches into the map's clip volume. An empty
+            array: no caster reaches that map (draw nothing into it; cleared to "far", it
+            shadows nothing).
         skipped: "" when fitted; else why not (no caster in the light's reach, or the
             fit's ``ValueError`` message). A skipped light casts no shadow this frame
             (its draws are empty).
@@ -150,7 +152,7 @@ class SummaryFit(NamedTuple):
 
 
 class _Geometry(NamedTuple):
-    summary: Summary
+    summary: GeometrySummary
     triangles: int  # how many the summary has
 
 
@@ -195,29 +197,28 @@ class ShadowScene:
         self._moved_since_atlas = np.zeros(0, dtype=bool)
 
     # -- building -------------------------------------------------------------------
-    def add_geometry(self, geometry: Mesh | Triangles | Real[ArrayLike, "V 3"]) -> int:
+    def add_geometry(
+        self, geometry: Mesh | Triangles | Real[ArrayLike, "V 3"] | GeometrySummary
+    ) -> int:
         """Add a geometry in local coordinates; returns its index for :meth:`add_objects`.
 
         Its summary (:mod:`shadowmath._scene._summary`) is computed here, once: about
-        5-10 ms, whatever its number of triangles beyond a few thousand.
+        5-10 ms, whatever its number of triangles beyond a few thousand; or pass one from
+        :func:`summarize_geometry` (a renderer's cache, shared between scenes).
 
         Arguments:
             geometry: an :class:`~shadowmath.Mesh` (``vertices (V, 3)``, ``faces (F, 3)``),
-                :class:`~shadowmath.Triangles` ``(M, 3, 3)``, or points ``(V, 3)``
-                (casters drawn as points: their summary is their 26-DOP's corners).
+                :class:`~shadowmath.Triangles` ``(M, 3, 3)``, points ``(V, 3)`` (casters
+                drawn as points: their summary is their 26-DOP's corners), or a
+                :class:`GeometrySummary`.
 
         Raises:
             ValueError: naming ``geometry``: wrong shapes, no vertices, non-finite
                 values, face indices outside the vertices.
         """
-        vertices, triangles = _geometry_arrays(geometry)
-        summary = summarize(vertices, triangles)
-        self._geometries.append(_Geometry(summary, len(summary.triangles)))
-        return len(self._geometries) - 1
-
-    def _add_summary(self, summary: Summary) -> int:
-        """Add a geometry by a summary computed earlier (by :func:`summarize`, of a trusted
-        geometry): a cache that rebuilds its scene (``integrations.pygfx``) reuses it."""
+        summary = (
+            geometry if isinstance(geometry, GeometrySummary) else summarize_geometry(geometry)
+        )
         self._geometries.append(_Geometry(summary, len(summary.triangles)))
         return len(self._geometries) - 1
 
@@ -344,14 +345,17 @@ class ShadowScene:
     ) -> list[LightShadows]:
         """Fit every light to the scene as it is now, with its draw lists.
 
-        * :class:`DirectionalLight`: :func:`fit_shadow` of every caster's summary (all
-          of them are drawn: the map holds them all), ``receivers=`` every receiver's;
+        * :class:`DirectionalLight`: :func:`fit_shadow` of every caster's summary,
+          ``receivers=`` every receiver's;
         * :class:`SpotLight`: the casters whose sphere reaches into the cone
           (:func:`._cull.spot_visible`), their summaries clipped to the cone's pyramid by
           :func:`fit_shadow`, the receivers in the cone as ``receivers=``;
         * :class:`PointLight`: a cube map, :func:`cube_depth_range` of every caster's
-          and receiver's summary, and per face the casters whose sphere reaches into it
-          (:func:`._cull.cube_faces_visible`).
+          and receiver's summary (its six faces drawn with :func:`cube_face_views` and
+          :func:`cube_face_projection` of that range, the spec's size and border).
+
+        Every map's draw list holds the casters whose sphere reaches into its clip volume
+        (:func:`._cull.clip_visible`): leaving the others out changes no texel.
 
         Arguments:
             lights: typed lights, each unbatched (``position`` and ``direction`` ``(3,)``).
@@ -383,26 +387,14 @@ class ShadowScene:
         **options: Any,
     ) -> SceneCascades:
         """:func:`fit_cascades` over the scene's bounds (:meth:`bounds`), with one draw
-        list per cascade: the casters whose sphere reaches into its map's window on the
-        light side of its ``far`` (:func:`._cull.box_visible`).
+        list per cascade: the casters whose sphere reaches into its map
+        (:func:`._cull.clip_visible`).
 
         ``options`` are :func:`fit_cascades`' keywords (``count``, ``stable``,
         ``depth_range``, ``state``...); what it raises, this raises.
         """
         cascades = fit_cascades(light, view, projection, self.bounds(), map_size, **options)
-        box = cascades.frustum
-        casting = np.flatnonzero(self._casts)
-        draws = []
-        for i in range(np.shape(cascades.world_to_light)[-3]):
-            hx = float(box.half_width[..., i]) / float(box.margin_x[..., i])
-            hy = float(box.half_height[..., i]) / float(box.margin_y[..., i])
-            cx, cy = float(box.center_x[..., i]), float(box.center_y[..., i])
-            window = np.array([cx - hx, cx + hx, cy - hy, cy + hy])
-            keep = _cull.box_visible(
-                np.asarray(cascades.world_to_light[..., i, :, :]), window,
-                float(box.far[..., i]), self._center[casting], self._radius[casting],
-            )  # fmt: skip
-            draws.append(casting[keep])
+        draws = self._drawn(np.asarray(cascades.world_to_clip))
         return SceneCascades(cascades, tuple(draws))
 
     def fit_atlas(
@@ -415,10 +407,11 @@ class ShadowScene:
 
         Each light reads what :meth:`fit` reads for it: a spot light the casters whose
         sphere reaches into its cone; a cube-mapped point light (``atlas.light_cube``)
-        the objects that may hold its nearest or farthest point, and each face draws the
-        casters whose sphere reaches into it; a sun or a point light with a 2D map every
-        caster. The lights' summaries go to :func:`fit_atlas` as one ``(L, M, 3, 3)``
-        batch, each light's padded to the longest by repeating its first triangle (which
+        the objects that may hold its nearest or farthest point; a sun or a point light
+        with a 2D map every caster. Each tile draws the casters whose sphere reaches into
+        its clip volume (:func:`._cull.clip_visible`), none for a light that failed. The
+        lights' summaries go to :func:`fit_atlas` as one ``(L, M, 3, 3)`` batch, each
+        light's padded to the longest by repeating its first triangle (which
         changes no extreme; a 2D point light's mean direction is taken over them).
 
         ``options`` are :func:`fit_atlas`' keywords (``api``, ``pcf_radius``, ``spec``...);
@@ -433,52 +426,52 @@ class ShadowScene:
                 "atlas: expected the ShadowAtlas of these lights (allocate_atlas with one "
                 f"entry per light: {len(checked)})"
             )
-        reads, draws = zip(
-            *(self._atlas_light(light, bool(cube)) for light, cube in
-              zip(checked, atlas.light_cube, strict=True)),
-            strict=True,
-        )  # fmt: skip
+        reads = [self._atlas_reads(light, bool(cube)) for light, cube in
+                 zip(checked, atlas.light_cube, strict=True)]  # fmt: skip
         longest = max(len(t) for t in reads)
         batch = np.stack(
             [np.concatenate([t, np.repeat(t[:1], longest - len(t), 0)]) for t in reads]
         )
         recv = self._triangles(self._receives) if self._receives.any() else None
         fit = fit_atlas(checked, Triangles(batch), atlas, receivers=recv, **options)
+        drawn = self._drawn(np.asarray(fit.world_to_clip))
+        failed = [e is not None for e in fit.light_errors]
         tiles = tuple(
-            draws[light][face if atlas.light_cube[light] else 0]
-            for light, face in zip(atlas.tile_light.tolist(), atlas.tile_face.tolist(), strict=True)
-        )  # fmt: skip
+            np.zeros(0, np.int64) if failed and failed[light] else d
+            for light, d in zip(atlas.tile_light.tolist(), drawn, strict=True)
+        )
         moved = np.flatnonzero(self._moved_since_atlas)
         self._moved_since_atlas[:] = False
         return SceneAtlas(fit, tiles, moved)
 
-    def _atlas_light(
+    def _atlas_reads(
         self, light: PointLight | SpotLight | DirectionalLight, cube: bool
-    ) -> tuple[np.ndarray, tuple[IntArray, ...]]:
-        """One light's triangles for :func:`fit_atlas` and its draw lists (six for a cube)."""
+    ) -> np.ndarray:
+        """One light's summary triangles ``(M, 3, 3)`` for :func:`fit_atlas`."""
         casts = self._casts
         if isinstance(light, PointLight) and cube:
             position = np.asarray(light.position)
             near, far = _cull.cube_range_candidates(position, self._center, self._radius,
                                                     casts, self._receives)  # fmt: skip
-            casting = np.flatnonzero(casts)
-            faces = _cull.cube_faces_visible(position, self._center[casting], self._radius[casting])
-            tris = self._triangles((near | far) & casts, position).corners
-            return tris, tuple(casting[f] for f in faces)
+            return np.asarray(self._triangles((near | far) & casts, position).corners)
         if isinstance(light, SpotLight):
             position = np.asarray(light.position)
             reach = casts & _cull.spot_visible(
-                position,
-                np.asarray(light.direction),
-                float(light.angle),
-                self._center,
-                self._radius,
-            )
+                position, np.asarray(light.direction), float(light.angle),
+                self._center, self._radius,
+            )  # fmt: skip
             if not reach.any():  # one triangle behind the spot: its empty fit
                 behind = position - np.asarray(light.direction)
-                return np.repeat(behind[None, None], 3, axis=1), (np.zeros(0, np.int64),)
-            return self._triangles(reach, position).corners, (np.flatnonzero(reach),)
-        return self._triangles(casts).corners, (np.flatnonzero(casts),)
+                return np.repeat(behind[None, None], 3, axis=1)
+            return np.asarray(self._triangles(reach, position).corners)
+        return np.asarray(self._triangles(casts).corners)
+
+    def _drawn(self, world_to_clip: np.ndarray) -> tuple[IntArray, ...]:
+        """The draw list of each map ``world_to_clip`` ``(maps, 4, 4)``: the casters whose
+        sphere reaches into its clip volume (:func:`._cull.clip_visible`)."""
+        casting = np.flatnonzero(self._casts)
+        keep = _cull.clip_visible(world_to_clip, self._center[casting], self._radius[casting])
+        return tuple(casting[k] for k in keep)
 
     # -- the steps ------------------------------------------------------------------
     def _place(self, objects: IntArray) -> None:
@@ -537,9 +530,9 @@ class ShadowScene:
                 float(light.angle), self._center, self._radius,
             )  # fmt: skip
             casts, receives = casts & reach, receives & reach
-        draws = (np.flatnonzero(casts),)
-        if not len(draws[0]):
-            return LightShadows(light, None, (draws[0],), "no caster in the light's reach")
+        none = (np.zeros(0, np.int64),)
+        if not casts.any():
+            return LightShadows(light, None, none, "no caster in the light's reach")
         try:
             if isinstance(light, DirectionalLight) and not spec.stable:
                 fit = self._fit_sun(light, casts, receives, spec, up)
@@ -548,8 +541,8 @@ class ShadowScene:
                 at = np.asarray(light.position) if isinstance(light, SpotLight) else None
                 fit = fit_shadow(light, self._triangles(casts, at), spec, receivers=recv, up=up)
         except ValueError as err:
-            return LightShadows(light, None, (np.zeros(0, np.int64),), str(err))
-        return LightShadows(light, fit, draws, "")
+            return LightShadows(light, None, none, str(err))
+        return LightShadows(light, fit, self._drawn(np.asarray(fit.blocker_to_clip)[None]), "")
 
     def _fit_sun(
         self, light: DirectionalLight, casts: np.ndarray, receives: np.ndarray,
@@ -573,11 +566,9 @@ class ShadowScene:
 
     def _fit_cube(self, light: PointLight, spec: ShadowMapSpec) -> LightShadows:
         position = np.asarray(light.position, dtype=np.float64)
-        casting = np.flatnonzero(self._casts)
         none = tuple(np.zeros(0, np.int64) for _ in range(6))
-        if not len(casting):
+        if not self._casts.any():
             return LightShadows(light, None, none, "no caster in the light's reach")
-        faces = _cull.cube_faces_visible(position, self._center[casting], self._radius[casting])
         near, far = _cull.cube_range_candidates(position, self._center, self._radius,
                                                 self._casts, self._receives)  # fmt: skip
         recv = self._triangles(far & self._receives) if np.any(far & self._receives) else None
@@ -587,7 +578,44 @@ class ShadowScene:
                                    border_texels=spec.border)  # fmt: skip
         except ValueError as err:
             return LightShadows(light, None, none, str(err))
-        return LightShadows(light, fit, tuple(casting[f] for f in faces), "")
+        faces = _cube_clip(np, position, fit, spec)
+        return LightShadows(light, fit, self._drawn(faces), "")
+
+
+def _cube_clip(xp: Any, position: Any, fit: CubeDepthRange, spec: ShadowMapSpec) -> Any:
+    """``(6, 4, 4)`` world-to-clip of a cube map's faces: :func:`cube_face_projection` of
+    ``fit`` with the spec's size and border ring, after :func:`cube_face_views`."""
+    P = cube_face_projection(fit.near, fit.far, map_size=spec.size[0], border_texels=spec.border)
+    return xp.asarray(P)[..., None, :, :] @ xp.asarray(cube_face_views(position))
+
+
+def summarize_geometry(
+    geometry: Mesh | Triangles | Real[ArrayLike, "V 3"],
+) -> GeometrySummary:
+    """What a scene's fits read of a geometry (its own triangles when few, else its
+    26-DOP's surface, and its bounding sphere: :mod:`shadowmath._scene._summary`), for
+    :meth:`ShadowScene.add_geometry`; computed once, it can be kept and shared.
+
+    Arguments:
+        geometry: an :class:`~shadowmath.Mesh`, :class:`~shadowmath.Triangles` ``(M, 3,
+            3)`` or points ``(V, 3)``, in local coordinates.
+
+    Returns:
+        :class:`GeometrySummary` (float64 NumPy).
+
+    Raises:
+        ValueError: naming ``geometry``: wrong shapes, no vertices, non-finite values,
+            face indices outside the vertices.
+
+    Example:
+        >>> import shadowmath as sm
+        >>> from shadowmath import meshes
+        >>> ball = sm.summarize_geometry(meshes.sphere(1.0, segments=64, rings=32))
+        >>> ball.exact, ball.triangles.shape  # 3,968 triangles read as 92
+        (False, (92, 3, 3))
+    """
+    vertices, triangles = _geometry_arrays(geometry)
+    return summarize(vertices, triangles)
 
 
 def _geometry_arrays(geometry: object) -> tuple[np.ndarray, np.ndarray]:
@@ -684,8 +712,10 @@ def fit_summaries(
     * **sun**: every caster; a receiver-only triangle becomes a copy of the first
       caster's (inside the map, before its far plane).
     * **point light**: a cube map's :func:`cube_depth_range` over every caster (others
-      replaced by the first caster's triangle) and receiver; per face the casters whose
-      sphere reaches into it (:func:`._cull.cube_faces_visible`).
+      replaced by the first caster's triangle) and receiver.
+
+    The draw masks are :meth:`ShadowScene.fit`'s: the casters whose sphere reaches into
+    each map's clip volume (:func:`._cull.clip_visible`).
 
     Unlike :meth:`ShadowScene.fit`, an object whose bounding sphere holds the light is
     read by its summary too (its own triangles would change the shapes): where that
@@ -742,29 +772,33 @@ def fit_summaries(
     casts, receives = summaries.casts, summaries.receives
     first = tris[xp.argmax(casts[owner])]  # the first caster's triangle (any, if none)
     if isinstance(light, SpotLight):
-        reach = spot_reach = _cull.spot_visible(
+        reach = _cull.spot_visible(
             xp.asarray(light.position), xp.asarray(light.direction), light.angle,
             summaries.center, summaries.radius, xp=xp,
         )  # fmt: skip
         behind = xp.asarray(light.position) - xp.asarray(light.direction)
         gone = xp.broadcast_to(behind, (3, 3))
         cast_t = xp.where((casts & reach)[owner][:, None, None], tris, gone)
-        recv_t = xp.where((receives & spot_reach)[owner][:, None, None], tris, gone)
-        fit: ShadowSetup | CubeDepthRange = fit_shadow(
-            light, Triangles(cast_t), spec, receivers=Triangles(recv_t), up=up
-        )
-        return SummaryFit(fit, (casts & reach)[None])
+        recv_t = xp.where((receives & reach)[owner][:, None, None], tris, gone)
+        spot = fit_shadow(light, Triangles(cast_t), spec, receivers=Triangles(recv_t), up=up)
+        return SummaryFit(spot, _drawn_mask(xp, spot.blocker_to_clip[None], summaries))
     cast_t = xp.where(casts[owner][:, None, None], tris, first)
     recv_t = xp.where(receives[owner][:, None, None], tris, first)
     if isinstance(light, DirectionalLight):
-        fit = fit_shadow(light, Triangles(cast_t), spec, receivers=Triangles(recv_t), up=up)
+        sun = fit_shadow(light, Triangles(cast_t), spec, receivers=Triangles(recv_t), up=up)
         used = xp.sum(casts[owner])  # the copies of the first caster are not casters
-        return SummaryFit(fit._replace(casters_used=used), casts[None])
+        draws = _drawn_mask(xp, sun.blocker_to_clip[None], summaries)
+        return SummaryFit(sun._replace(casters_used=used), draws)
     position = xp.asarray(light.position)
-    fit = cube_depth_range(position, Triangles(cast_t), receivers=Triangles(recv_t),
-                           map_size=spec.size[0], border_texels=spec.border)  # fmt: skip
-    faces = _cull.cube_faces_visible(position, summaries.center, summaries.radius, xp=xp)
-    return SummaryFit(fit, faces & casts)
+    cube = cube_depth_range(position, Triangles(cast_t), receivers=Triangles(recv_t),
+                            map_size=spec.size[0], border_texels=spec.border)  # fmt: skip
+    return SummaryFit(cube, _drawn_mask(xp, _cube_clip(xp, position, cube, spec), summaries))
+
+
+def _drawn_mask(xp: Any, world_to_clip: Any, summaries: SceneSummaries) -> Any:
+    """``(maps, N)`` the casters whose sphere reaches into each map's clip volume."""
+    keep = _cull.clip_visible(world_to_clip, summaries.center, summaries.radius, xp=xp)
+    return keep & summaries.casts
 
 
 def _namespace(summaries: SceneSummaries) -> Any:

@@ -55,7 +55,14 @@ from .strategies import (
     sized_maps,
     unit_vectors,
 )
-from .test_scene import _cone_distance, _inside_map, _random_scene, _samples, _world
+from .test_scene import (
+    _clip_inside,
+    _cone_distance,
+    _inside_map,
+    _random_scene,
+    _samples,
+    _world,
+)
 from .test_stable_sphere import DUPLICATE
 
 CASES: Counter[str] = Counter()
@@ -2967,10 +2974,10 @@ def test_fuzz_widen_cascades(data: st.DataObject) -> None:
 @settings(deadline=None)
 def test_fuzz_shadow_scene(seed: int) -> None:
     """Random scenes and lights through ``ShadowScene.fit``: an object left out of a map's
-    draw list has no point (sampled on its own triangles) where a segment from a lit point
-    of that map to the light could pass, and every drawn caster's points that the map can
-    shadow lie in the fitted map (the spot's texture square, the sun's box, the cube's
-    depth range)."""
+    draw list has no point (sampled on its own triangles) in the map's clip volume (so no
+    texel changes: no lit point's lookup sees it), a spot skipped has nothing in its cone,
+    and every caster's points that a map can shadow lie in it (the spot's texture square
+    for the points in its cone, the sun's box, the cube's depth range)."""
     rng = np.random.default_rng(seed)
     scene, objects = _random_scene(rng, int(rng.integers(1, 8)))
     lights = [
@@ -2982,19 +2989,23 @@ def test_fuzz_shadow_scene(seed: int) -> None:
     spot, sun, point = scene.fit(lights, 512)
     points = [_samples(_world(mesh, M), 3) for mesh, M in objects]
     L, axis, theta = lights[0]
+    faces = None
+    if point.fit is not None:
+        P = sm.cube_face_projection(point.fit.near, point.fit.far, map_size=512, border_texels=1)
+        faces = P @ sm.cube_face_views(lights[2].position)
     for k in range(1, len(objects)):
         in_cone = _cone_distance(L, axis, float(theta), points[k]) == 0
-        if k not in spot.draws[0]:
-            assert not np.any(in_cone)
-        elif spot.fit is not None:
+        if spot.fit is not None:
             assert np.all(_inside_map(spot.fit, points[k][in_cone]))
+            if k not in spot.draws[0]:  # culled: no fragment in the map at all
+                assert not np.any(_clip_inside(np.asarray(spot.fit.blocker_to_clip), points[k]))
+        else:
+            assert not np.any(in_cone)  # skipped: nothing in its cone
         assert k in sun.draws[0]
         assert sun.fit is not None and np.all(_inside_map(sun.fit, points[k]))
-        rel = points[k] - lights[2].position
-        if point.fit is not None:
-            D = np.max(np.abs(rel), axis=1)
-            assert np.all((float(point.fit.near) <= D) & (float(point.fit.far) >= D))
-        for face, (ax, sign) in enumerate(((0, 1), (0, -1), (1, 1), (1, -1), (2, 1), (2, -1))):
-            seen = np.all(sign * rel[:, ax, None] >= np.abs(np.delete(rel, ax, axis=1)), axis=1)
-            if k not in point.draws[face]:
-                assert not np.any(seen)
+        if faces is not None:
+            depth = np.max(np.abs(points[k] - lights[2].position), axis=1)
+            assert np.all((depth >= float(point.fit.near)) & (depth <= float(point.fit.far)))
+            for face in range(6):
+                if k not in point.draws[face]:
+                    assert not np.any(_clip_inside(faces[face], points[k]))

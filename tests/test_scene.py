@@ -140,9 +140,16 @@ def test_spot_cull_only_drops_spheres_outside_the_cone(seed: int) -> None:
     assert np.all(keep[gap < r * (1 - 1e-9)])  # reaching in: kept
 
 
+def _clip_inside(world_to_clip: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Points that land in the map: ``|x| <= w``, ``|y| <= w`` in clip coordinates."""
+    h = np.c_[points, np.ones(len(points))] @ world_to_clip.T
+    return (np.abs(h[:, 0]) <= h[:, 3]) & (np.abs(h[:, 1]) <= h[:, 3])
+
+
 @given(SEEDS)
-def test_cube_face_cull_drops_nothing_a_face_sees(seed: int) -> None:
-    """Points sampled on the culled objects' own triangles never lie in the face's pyramid."""
+def test_clip_rule_drops_nothing_a_map_draws(seed: int) -> None:
+    """Points sampled on the culled objects' own triangles never land in the map's clip
+    volume (a cube face with a border ring, a perspective and an orthographic map)."""
     rng = np.random.default_rng(seed)
     L = rng.normal(size=3)
     mesh = _geometry(rng)
@@ -150,15 +157,25 @@ def test_cube_face_cull_drops_nothing_a_face_sees(seed: int) -> None:
     s = summarize(V, V[np.asarray(mesh.faces)])
     M = np.stack([_affine(rng, 3.0) for _ in range(12)])
     c, r = _cull.world_spheres(M, np.broadcast_to(s.center, (12, 3)), np.full(12, s.radius))
-    seen = _cull.cube_faces_visible(L, c, r)
+    faces = sm.cube_face_projection(0.1, 20.0, map_size=64, border_texels=int(rng.integers(0, 4)))
+    maps = np.concatenate([faces @ sm.cube_face_views(L), _maps(rng)])
+    seen = _cull.clip_visible(maps, c, r)
+    assert seen.shape == (len(maps), 12)
     for k in range(12):
-        rel = _samples(_world(mesh, M[k]), 3) - L
-        for f, (axis, sign) in enumerate(_cull.CUBE_FACES):
-            if seen[f, k]:
-                continue
-            main = sign * rel[:, axis]
-            others = np.delete(rel, axis, axis=1)
-            assert not np.any(np.all(main[:, None] >= np.abs(others), axis=1))
+        p = _samples(_world(mesh, M[k]), 3)
+        for m in range(len(maps)):
+            if not seen[m, k]:
+                assert not np.any(_clip_inside(maps[m], p))
+            if _clip_inside(maps[m], c[k : k + 1])[0]:
+                assert seen[m, k]  # a centre in the map: kept
+
+
+def _maps(rng: np.random.Generator) -> np.ndarray:
+    """A perspective (a spot's fit) and an orthographic (a sun's) world-to-clip matrix."""
+    box = rng.uniform(-3, 3, (8, 3))
+    spot = sm.fit_shadow(sm.PointLight(np.r_[rng.uniform(-1, 1, 2), 8.0]), box, 128)
+    sun = sm.fit_shadow(sm.DirectionalLight(rng.normal(size=3)), box, 128)
+    return np.stack([spot.blocker_to_clip, sun.blocker_to_clip])
 
 
 def test_cube_range_from_candidates_equals_every_object() -> None:
@@ -286,7 +303,7 @@ def test_cascade_draws_leave_out_only_what_cannot_shadow_the_slice() -> None:
 
 def test_a_halved_bound_would_drop_a_caster() -> None:
     """The constructed cases that the rules' bounds are not loose: a ball grazing the
-    cone, a cube face and the cube range, each kept, and dropped with its radius halved."""
+    cone and a cube face, each kept, and dropped with its radius halved."""
     L, axis, theta = np.zeros(3), np.array([0.0, 0.0, 1.0]), 0.3
     # a ball of radius 1 whose nearest point is 0.5 inside the cone's side
     d = 10.0
@@ -295,24 +312,27 @@ def test_a_halved_bound_would_drop_a_caster() -> None:
     r = gap + 0.5
     assert _cull.spot_visible(L, axis, theta, c[None], np.array([r]))[0]
     assert not _cull.spot_visible(L, axis, theta, c[None], np.array([r / 2]))[0]
-    # a ball beside the +X face, reaching 0.2 into it
-    c = np.array([[2.0, 2.0 + 1.2 * np.sqrt(2.0), 0.0]])
-    assert _cull.cube_faces_visible(L, c, np.array([1.4]))[0, 0]
-    assert not _cull.cube_faces_visible(L, c, np.array([0.7]))[0, 0]
+    # a ball beside the +X cube face (no ring), its sphere reaching 0.4 r into it
+    face = (sm.cube_face_projection(0.1, 50.0, map_size=64) @ sm.cube_face_views(L))[0]
+    c = np.array([[2.0, 2.0 + 0.6 * np.sqrt(2.0), 0.0]])
+    assert _cull.clip_visible(face, c, np.array([1.0]))[0]
+    assert not _cull.clip_visible(face, c, np.array([0.5]))[0]
 
 
-@pytest.mark.parametrize("side", range(5))
-def test_box_rule_keeps_a_sphere_reaching_in_by_half_its_radius(side: int) -> None:
-    """A sphere reaching 0.4 of its radius into each side of a cascade's window (or before
-    its far plane) is kept; moved out by its radius and more, dropped."""
-    window, far, r = np.array([-2.0, 3.0, -1.0, 4.0]), 10.0, 1.0
-    inward = [np.array([window[0] - 0.6, 1.0, 0.0]), np.array([window[1] + 0.6, 1.0, 0.0]),
-              np.array([0.0, window[2] - 0.6, 0.0]), np.array([0.0, window[3] + 0.6, 0.0]),
-              np.array([0.0, 1.0, far + 0.6])][side]  # fmt: skip
-    outward = [np.array([-1.6, 0, 0]), np.array([1.6, 0, 0]), np.array([0, -1.6, 0]),
-               np.array([0, 1.6, 0]), np.array([0, 0, 1.6])][side]  # fmt: skip
-    c = np.stack([inward, inward + outward])
-    keep = _cull.box_visible(np.eye(4), window, far, c, np.full(2, r))
+@pytest.mark.parametrize("side", range(4))
+def test_clip_rule_keeps_a_sphere_reaching_in_by_part_of_its_radius(side: int) -> None:
+    """An orthographic map's window ``[-2, 3] x [-1, 4]`` (a cascade's): a sphere reaching
+    0.4 of its radius into each side is kept; moved out by more than its radius, dropped."""
+    lo, hi = np.array([-2.0, -1.0]), np.array([3.0, 4.0])
+    ortho = np.eye(4)
+    ortho[:2, :2] = np.diag(2 / (hi - lo))
+    ortho[:2, 3] = -(hi + lo) / (hi - lo)
+    ortho[2, 2] = -0.1
+    edge = [np.array([lo[0] - 0.6, 1.0, 0.0]), np.array([hi[0] + 0.6, 1.0, 0.0]),
+            np.array([0.0, lo[1] - 0.6, 0.0]), np.array([0.0, hi[1] + 0.6, 0.0])][side]  # fmt: skip
+    out = [np.array([-1.6, 0, 0]), np.array([1.6, 0, 0]), np.array([0, -1.6, 0]),
+           np.array([0, 1.6, 0])][side]  # fmt: skip
+    keep = _cull.clip_visible(ortho, np.stack([edge, edge + out]), np.ones(2))
     assert keep.tolist() == [True, False]
 
 

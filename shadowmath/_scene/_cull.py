@@ -1,25 +1,28 @@
-r"""Conservative culling rules: which objects can cast into which map.
+r"""Conservative culling rules: what each light's fit reads, and what each map draws.
 
 Each object is read through its world-space bounding sphere (centre ``c``, radius
-``r``; :func:`world_spheres`), which holds every point of it. A rule drops an object
-only when no point of its sphere can shadow a lit point of the map, so the shadows drawn
-from the draw lists equal those drawn with every caster in every map.
+``r``; :func:`world_spheres`), which holds every point of it. Two kinds of rules:
+
+**What a map draws** (:func:`clip_visible`, one rule for every map: a sun's or a spot's,
+a cube face, a cascade, an atlas tile). A map's texels are what its ``world_to_clip``
+rasterizes inside the clip volume; its four side planes are the rows
+``P_3 + P_0, P_3 - P_0, P_3 + P_1, P_3 - P_1`` (``|x| <= w``, ``|y| <= w``, the same in
+every graphics API; their intersection also has ``w >= 0``). A sphere wholly outside one
+of them (signed distance ``pi . (c, 1) / |pi_xyz| < -r``) puts no fragment in the map, so
+leaving it out of the draw list changes no texel: the map, and every lookup of it (any
+filter, any offset), is the one drawn with every caster. Depth is not tested: what the
+near and far planes clip is drawn by neither.
+
+**What a fit reads**, before it has a map:
 
 * **Spot light** at ``L``, unit axis ``a``, half-angle ``theta`` (:func:`spot_visible`).
   A receiver point ``P`` it lights lies in the cone, and so does the segment ``LP``
   (a cone is convex from its apex); a caster shadows ``P`` only on that segment. A
   sphere misses the cone when the angle between ``a`` and ``c - L`` exceeds
   ``theta + asin(r / |c - L|)`` (every point of the sphere is seen from ``L`` within
-  ``asin(r / |c - L|)`` of ``c``'s direction), i.e. when ``theta + asin(r/|c - L|) <
-  pi`` and ``cos(angle(a, c - L)) < cos(theta + asin(r / |c - L|))``. A sphere holding
-  the light is always kept.
-* **Cube face** of a point light at ``L`` (:func:`cube_faces_visible`): face ``+X``
-  sees the directions with ``x >= |y|, x >= |z|`` (relative to ``L``): the four
-  half-spaces ``x - y >= 0``, ``x + y >= 0``, ``x - z >= 0``, ``x + z >= 0`` through
-  ``L``, each of normal length ``sqrt 2``. A sphere lies wholly outside one of them when
-  its signed value is below ``-r sqrt 2``; such an object casts nothing a texel of that
-  face samples (a lit point seen through the face lies in its pyramid, and so does its
-  segment to the light). The other five faces likewise.
+  ``asin(r / |c - L|)`` of ``c``'s direction). A sphere holding the light is kept. The
+  map is fitted to the rest (clipped to the cone's square pyramid); its draw list is
+  then the clip-volume rule's, which may also hold casters in the square's corners.
 * **A cube map's depth range** (:func:`cube_range_candidates`): with ``D(p) =
   max_i |p_i - L_i|`` (the depth of ``p`` in the face that sees it), every point of a
   sphere has ``D(c) - r <= D <= D(c) + r`` (``D`` is 1-Lipschitz in the max norm, which is
@@ -27,11 +30,10 @@ from the draw lists equal those drawn with every caster in every map.
   most the least ``D(c) + r`` of the casters; the farthest caster or receiver corner in one
   whose ``D(c) + r`` is at least the largest ``D(c) - r``. Only these are read: the range
   is the same as from every object.
-* **Orthographic box** (a sun's map or a cascade, :func:`box_visible`): in the map's
-  light coordinates (``Z`` along the light's travel), a lit point has ``|x - c_x| <=
-  R_x``, ``|y - c_y| <= R_y`` and ``z <= far``; its segment toward the light keeps
-  ``x, y`` and has smaller ``z``. A sphere whose ``x`` or ``y`` range misses the box's,
-  or whose nearest ``z`` is beyond ``far``, is dropped.
+* **A sun's box** (:func:`sun_candidates`, :func:`inside_box`): the objects that may
+  bound it along 16 directions across the light and along it are read first; every other
+  sphere is then checked against the fitted box and the fit is repeated with those that
+  stick out, so the box is the one of every caster.
 """
 
 from __future__ import annotations
@@ -77,26 +79,24 @@ def spot_visible(
     return inside | (spread >= np.pi) | (cos_angle >= xp.cos(xp.minimum(spread, np.pi)))
 
 
-#: The cube's faces as (axis, sign) in pygfx's and OpenGL's order +X, -X, +Y, -Y, +Z, -Z.
-CUBE_FACES = ((0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0), (2, 1.0), (2, -1.0))
-
-
-def cube_faces_visible(
-    position: Float[Array, "3"],
+def clip_visible(
+    world_to_clip: Float[Array, "*maps 4 4"],
     center: Float[Array, "N 3"],
     radius: Float[Array, " N"],
     *,
     xp: ModuleType = np,
-) -> Bool[Array, "6 N"]:
-    """``(6, N)`` for each cube face, the spheres that reach into its pyramid."""
-    rel = center - position
-    slack = np.sqrt(2.0) * radius
-    rows = []
-    for axis, sign in CUBE_FACES:
-        main = sign * rel[:, axis]
-        a, b = (rel[:, k] for k in range(3) if k != axis)
-        rows.append((main - xp.abs(a) >= -slack) & (main - xp.abs(b) >= -slack))
-    return xp.stack(rows)
+) -> Bool[Array, "*maps N"]:
+    """``(*maps, N)`` the spheres that may put a fragment in each map (see the module):
+    not wholly outside one of the four side planes of ``world_to_clip``."""
+    P = world_to_clip[..., None, :, :]  # (*maps, 1, 4, 4): planes (*maps, 1, 4, 4)
+    planes = xp.stack(
+        [P[..., 3, :] + P[..., 0, :], P[..., 3, :] - P[..., 0, :],
+         P[..., 3, :] + P[..., 1, :], P[..., 3, :] - P[..., 1, :]],
+        axis=-2,
+    )  # fmt: skip
+    value = xp.sum(planes[..., :3] * center[:, None, :], axis=-1) + planes[..., 3]
+    norm = xp.sqrt(xp.sum(planes[..., :3] ** 2, axis=-1))
+    return xp.all(value >= -radius[:, None] * norm, axis=-1)
 
 
 def cube_range_candidates(
@@ -173,24 +173,4 @@ def inside_box(
         & (dy + radius <= Ry)
         & (p[:, 2] - radius >= float(box.near))
         & before_far
-    )
-
-
-def box_visible(
-    world_to_light: Float[Array, "4 4"],
-    window: Float[Array, "4"],
-    far: float,
-    center: Float[Array, "N 3"],
-    radius: Float[Array, " N"],
-) -> Bool[Array, " N"]:
-    """``(N,)`` the spheres that can shadow the box ``x in [window[0], window[1]]``,
-    ``y in [window[2], window[3]]``, ``z <= far`` (light coordinates of the rigid
-    ``world_to_light``)."""
-    p = center @ world_to_light[:3, :3].T + world_to_light[:3, 3]
-    return (
-        (p[:, 0] + radius >= window[0])
-        & (p[:, 0] - radius <= window[1])
-        & (p[:, 1] + radius >= window[2])
-        & (p[:, 1] - radius <= window[3])
-        & (p[:, 2] - radius <= far)
     )

@@ -40,8 +40,10 @@ from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import Array
 
 
-class Summary(NamedTuple):
-    """One geometry's summary, in its local coordinates (float64 NumPy).
+class GeometrySummary(NamedTuple):
+    """One geometry's summary, in its local coordinates (float64 NumPy): what
+    :meth:`ShadowScene.add_geometry` computes, or takes from :func:`summarize_geometry`
+    to share one summary between scenes.
 
     Attributes:
         triangles: ``(T, 3, 3)`` the summary's triangles (see the module).
@@ -75,8 +77,8 @@ DIRECTIONS = _directions()
 _TRIPLES = np.array(list(itertools.combinations(range(len(DIRECTIONS)), 3)))
 
 
-def summarize(vertices: np.ndarray, triangles: np.ndarray) -> Summary:
-    """The :class:`Summary` of a trusted geometry: finite float64 ``vertices`` ``(V, 3)``
+def summarize(vertices: np.ndarray, triangles: np.ndarray) -> GeometrySummary:
+    """The :class:`GeometrySummary` of a trusted geometry: finite float64 ``vertices`` ``(V, 3)``
     (``V >= 1``) and its ``triangles`` ``(F, 3, 3)`` (``F = 0`` for a point set, whose
     summary triangles are then degenerate ``(p, p, p)``)."""
     scale = float(np.max(np.abs(vertices))) or 1.0
@@ -88,7 +90,7 @@ def summarize(vertices: np.ndarray, triangles: np.ndarray) -> Summary:
     points = vertices if exact else corners
     center, radius = _sphere(points)
     bounds = np.stack([vertices.min(axis=0), vertices.max(axis=0)])
-    return Summary(tris, points, center, radius, bounds, exact, triangles)
+    return GeometrySummary(tris, points, center, radius, bounds, exact, triangles)
 
 
 def dop(vertices: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:

@@ -87,6 +87,8 @@ import numpy as np
 from shadowmath import (
     CubeDepthRange,
     DirectionalLight,
+    GeometrySummary,
+    LightShadows,
     Mesh,
     PointLight,
     ShadowCamera,
@@ -98,9 +100,8 @@ from shadowmath import (
     fit_shadow,
     gather_meshes,
     shadow_camera,
+    summarize_geometry,
 )
-from shadowmath._scene._summary import Summary, summarize
-from shadowmath.scene import LightShadows, _geometry_arrays
 
 try:
     import pygfx as gfx
@@ -517,7 +518,7 @@ class _SceneState:
     """
 
     def __init__(self) -> None:
-        self.summaries: dict[_Version, Summary | None] = {}
+        self.summaries: dict[_Version, GeometrySummary | None] = {}
         self.refs: list[weakref.ref[Any]] = []
         self.key: list[tuple[_Version, bool, bool, int]] = []
         self.scene: ShadowScene | None = None
@@ -568,7 +569,7 @@ class _SceneState:
 
     def _rebuild(self, root: Any, meshes: list[Any], key: list[Any]) -> None:
         self.rebuilds += 1
-        summaries: dict[_Version, Summary | None] = {}
+        summaries: dict[_Version, GeometrySummary | None] = {}
         scene, items, placed, index = ShadowScene(), [], [], {}
         casting = False
         for mesh, (version, cast, receive, count) in zip(meshes, key, strict=True):
@@ -581,7 +582,7 @@ class _SceneState:
             if summary is None or count == 0:
                 continue  # no faces or no instances: nothing drawn, nothing to fit
             if version not in index:
-                index[version] = scene._add_summary(summary)
+                index[version] = scene.add_geometry(summary)
             try:
                 scene.add_objects(index[version], _world_matrices(mesh), casts=cast,
                                   receives=receive)  # fmt: skip
@@ -602,7 +603,7 @@ class _SceneState:
 _CACHE: weakref.WeakKeyDictionary[Any, _SceneState] = weakref.WeakKeyDictionary()
 
 
-def _summarize(root: Any, geometry: Any) -> Summary | None:
+def _summarize(root: Any, geometry: Any) -> GeometrySummary | None:
     """A pygfx geometry's summary (None: no faces), or gather_scene's ValueError."""
     positions = np.asarray(geometry.positions.data)[:, :3]
     indices = getattr(geometry, "indices", None)
@@ -614,11 +615,10 @@ def _summarize(root: Any, geometry: Any) -> Summary | None:
     if len(faces) == 0:
         return None
     try:
-        vertices, triangles = _geometry_arrays(Mesh(positions, faces.astype(np.int64)))
+        return summarize_geometry(Mesh(positions, faces.astype(np.int64)))
     except ValueError:
         gather_scene(root)  # raises the per-entry message (non-finite positions...)
         raise
-    return summarize(vertices, triangles)
 
 
 def _world_matrices(mesh: Any) -> np.ndarray:
