@@ -548,21 +548,44 @@ class ShadowScene:
         self, light: DirectionalLight, casts: np.ndarray, receives: np.ndarray,
         spec: ShadowMapSpec, up: np.ndarray | None,
     ) -> ShadowSetup:  # fmt: skip
-        """A sun's fit from the objects that may bound its box (:func:`._cull.sun_candidates`),
-        checked against every other object (:func:`._cull.inside_box`) and refitted with
-        those that stick out until none does: the map holds every caster's sphere."""
-        c, r = self._center, self._radius
-        cand_c, cand_r = _cull.sun_candidates(np.asarray(light.direction), c, r, casts, receives)
+        """A sun's fit from the objects that may bound its box (:func:`._cull.sun_candidates`
+        in the fit's own frame, whose rotation a fit of one caster gives), checked against
+        every other object (:func:`._cull.inside_box`, then their corners) and refitted
+        with those that stick out until none does: the fit of every caster's summary."""
+        one = self._world[self._offsets[np.argmax(casts)]][None]  # any caster's triangle
+        frame = np.asarray(fit_shadow(light, Triangles(one), spec, up=up).world_to_light)
+        lo, hi = _cull.light_intervals(frame, self._center, self._radius, self._bounds)
+        cand_c, cand_r = _cull.sun_candidates(lo, hi, casts, receives)
         while True:
             recv = self._triangles(cand_r) if cand_r.any() else None
             fit = fit_shadow(light, self._triangles(cand_c), spec, receivers=recv, up=up)
             W2L, box = np.asarray(fit.world_to_light), fit.frustum
-            out_c = casts & ~cand_c & ~_cull.inside_box(W2L, box, c, r, receiver=False)
-            out_r = receives & ~cand_r & ~_cull.inside_box(W2L, box, c, r, receiver=True)
+            shift = W2L[:3, 3] - frame[:3, 3]  # the same rotation: the origins differ
+            lo_b, hi_b = lo + shift, hi + shift
+            out_c = casts & ~cand_c & ~_cull.inside_box(lo_b, hi_b, box, receiver=False)
+            out_r = receives & ~cand_r & ~_cull.inside_box(lo_b, hi_b, box, receiver=True)
+            if out_c.any():  # their bounds stick out: read their summaries' corners
+                out_c[out_c] = ~self._corners_inside(np.flatnonzero(out_c), W2L, box)
             if not (out_c.any() or out_r.any()):  # a sun uses every caster: count them all
                 used = np.asarray(np.count_nonzero(casts[self._owner]))
                 return fit._replace(casters_used=used)
             cand_c, cand_r = cand_c | out_c, cand_r | out_r
+
+    def _corners_inside(self, objects: IntArray, world_to_light: np.ndarray, box: Any) -> Any:
+        """``(K,)`` the objects whose summary corners all lie in an orthographic fit's box
+        (``|x - c_x| <= R_x``, ``|y - c_y| <= R_y``, ``near <= z <= far``): reading them
+        would change nothing."""
+        picked = np.zeros(len(self._M), dtype=bool)
+        picked[objects] = True
+        rows = self._rows(picked)
+        p = self._world[rows] @ world_to_light[:3, :3].T + world_to_light[:3, 3]
+        x, y, z = (p[..., k] for k in range(3))
+        ok = (np.abs(x - float(box.center_x)) <= float(box.half_width)) & (
+            np.abs(y - float(box.center_y)) <= float(box.half_height)
+        )
+        ok = np.all(ok & (z >= float(box.near)) & (z <= float(box.far)), axis=1)
+        owner = self._owner[rows]
+        return np.array([bool(np.all(ok[owner == k])) for k in objects])
 
     def _fit_cube(self, light: PointLight, spec: ShadowMapSpec) -> LightShadows:
         position = np.asarray(light.position, dtype=np.float64)

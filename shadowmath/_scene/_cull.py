@@ -30,10 +30,12 @@ near and far planes clip is drawn by neither.
   most the least ``D(c) + r`` of the casters; the farthest caster or receiver corner in one
   whose ``D(c) + r`` is at least the largest ``D(c) - r``. Only these are read: the range
   is the same as from every object.
-* **A sun's box** (:func:`sun_candidates`, :func:`inside_box`): the objects that may
-  bound it along 16 directions across the light and along it are read first; every other
-  sphere is then checked against the fitted box and the fit is repeated with those that
-  stick out, so the box is the one of every caster.
+* **A sun's box** (:func:`sun_candidates`, :func:`inside_box`): in the fit's frame
+  (whose rotation depends on the light's direction and ``up`` only), each object's light
+  coordinates lie in an interval (:func:`light_intervals`); the objects whose intervals
+  may hold an extreme are read first, every other one is then checked against the fitted
+  box (and, where its interval sticks out, by its summary's corners), and the fit is
+  repeated with those that stick out, so the box is the one of every caster.
 """
 
 from __future__ import annotations
@@ -88,15 +90,16 @@ def clip_visible(
 ) -> Bool[Array, "*maps N"]:
     """``(*maps, N)`` the spheres that may put a fragment in each map (see the module):
     not wholly outside one of the four side planes of ``world_to_clip``."""
-    P = world_to_clip[..., None, :, :]  # (*maps, 1, 4, 4): planes (*maps, 1, 4, 4)
+    P = world_to_clip
     planes = xp.stack(
         [P[..., 3, :] + P[..., 0, :], P[..., 3, :] - P[..., 0, :],
          P[..., 3, :] + P[..., 1, :], P[..., 3, :] - P[..., 1, :]],
         axis=-2,
     )  # fmt: skip
-    value = xp.sum(planes[..., :3] * center[:, None, :], axis=-1) + planes[..., 3]
-    norm = xp.sqrt(xp.sum(planes[..., :3] ** 2, axis=-1))
-    return xp.all(value >= -radius[:, None] * norm, axis=-1)
+    planes = planes / xp.sqrt(xp.sum(planes[..., :3] ** 2, axis=-1))[..., None]  # unit normals
+    value = xp.matmul(planes[..., :3], xp.matrix_transpose(center))
+    value = value + planes[..., 3:4]  # (*maps, 4, N): signed distances
+    return xp.all(value >= -radius, axis=-2)
 
 
 def cube_range_candidates(
@@ -116,61 +119,57 @@ def cube_range_candidates(
     return near, far
 
 
-#: The directions across a sun's light (angles in the plane normal to it) whose extremes
-#: pick the objects that may bound its map (:func:`sun_candidates`).
-_SUN_DIRECTIONS = 16
+def light_intervals(
+    world_to_light: Float[Array, "4 4"],
+    center: Float[Array, "N 3"],
+    radius: Float[Array, " N"],
+    bounds: Float[Array, "N 2 3"],
+) -> tuple[Float[Array, "N 3"], Float[Array, "N 3"]]:
+    """``(lo, hi)`` ``(N, 3)`` bounds of each object's light coordinates under the rigid
+    ``world_to_light``, twice bounded, by its sphere and by its world box ``bounds``
+    (``[min, max]``: along a unit axis ``u`` its points lie within ``|u| . h`` of the box's
+    centre, ``h`` the half-extents); the tighter of the two intervals."""
+    R, t = world_to_light[:3, :3], world_to_light[:3, 3]
+    p = center @ R.T + t
+    mid = 0.5 * (bounds[:, 0] + bounds[:, 1])
+    q, half = mid @ R.T + t, 0.5 * (bounds[:, 1] - bounds[:, 0]) @ np.abs(R).T
+    return np.maximum(p - radius[:, None], q - half), np.minimum(p + radius[:, None], q + half)
 
 
 def sun_candidates(
-    direction: Float[Array, "3"],
-    center: Float[Array, "N 3"],
-    radius: Float[Array, " N"],
+    lo: Float[Array, "N 3"],
+    hi: Float[Array, "N 3"],
     casts: Bool[Array, " N"],
     receives: Bool[Array, " N"],
 ) -> tuple[Bool[Array, " N"], Bool[Array, " N"]]:
-    """``(casters, receivers)`` a first guess of the objects that bound a sun's map: along
-    each of 16 directions normal to the light and along the light, the objects whose
-    sphere reaches past the least far end of every other sphere (a sphere entirely
-    behind another's extreme cannot hold the extreme); for receivers, only the far end.
-    A guess: :func:`inside_box` checks the rest against the fitted map."""
-    Z = -direction / np.linalg.norm(direction)
-    e1 = np.cross(Z, [1.0, 0.0, 0.0] if abs(Z[0]) < 0.9 else [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(Z, e1)
-    angle = np.linspace(0.0, 2 * np.pi, _SUN_DIRECTIONS, endpoint=False)
-    U = np.concatenate([np.cos(angle)[:, None] * e1 + np.sin(angle)[:, None] * e2, [Z, -Z]])
-    proj = center @ U.T  # (N, 18)
-    lo, hi = proj - radius[:, None], proj + radius[:, None]
-    bound = np.max(np.where(casts[:, None], lo, -np.inf), axis=0)
-    cand_c = casts & np.any(hi >= bound, axis=1)
-    z_lo, z_hi = lo[:, -2], hi[:, -2]
-    cand_r = receives & (z_hi >= np.max(np.where(receives, z_lo, -np.inf)))
+    """``(casters, receivers)`` the objects that may bound a sun's map, from their light
+    coordinates' intervals (:func:`light_intervals`, in the fit's frame): along each axis
+    the casters whose interval reaches past the least far end of every caster's (an
+    interval wholly inside another's extreme cannot hold the extreme), both ways; for
+    receivers the far end of ``z`` only."""
+    top = np.max(np.where(casts[:, None], lo, -np.inf), axis=0)
+    bottom = np.min(np.where(casts[:, None], hi, np.inf), axis=0)
+    cand_c = casts & np.any((hi >= top) | (lo <= bottom), axis=1)
+    cand_r = receives & (hi[:, 2] >= np.max(np.where(receives, lo[:, 2], -np.inf)))
     return cand_c, cand_r
 
 
 def inside_box(
-    world_to_light: Float[Array, "4 4"],
-    box: Any,
-    center: Float[Array, "N 3"],
-    radius: Float[Array, " N"],
-    *,
-    receiver: bool,
+    lo: Float[Array, "N 3"], hi: Float[Array, "N 3"], box: Any, *, receiver: bool
 ) -> Bool[Array, " N"]:
-    """``(N,)`` the spheres that leave an orthographic fit unchanged: a caster's inside the
-    box ``|x - c_x| <= R_x``, ``|y - c_y| <= R_y``, ``near <= z <= far`` (in the rigid
-    ``world_to_light``); a receiver's outside the window or on the light's side of ``far``
-    (receivers only push ``far``, and only where the map covers them)."""
-    p = center @ world_to_light[:3, :3].T + world_to_light[:3, 3]
-    dx = np.abs(p[:, 0] - float(box.center_x))
-    dy = np.abs(p[:, 1] - float(box.center_y))
-    Rx, Ry = float(box.half_width), float(box.half_height)
-    before_far = p[:, 2] + radius <= float(box.far)
+    """``(N,)`` the objects that leave an orthographic fit unchanged, from their light
+    coordinates' intervals (:func:`light_intervals`): a caster's inside the box
+    ``|x - c_x| <= R_x``, ``|y - c_y| <= R_y``, ``near <= z <= far``; a receiver's
+    outside the window or on the light's side of ``far`` (receivers only push ``far``,
+    and only where the map covers them)."""
+    cx, cy, Rx, Ry = (float(v) for v in (box.center_x, box.center_y, box.half_width,
+                                          box.half_height))  # fmt: skip
+    before_far = hi[:, 2] <= float(box.far)
     if receiver:
         hx, hy = Rx / float(box.margin_x), Ry / float(box.margin_y)
-        return (dx - radius > hx) | (dy - radius > hy) | before_far
-    return (
-        (dx + radius <= Rx)
-        & (dy + radius <= Ry)
-        & (p[:, 2] - radius >= float(box.near))
-        & before_far
-    )
+        outside = (lo[:, 0] > cx + hx) | (hi[:, 0] < cx - hx)
+        outside |= (lo[:, 1] > cy + hy) | (hi[:, 1] < cy - hy)
+        return outside | before_far
+    inside = (lo[:, 0] >= cx - Rx) & (hi[:, 0] <= cx + Rx)
+    inside &= (lo[:, 1] >= cy - Ry) & (hi[:, 1] <= cy + Ry)
+    return inside & (lo[:, 2] >= float(box.near)) & before_far
