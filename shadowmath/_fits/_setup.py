@@ -239,14 +239,14 @@ def _fit(
     """The fit of trusted, shape-checked inputs by the driver that suits them, with
     ``casters_used``."""
     if method == "optimized":
-        return _optimized(ctx, a, key.margins)._replace(casters_used=used)
+        return _optimized(ctx, a, key.margins)._replace(casters_used=used, map_size=key.texels)
     if not ctx.is_jax:
         if _kernels.available():
             return _compiled.fit(ctx, key, shape, a, used=used)
         small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
         if small and _kernels.python_loop():
             return _compiled.fit(ctx, key, shape, a, used=used, python=True)
-    return _fit_on_arrays(ctx, a, shape, key)._replace(casters_used=used)
+    return _fit_on_arrays(ctx, a, shape, key)._replace(casters_used=used, map_size=key.texels)
 
 
 def _fit_on_arrays(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey) -> ShadowSetup:
