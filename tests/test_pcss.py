@@ -253,8 +253,21 @@ def point_fit() -> sm.ShadowSetup:
             {"light_radius": 0.1, "map_size": (256, 128)},
             "map_size: the fit was made for a 256x256 map, not 256x128",
         ),
-        ({"angular_radius": 0.1, "map_size": 256}, "angular_radius: the fit has no"),
-        ({"map_size": 256}, "light_radius: a point or spot"),
+        (
+            {"angular_radius": 0.1, "map_size": 256},
+            r"angular_radius: the fit's maps are all a point or spot light's, which take the "
+            r"light's radius \(light_radius\), not the sun's angular radius; give light_radius "
+            "instead",
+        ),
+        (
+            {"angular_radius": 0.1, "light_radius": 0.1},
+            r"angular_radius: .*; give light_radius only",
+        ),
+        (
+            {"map_size": 256},
+            "light_radius: the fit has a point or spot light's map, which needs the light's "
+            "radius: give light_radius",
+        ),
         ({"light_radius": 0.1, "map_size": 256, "reversed_z": True}, "reversed_z: the fit's"),
         ({"light_radius": 0.1, "map_size": 256, "border_texels": 2}, "border_texels: only"),
     ],
@@ -346,8 +359,12 @@ def test_the_door_refuses_suns_and_other_fits() -> None:
     c = sm.fit_cascades(sun, view, proj, box, 256)
     with pytest.raises(ValueError, match=r"angular_radius: expected radians in \[0, pi/2\)"):
         sm.pcss_parameters(c, angular_radius=np.pi / 2)
-    with pytest.raises(ValueError, match="light_radius: the fit has no"):
+    with pytest.raises(
+        ValueError, match=r"light_radius: the fit's maps are all a directional light's.*only"
+    ):
         sm.pcss_parameters(c, light_radius=0.1, angular_radius=0.01)
+    with pytest.raises(ValueError, match="angular_radius: the fit has a directional light's map"):
+        sm.pcss_parameters(c)
     with pytest.raises(ValueError, match="map_size: a Cascades records"):
         sm.pcss_parameters(c, angular_radius=0.01, map_size=256)
     with pytest.raises(ValueError, match="fit: expected a ShadowSetup"):
@@ -485,7 +502,7 @@ def test_widened_cascades_hold_the_search_of_their_edges() -> None:
 
 def test_widen_cascades_refuses_stable_and_bad_angles() -> None:
     sun, view, proj, box = camera_scene(0)
-    with pytest.raises(ValueError, match="cascades: stable cascades keep their size"):
+    with pytest.raises(ValueError, match="cascades: stable cascades cannot be widened"):
         sm.widen_cascades(sm.fit_cascades(sun, view, proj, box, 256, stable=True),
                           angular_radius=0.01)  # fmt: skip
     c = sm.fit_cascades(sun, view, proj, box, 256)

@@ -162,15 +162,20 @@ def _require_sizes(m: Maps, R: Any, theta: Any) -> None:
     else:
         needs = (bool(persp.any()), not bool(persp.all()))
     named = (
-        ("light_radius", R, needs[0], "a point or spot light's", "angular_radius"),
-        ("angular_radius", theta, needs[1], "a directional light's", "light_radius"),
+        ("light_radius", R, needs[0], "a point or spot light's", "the light's radius"),
+        ("angular_radius", theta, needs[1], "a directional light's", "the sun's angular radius"),
     )
-    for name, given, need, kind, other in named:  # the wrong size first: it says which
+    for i, (name, given, need, _, what) in enumerate(named):  # the wrong size first
         if given is not None and not need:
-            raise ValueError(f"{name}: the fit has no {kind} map (give {other})")
-    for name, given, need, kind, _ in named:
+            other, other_given, _, kind, other_what = named[1 - i]
+            raise ValueError(
+                f"{name}: the fit's maps are all {kind}, which take {other_what} "
+                f"({other}), not {what}; give {other} "
+                f"{'only' if other_given is not None else 'instead'}"
+            )
+    for name, given, need, kind, what in named:
         if given is None and need:
-            raise ValueError(f"{name}: {kind} map needs it")
+            raise ValueError(f"{name}: the fit has {kind} map, which needs {what}: give {name}")
 
 
 #: The sizes the Python-float path takes as they are (no bool: it is an int).
