@@ -164,16 +164,31 @@ TEXEL_FRACTION = 4.0
 ROUNDING_MARGIN = 32.0
 
 
+_EPS = {np.dtype(t): float(np.finfo(t).eps) for t in (np.float32, np.float64)}
+
+
 def precision(door: Door) -> Precision | None:
     """The coarsest entry's rounding step against its casters' extent and texel, from the
     light (a position) and the casters in world coordinates; None for traced arrays or
     casters of no extent (refused by the fit's own checks)."""
-    a = door.a
+    a, key = door.a, door.key
     if door.ctx.lazy and (is_tracer(a.verts) or is_tracer(a.light) or is_tracer(a.B)):
         return None
-    V = np.asarray(a.verts)
+    V = a.verts if type(a.verts) is np.ndarray else np.asarray(a.verts)
     if V.size == 0:  # no casters, or an empty batch: nothing to resolve
         return None
+    eps = _EPS.get(V.dtype) or float(np.finfo(V.dtype).eps)
+    if a.B is None and V.ndim == 2 and a.light.ndim == 1:  # one entry: on Python floats
+        x0, y0, z0 = V.min(axis=0).tolist()
+        x1, y1, z1 = V.max(axis=0).tolist()
+        big = max(x1, -x0, y1, -y0, z1, -z0)  # max |p| over the casters' box
+        if not key.directional:
+            lx, ly, lz = np.asarray(a.light)[:3].tolist()
+            big = max(big, abs(lx), abs(ly), abs(lz))
+        e = max(x1 - x0, y1 - y0, z1 - z0)
+        if not (e > 0 and math.isfinite(big) and math.isfinite(e)):
+            return None
+        return Precision(eps * big, e, e / max(key.texels), V.dtype.name)
     if a.B is not None:
         B = np.asarray(a.B)
         V = V @ np.swapaxes(B[..., :3, :3], -1, -2) + B[..., None, :3, 3]
@@ -183,14 +198,13 @@ def precision(door: Door) -> Precision | None:
         if not door.key.directional:  # a position: rounded as the casters are
             coords = np.maximum(coords, np.abs(np.asarray(a.light)[..., :3]).max(axis=-1))
         coords, extent = np.broadcast_arrays(coords, (hi - lo).max(axis=-1))
-        eps = float(np.finfo(V.dtype).eps)
         ratio = eps * coords / extent  # the rounding step in casters' extents
     ratio = np.where(extent > 0, ratio, 0.0)  # (NaN: non-finite input, refused by the fit)
     i = int(np.argmax(np.nan_to_num(ratio, nan=0.0)))
     if not ratio.flat[i] > 0:
         return None
-    e, n = float(extent.flat[i]), max(door.key.texels)
-    return Precision(eps * float(coords.flat[i]), e, e / n, V.dtype.name)
+    e = float(extent.flat[i])
+    return Precision(eps * float(coords.flat[i]), e, e / max(key.texels), V.dtype.name)
 
 
 def warn_precision(door: Door) -> None:
@@ -201,7 +215,9 @@ def warn_precision(door: Door) -> None:
     map resolves its casters' extent ``E`` to a texel, ``E / n``: a step over a quarter
     texel moves shadow edges and stored depths by a visible part of one (the map's own
     rasterization is exact to well under a quarter texel), so the fit is only as good as
-    its rounding."""
+    its rounding. :func:`fit_shadow` asks for float32 only: in float64 the step reaches a
+    quarter texel at ``max |p| > E / (4 n eps)``, about ``10^15 E / n``, and the check's
+    few microseconds would be spent on every call for nothing."""
     p = precision(door)
     if p is not None and p.step > p.texel / TEXEL_FRACTION:
         warnings.warn(

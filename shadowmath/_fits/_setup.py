@@ -213,10 +213,10 @@ def fit_shadow(
             frustum wider than 120 degrees (a texel at the edge then sees a quarter
             of the angle of one at the centre or less), a map whose border
             leaves less than half of its texels per axis (from :class:`ShadowMapSpec`),
-            and coordinates whose rounding step (``eps`` times the largest coordinate of
-            the light and casters) exceeds a quarter of a texel (the casters' extent over
-            the map's larger side): float32 far from the origin; pass float64, or recentre
-            the coordinates about a nearby origin.
+            and float32 coordinates whose rounding step (``eps`` times the largest
+            coordinate of the light and casters) exceeds a quarter of a texel (the casters'
+            extent over the map's larger side): far from the origin; pass float64, or
+            recentre the coordinates about a nearby origin.
 
     Example:
         >>> import numpy as np
@@ -246,9 +246,12 @@ def fit_shadow(
         if refined is err:
             raise
         raise refined from err
-    if not door.ctx.is_jax:
+    if door.ctx.dtype == _SINGLE and not door.ctx.is_jax:  # (float64: see warn_precision)
         warn_precision(door)
     return setup
+
+
+_SINGLE = np.dtype(np.float32)
 
 
 def _fit(
