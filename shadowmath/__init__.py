@@ -31,7 +31,8 @@ CONVENTIONS
   broadcast NumPy-style.
 * **Backends**: NumPy in gives NumPy out, JAX in gives JAX out (a mix gives
   JAX); float32 stays float32, float64 stays float64, integers become float64
-  (float16 becomes float32). ``import shadowmath`` does not import JAX.
+  (float16 becomes float32, with a :class:`ShadowFitWarning`). ``import shadowmath``
+  does not import JAX.
 * **Errors**: bad shapes always raise ``ValueError``. Bad values raise
   ``ValueError`` naming the argument and the problem for NumPy and concrete
   JAX inputs; inside JAX transformations (``jit``, ``vmap``, ``grad``), where

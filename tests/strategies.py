@@ -680,7 +680,7 @@ def invalid_fit_calls(
     if kind == "projective":
         B = np.eye(4) if call.placement is None else call.placement.copy()
         B[3] = [0.0, 0.0, 0.0, -1.0]
-        return bad(call._replace(placement=B), "blocker_to_world: sends a blocker vertex to w <= 0")
+        return bad(call._replace(placement=B), "blocker_to_world: its last row is not (0, 0, 0, 1)")
     if kind == "nan_receiver" and call.receivers is not None:
         R = call.receivers.copy()
         R[draw(st.integers(0, len(R) - 1)), index[1]] = np.nan

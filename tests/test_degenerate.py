@@ -119,6 +119,64 @@ def test_a_singular_placement_is_named_on_blocker_to_world(path: str) -> None:
             assert np.isfinite(s.blocker_to_clip).all()
 
 
+ROW_MAJOR = re.escape("blocker_to_world: its last row is not (0, 0, 0, 1)") + ".*row-major"
+
+
+def _placement(dtype: Any = np.float64) -> np.ndarray:
+    """A rigid placement (a turn about y, then far along x and z), column-vector convention."""
+    c, s = math.cos(0.7), math.sin(0.7)
+    return np.array([[c, 0, s, 40.0], [0, 1, 0, 2.0], [-s, 0, c, 30.0], [0, 0, 0, 1]], dtype)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_a_row_major_placement_is_refused(path: str) -> None:
+    """The transpose of a placement (its translation in the bottom row, as a row-vector API
+    stores it) is refused by name; the placement itself fits, as the vertices placed by
+    hand do. (Before the check, the transpose was fitted whenever every w was > 0.)"""
+    B = _placement()
+    light = np.array([40.0, 2.0, 20.0])
+    with PATHS[path]():
+        placed = sm.fit_shadow(light, BOX, 64, blocker_to_world=B)
+        by_hand = sm.fit_shadow(light, BOX @ B[:3, :3].T + B[:3, 3], 64)
+        np.testing.assert_allclose(placed.world_to_texture, by_hand.world_to_texture, atol=1e-12)
+        with pytest.raises(ValueError, match=ROW_MAJOR):
+            sm.fit_shadow(light, BOX * 1e-3, 64, blocker_to_world=B.T)  # every w > 0
+        fitter = sm.ShadowFitter(light, BOX, 64, blocker_to_world=B)
+        with pytest.raises(ValueError, match=ROW_MAJOR):
+            fitter.fit(light, BOX * 1e-3, blocker_to_world=B.T)
+    assert np.all(B.T[3] @ np.c_[BOX * 1e-3, np.ones(8)].T > 0)  # not refused for w <= 0
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_the_last_row_is_read_to_rounding(dtype: Any) -> None:
+    """``4 eps`` times the largest entry: rounding in a last row passes, more is refused."""
+    B = _placement(dtype)
+    eps, big = float(np.finfo(dtype).eps), float(np.abs(B).max())
+    light = np.array([40.0, 2.0, 20.0], dtype)
+    for j, off in ((0, 2.0), (3, -3.0)):
+        noisy = B.copy()
+        noisy[3, j] += dtype(off * eps * big)
+        assert np.isfinite(sm.fit_shadow(light, BOX.astype(dtype), 64, blocker_to_world=noisy)
+                           .blocker_to_clip).all()  # fmt: skip
+        noisy[3, j] += dtype(8 * eps * big)
+        with pytest.raises(ValueError, match=ROW_MAJOR):
+            sm.fit_shadow(light, BOX.astype(dtype), 64, blocker_to_world=noisy)
+
+
+def test_a_row_major_placement_is_nan_under_jit_and_refused_by_the_optimized_fit() -> None:
+    B = _placement()
+    light = np.array([40.0, 2.0, 20.0])
+    fit = jax.jit(lambda M: sm.fit_shadow(sm.PointLight(jnp.asarray(light)), jnp.asarray(BOX),
+                                          64, blocker_to_world=M))  # fmt: skip
+    assert np.isfinite(fit(jnp.asarray(B)).blocker_to_clip).all()
+    assert np.isnan(fit(jnp.asarray(B.T)).blocker_to_clip).all()
+    with pytest.raises(ValueError, match=ROW_MAJOR):
+        sm.fit_shadow(jnp.asarray(light), jnp.asarray(BOX), 64, blocker_to_world=jnp.asarray(B.T),
+                      method="optimized")  # fmt: skip
+    with pytest.raises(ValueError, match=re.escape("receiver_to_world: its last row")):
+        sm.receiver_texture_matrix(sm.fit_shadow(light, BOX, 64, blocker_to_world=B), B.T)
+
+
 def test_a_border_wider_than_half_the_map_warns() -> None:
     with pytest.warns(sm.ShadowFitWarning, match=r"map_size: a border of 20 texel\(s\) on each"):
         sm.ShadowMapSpec(64, border_texels=20)
@@ -139,3 +197,71 @@ def test_a_placement_far_from_the_origin_is_not_singular(dtype: Any) -> None:
     s = sm.fit_shadow(np.array([far, far, far - 3.0], dtype), BOX.astype(dtype), 64,
                       blocker_to_world=B.astype(dtype))  # fmt: skip
     assert np.isfinite(s.blocker_to_clip).all()
+
+
+# --- float32 far from the origin ------------------------------------------------------------
+
+PRECISION = r"blocker_vertices: float32 coordinates this far from the origin are rounded in steps"
+CENTRE = re.escape("the light sits at the blocker's centre")
+
+
+def _far_scene(offset: float, dtype: Any) -> tuple[np.ndarray, np.ndarray]:
+    """BOX (2 units across) and a light 3 units before it, moved ``offset`` along each axis."""
+    o = np.full(3, offset)
+    return (np.array([0.0, 0.0, -3.0]) + o).astype(dtype), (BOX + o).astype(dtype)
+
+
+def _precision_warnings(light: Any, verts: Any, n: int) -> list[str]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sm.fit_shadow(light, verts, n)
+    return [str(w.message) for w in caught if "rounded in steps" in str(w.message)]
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_float32_far_from_the_origin_warns_past_a_quarter_texel(path: str) -> None:
+    """The rule: eps max|p| (the rounding step of the largest coordinate) over a quarter of
+    a texel, the casters' extent E over the map's n texels, warns; the message names the
+    remedies. Offsets a factor 2 on either side of the threshold (in float32), and the
+    same scenes in float64 or recentred, which are quiet."""
+    eps, E, n = float(np.finfo(np.float32).eps), 2.0, 256
+    threshold = (E / n) / 4 / eps  # the largest coordinate at which the step is a quarter texel
+    with PATHS[path]():
+        for offset, warns in ((threshold / 2 - 6, False), (2 * threshold, True)):
+            light, verts = _far_scene(offset, np.float32)
+            assert (eps * np.abs(verts).max() > E / n / 4) == warns  # the rule, by hand
+            got = _precision_warnings(light, verts, n)
+            assert len(got) == int(warns), got
+            if warns:
+                assert "pass float64 arrays, or recentre the coordinates" in got[0]
+            assert not _precision_warnings(*_far_scene(offset, np.float64), n)
+            assert not _precision_warnings(*_far_scene(0.0, np.float32), n)
+    # The warning is warranted: the float32 fit's stored depth of a receiver differs from
+    # float64's by more than the step's share of the depth range.
+    light, verts = _far_scene(1e6, np.float32)
+    with pytest.warns(sm.ShadowFitWarning, match=PRECISION):
+        s32 = sm.fit_shadow(light, verts, n)
+    s64 = sm.fit_shadow(light.astype(np.float64), verts.astype(np.float64), n)
+    p = np.r_[verts.astype(np.float64).mean(axis=0) + [0.3, 0.2, 5.0], 1.0]
+    d32, d64 = (np.asarray(s.world_to_texture, np.float64) @ p for s in (s32, s64))
+    assert abs(d32[2] / d32[3] - d64[2] / d64[3]) > 1e-3  # float64's own error: ~1e-10
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_a_refusal_at_1e7_names_the_precision(path: str) -> None:
+    """At 1e7 in float32 the rounding step (about 1.2) is over a 32nd of the casters' 2
+    units: the fit's rounding checks refuse it, and the message names the precision and
+    its remedies, not the light sitting at the blocker's centre. The same scene in float64
+    fits; a light truly at the centre is still named so."""
+    light, verts = _far_scene(1e7, np.float32)
+    with PATHS[path]():
+        with pytest.raises(ValueError, match=PRECISION) as info:
+            sm.fit_shadow(light, verts, 256)
+        assert "pass float64 arrays, or recentre" in str(info.value)
+        assert not re.search(CENTRE, str(info.value))
+        assert np.isfinite(sm.fit_shadow(*_far_scene(1e7, np.float64), 256).blocker_to_clip).all()
+        centre = np.float32(BOX.mean(axis=0))
+        with pytest.raises(ValueError, match=CENTRE):
+            sm.fit_shadow(centre, BOX.astype(np.float32), 256)
+    with pytest.raises(ValueError, match=PRECISION):  # concrete JAX: the same message
+        sm.fit_shadow(jnp.asarray(light), jnp.asarray(verts), 256)

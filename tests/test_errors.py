@@ -224,7 +224,13 @@ VALUE_CASES = {
     "fit_shadow: projective placement with w <= 0": Case(
         lambda L, V, B: sm.fit_shadow(L, V, 128, blocker_to_world=B),
         (LIGHT, VERTS, _with(np.eye(4), (3, 2), -1.0)), (LIGHT, VERTS, np.eye(4)),
-        ("blocker_to_world:", "w <= 0", "affine placement"),
+        ("blocker_to_world:", "last row is not (0, 0, 0, 1)", "projective"),
+    ),
+    "fit_shadow: row-major placement": Case(
+        lambda L, V, B: sm.fit_shadow(L, V, 128, blocker_to_world=B),
+        (LIGHT, VERTS, _with(np.eye(4), (3, 0), 0.5)),
+        (LIGHT, VERTS, _with(np.eye(4), (0, 3), 0.5)),
+        ("blocker_to_world:", "row-major", "transpose"),
     ),
     "smooth_max: temperature <= 0": Case(
         sm.smooth_max, (np.array([0.0, 1.0]), np.array(0.0)),
@@ -279,6 +285,12 @@ VALUE_CASES = {
         lambda L, V, R: sm.receiver_texture_matrix(sm.fit_shadow(L, V, 64), R),
         (LIGHT, VERTS, _with(np.eye(4), (2, 2), np.inf)), (LIGHT, VERTS, np.eye(4)),
         ("receiver_to_world:", "non-finite"),
+    ),
+    "receiver_texture_matrix: row-major receiver_to_world": Case(
+        lambda L, V, R: sm.receiver_texture_matrix(sm.fit_shadow(L, V, 64), R),
+        (LIGHT, VERTS, _with(np.eye(4), (3, 1), 2.0)),
+        (LIGHT, VERTS, _with(np.eye(4), (1, 3), 2.0)),
+        ("receiver_to_world:", "row-major", "transpose"),
     ),
 }  # fmt: skip
 

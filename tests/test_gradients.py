@@ -40,12 +40,19 @@ def _scene(seed: int) -> dict[str, Any]:
         "light": jnp.asarray(light),
         "verts": jnp.asarray(verts),
         "local": jnp.asarray(verts - centre),
-        "placement": jnp.asarray(placement),
+        # A placement's rows above its last, (0, 0, 0, 1): a placement is affine (a last
+        # row off it is refused), so the derivatives are taken along the three rows only.
+        "placement": jnp.asarray(placement[:3]),
         "plane": jnp.asarray(np.r_[rng.normal(size=3) + [0, 2, 0], rng.uniform(-1, 1)]),
         "light4": jnp.asarray(np.r_[rng.normal(size=3) * 2 + [0, 8, 0], 1.0]),
         "direction": jnp.asarray(rng.normal(size=3) + [0, 0, 3]),
         "roll": jnp.asarray(rng.uniform(-np.pi, np.pi)),
     }
+
+
+def _affine(rows: Any) -> Any:
+    """The placement of its three rows above the last, ``(0, 0, 0, 1)``."""
+    return jnp.concatenate([rows, jnp.asarray([[0.0, 0.0, 0.0, 1.0]], dtype=rows.dtype)])
 
 
 def _frame_array(f: sm.LightFrame) -> Any:
@@ -122,14 +129,16 @@ CASES: dict[str, tuple[Callable[..., Any], tuple[str, ...]]] = {
     "fit_shadow": (
         lambda p, v, b: jnp.stack(
             [
-                (s := sm.fit_shadow(p, v, MAP, blocker_to_world=b)).blocker_to_clip,
+                (s := sm.fit_shadow(p, v, MAP, blocker_to_world=_affine(b))).blocker_to_clip,
                 s.world_to_texture,
             ]
         ),
         ("light", "local", "placement"),
     ),
     "receiver_texture_matrix": (
-        lambda p, b: sm.receiver_texture_matrix(sm.fit_shadow(p, _scene(0)["verts"], MAP), b),
+        lambda p, b: sm.receiver_texture_matrix(
+            sm.fit_shadow(p, _scene(0)["verts"], MAP), _affine(b)
+        ),
         ("light", "placement"),
     ),
     "smooth_max": (lambda v: sm.smooth_max(v[:, 0], 0.3), ("verts",)),

@@ -5,6 +5,7 @@ and no function ever writes into its arguments.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -96,13 +97,26 @@ def test_float16_is_promoted_to_float32_documented() -> None:
     # float16 cannot hold a shadow matrix usefully (11-bit mantissa): computed in
     # float32 from the exactly representable float16 values, as the package docstring says.
     h = [a.astype(np.float16) for a in (PLANE, LIGHT4, LIGHT, VERTS)]
-    got = every_function(*h)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = every_function(*h)
+    # Each function given only float16 arrays says so (here the first four calls).
+    said = [str(w.message) for w in caught if w.category is sm.ShadowFitWarning]
+    assert len(said) >= 4
+    assert all("float16 is computed and returned in float32" in m for m in said), said
     want = every_function(*(a.astype(np.float32) for a in h))
     for name, value in got.items():
         assert value.dtype == np.float32, name
         np.testing.assert_array_equal(value, want[name], err_msg=name)
     assert "float16 becomes float32" in (sm.__doc__ or "")
-    assert sm.planar_projection(jnp.asarray(h[0]), jnp.asarray(h[1])).dtype == jnp.float32
+    with pytest.warns(sm.ShadowFitWarning, match=r"^plane, light: float16 is computed"):
+        assert sm.planar_projection(jnp.asarray(h[0]), jnp.asarray(h[1])).dtype == jnp.float32
+    with pytest.warns(sm.ShadowFitWarning, match=r"^light, blocker_vertices: float16 is comp"):
+        sm.fit_shadow(h[2], h[3], 64)
+    with warnings.catch_warnings():  # float32 or float64 beside float16: computed as given
+        warnings.simplefilter("error")
+        for other in (np.float32, np.float64):
+            sm.planar_projection(PLANE.astype(other), h[1])
 
 
 def test_read_only_arrays_work() -> None:

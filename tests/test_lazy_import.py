@@ -83,3 +83,19 @@ def test_unknown_name_is_an_attribute_error():
         shadowmath.fit_shadows  # noqa: B018
     with pytest.raises(ImportError):
         from shadowmath import fit_shadows  # noqa: F401
+
+
+def test_render_without_moderngl_names_the_extra():
+    """A missing moderngl (None in sys.modules: its import fails) is an ImportError that
+    says which extra to install, not a bare ModuleNotFoundError from deep inside."""
+    seen = _fresh(
+        "import json, sys; sys.modules['moderngl'] = None\n"
+        "try:\n"
+        "    import shadowmath.render\n"
+        "except ImportError as err:\n"
+        "    print(json.dumps([type(err).__name__, str(err), type(err.__cause__).__name__]))\n"
+    )
+    kind, message, cause = seen
+    assert kind == "ImportError" and cause == "ModuleNotFoundError"
+    assert message.startswith("shadowmath.render needs moderngl")
+    assert "pip install 'shadowmath[render]'" in message

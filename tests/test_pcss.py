@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import shadowmath as sm
+from shadowmath._backends import _kernels
 
 from .cameras import scene as camera_scene
 
@@ -244,9 +245,29 @@ def point_fit() -> sm.ShadowSetup:
     [
         ({"light_radius": -0.1, "map_size": 256}, "light_radius: expected finite"),
         ({"light_radius": np.inf, "map_size": 256}, "light_radius: expected finite"),
-        ({"light_radius": 0.1}, "map_size: a ShadowSetup"),
-        ({"angular_radius": 0.1, "map_size": 256}, "angular_radius: the fit has no"),
-        ({"map_size": 256}, "light_radius: a point or spot"),
+        (
+            {"light_radius": 0.1, "map_size": 512},
+            "map_size: the fit was made for a 256x256 map, not 512x512",
+        ),
+        (
+            {"light_radius": 0.1, "map_size": (256, 128)},
+            "map_size: the fit was made for a 256x256 map, not 256x128",
+        ),
+        (
+            {"angular_radius": 0.1, "map_size": 256},
+            r"angular_radius: the fit's maps are all a point or spot light's, which take the "
+            r"light's radius \(light_radius\), not the sun's angular radius; give light_radius "
+            "instead",
+        ),
+        (
+            {"angular_radius": 0.1, "light_radius": 0.1},
+            r"angular_radius: .*; give light_radius only",
+        ),
+        (
+            {"map_size": 256},
+            "light_radius: the fit has a point or spot light's map, which needs the light's "
+            "radius: give light_radius",
+        ),
         ({"light_radius": 0.1, "map_size": 256, "reversed_z": True}, "reversed_z: the fit's"),
         ({"light_radius": 0.1, "map_size": 256, "border_texels": 2}, "border_texels: only"),
     ],
@@ -256,13 +277,94 @@ def test_the_door_names_the_argument(kwargs: dict[str, Any], message: str) -> No
         sm.pcss_parameters(point_fit(), **kwargs)
 
 
+# --- the fit's recorded map size --------------------------------------------------------------
+
+
+def test_a_fit_records_its_map_size_and_k_follows_it() -> None:
+    """K counts the texels of the map the fit was made for: read from the fit, it equals K
+    given that size by hand, and a map of twice the texels (same border) has twice the K."""
+    verts, L = caster_box(np.random.default_rng(5)), np.array([0.0, 9.0, 0.0])
+    small = sm.fit_shadow(L, verts, sm.ShadowMapSpec((256, 128), margin=0.9))
+    large = sm.fit_shadow(L, verts, sm.ShadowMapSpec((512, 256), margin=0.9))
+    assert small.map_size == (256, 128) and large.map_size == (512, 256)
+    k = sm.pcss_parameters(large, light_radius=0.2).texels_per_depth
+    by_hand = sm.pcss_parameters(large._replace(map_size=None), light_radius=0.2,
+                                 map_size=(512, 256))  # fmt: skip
+    np.testing.assert_array_equal(k, by_hand.texels_per_depth)
+    np.testing.assert_allclose(k, 2 * sm.pcss_parameters(small, light_radius=0.2).texels_per_depth,
+                               rtol=1e-12)  # fmt: skip
+
+
+def test_a_setup_made_by_hand_needs_its_map_size() -> None:
+    fit = point_fit()._replace(map_size=None)
+    with pytest.raises(ValueError, match="map_size: a ShadowSetup made without fit_shadow"):
+        sm.pcss_parameters(fit, light_radius=0.1)
+    assert sm.pcss_parameters(fit, light_radius=0.1, map_size=256).texels_per_depth.shape == (2,)
+
+
+def test_every_fit_path_records_the_map_size() -> None:
+    """Compiled, on arrays (no Numba), one small fit on Python floats, batched, ShadowFitter:
+    each ShadowSetup records the map it was fitted for, as Python ints."""
+    verts, L, spec = caster_box(np.random.default_rng(5)), np.array([0.0, 9.0, 0.0]), (64, 32)
+    fits = [sm.fit_shadow(L, verts, spec), sm.fit_shadow(np.stack([L, L]), verts, spec)]
+    fitter = sm.ShadowFitter(L, verts, spec)
+    fits.append(fitter.setup(fitter.fit(L, verts)))
+    sun = sm.DirectionalLight(np.array([0.2, 1.0, 0.1]))
+    fits.append(sm.fit_shadow(sun, sm.Triangles(verts[:6].reshape(2, 3, 3)), spec))
+    with _kernels.disabled():  # one entry on Python floats, a batch on arrays
+        fits += [sm.fit_shadow(L, verts, spec), sm.fit_shadow(np.stack([L, L]), verts, spec)]
+        fits.append(fitter.setup(fitter.fit(L, verts)))
+        with _kernels.array_path():
+            fits.append(sm.fit_shadow(L, verts, spec))
+    for fit in fits:
+        assert fit.map_size == (64, 32)
+        assert all(type(n) is int for n in fit.map_size)
+
+
+def test_the_recorded_size_goes_through_jit_and_vmap() -> None:
+    """JAX makes the recorded size arrays at a jit's or vmap's output (one per entry under
+    vmap): pcss_parameters reads them; inside a transformation the size is given."""
+    jax = pytest.importorskip("jax")
+    jnp = jax.numpy
+    verts = jnp.asarray(caster_box(np.random.default_rng(5)))
+    ref = sm.pcss_parameters(sm.fit_shadow(np.array([0.0, 9.0, 0.0]), np.asarray(verts), 128),
+                             light_radius=0.2).texels_per_depth  # fmt: skip
+
+    def fit(position: Any) -> Any:
+        return sm.fit_shadow(sm.PointLight(position), verts, 128)
+
+    one = jax.jit(fit)(jnp.asarray([0.0, 9.0, 0.0]))
+    many = jax.vmap(fit)(jnp.asarray([[0.0, 9.0, 0.0]] * 3))
+    assert [int(n) for n in one.map_size] == [128, 128]
+    rtol = 1e-12 if jax.config.jax_enable_x64 else 1e-5
+    np.testing.assert_allclose(sm.pcss_parameters(one, light_radius=0.2).texels_per_depth, ref,
+                               rtol=rtol)  # fmt: skip
+    K = sm.pcss_parameters(many, light_radius=0.2).texels_per_depth
+    np.testing.assert_allclose(K, np.broadcast_to(ref, (3, 2)), rtol=rtol)
+    with pytest.raises(ValueError, match="map_size: the fit was made for a 128x128 map"):
+        sm.pcss_parameters(many, light_radius=0.2, map_size=256)
+
+    def inside(position: Any) -> Any:  # a fit made inside the transformation: Python ints
+        return sm.pcss_parameters(fit(position), light_radius=0.2).texels_per_depth
+
+    np.testing.assert_allclose(jax.jit(inside)(jnp.asarray([0.0, 9.0, 0.0])), ref, rtol=rtol)
+    traced = jax.jit(lambda s: sm.pcss_parameters(s, light_radius=0.2, map_size=128))(one)
+    np.testing.assert_allclose(traced.texels_per_depth, ref, rtol=rtol)
+    with pytest.raises(ValueError, match="map_size: the fit's recorded map size is traced"):
+        jax.jit(lambda s: sm.pcss_parameters(s, light_radius=0.2))(one)
+
+
 def test_the_door_refuses_suns_and_other_fits() -> None:
     sun, view, proj, box = camera_scene(0)
     c = sm.fit_cascades(sun, view, proj, box, 256)
     with pytest.raises(ValueError, match=r"angular_radius: expected radians in \[0, pi/2\)"):
         sm.pcss_parameters(c, angular_radius=np.pi / 2)
-    with pytest.raises(ValueError, match="light_radius: the fit has no"):
+    with pytest.raises(
+        ValueError, match=r"light_radius: the fit's maps are all a directional light's.*only"
+    ):
         sm.pcss_parameters(c, light_radius=0.1, angular_radius=0.01)
+    with pytest.raises(ValueError, match="angular_radius: the fit has a directional light's map"):
+        sm.pcss_parameters(c)
     with pytest.raises(ValueError, match="map_size: a Cascades records"):
         sm.pcss_parameters(c, angular_radius=0.01, map_size=256)
     with pytest.raises(ValueError, match="fit: expected a ShadowSetup"):
@@ -400,7 +502,7 @@ def test_widened_cascades_hold_the_search_of_their_edges() -> None:
 
 def test_widen_cascades_refuses_stable_and_bad_angles() -> None:
     sun, view, proj, box = camera_scene(0)
-    with pytest.raises(ValueError, match="cascades: stable cascades keep their size"):
+    with pytest.raises(ValueError, match="cascades: stable cascades cannot be widened"):
         sm.widen_cascades(sm.fit_cascades(sun, view, proj, box, 256, stable=True),
                           angular_radius=0.01)  # fmt: skip
     c = sm.fit_cascades(sun, view, proj, box, 256)

@@ -8,7 +8,9 @@ import warnings
 
 
 class ShadowFitWarning(UserWarning):
-    """A fit that is valid but wasteful: past a documented soft limit (see :func:`fit_shadow`)."""
+    """A fit that is valid but wasteful: past a documented soft limit (see :func:`fit_shadow`),
+    or computed at another precision than its input's (float16 arguments, computed and
+    returned in float32)."""
 
 
 def warn_wide() -> None:
@@ -45,6 +47,18 @@ FAR_CLIPS = (
     "coordinates), so the GPU would clip part of the blocker out of the shadow map; pass "
     "a larger far (or None for the default just behind the blocker)"
 )
+
+
+def not_affine(name: str) -> str:
+    """The refusal of a placement ``name`` whose last row is not ``(0, 0, 0, 1)``."""
+    return (
+        f"{name}: its last row is not (0, 0, 0, 1) to rounding: the matrix looks row-major "
+        "(transposed: the translation in the bottom row, as row-vector APIs store it) or "
+        "projective; give the column-vector local-to-world matrix (transpose a row-major one)"
+    )
+
+
+AFFINE_PLACEMENT = not_affine("blocker_to_world")
 PROJECTIVE_PLACEMENT = (
     "blocker_to_world: sends a blocker vertex to w <= 0 (a projective placement); "
     "use an affine placement, last row (0, 0, 0, 1)"

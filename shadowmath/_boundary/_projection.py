@@ -19,10 +19,10 @@ import numpy as np
 from ._validate import Array, Checks, all_finite, non_finite, require_matrix
 
 PROJECTION_ROW = (
-    "projection: its last row is neither a perspective projection's (0, 0, -1, 0) or "
-    "(0, 0, 1, 0) nor an orthographic one's (0, 0, 0, 1); a transposed matrix (row-major "
+    "projection: its last row is neither a perspective projection's ((0, 0, -1, 0) or "
+    "(0, 0, 1, 0)) nor an orthographic one's ((0, 0, 0, 1)). A transposed matrix (row-major "
     "memory read as column-major) has its last row in its last column: shadowmath takes "
-    "column-vector matrices (clip = P @ view), pass P.T; a scaled one: divide it by its "
+    "column-vector matrices (clip = P @ view), so pass P.T; a scaled one: divide it by its "
     "last row's nonzero entry"
 )
 

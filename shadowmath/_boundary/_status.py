@@ -20,6 +20,7 @@ FIT_CHECKS: tuple[tuple[str, str], ...] = (
     ("placement", non_finite("blocker_to_world")),
     ("receivers", non_finite("receivers")),
     ("up", non_finite("up")),
+    ("affine_placement", msg.AFFINE_PLACEMENT),
     ("projective", msg.PROJECTIVE_PLACEMENT),
     ("singular_placement", msg.SINGULAR_PLACEMENT),
     ("zero_light", msg.ZERO_DIRECTIONAL),
@@ -53,6 +54,7 @@ def bit(name: str) -> int:
 LIGHT = bit("light")
 VERTICES = bit("vertices")
 PLACEMENT = bit("placement")
+AFFINE_PLACEMENT = bit("affine_placement")
 RECEIVERS = bit("receivers")
 UP = bit("up")
 PROJECTIVE = bit("projective")

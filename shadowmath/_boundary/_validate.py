@@ -8,7 +8,7 @@ Every public function of shadowmath starts with :func:`convert`, which
   array-API namespace itself, so no compatibility wrapper sits in the hot path;
 * picks one floating result dtype: the promoted float dtype of the float
   arguments, float64 when all are integers (float16 is promoted to float32,
-  since a shadow matrix in half precision is not usable);
+  since a shadow matrix in half precision is not usable, with a ``ShadowFitWarning``);
 * refuses what is not real numbers with a ``ValueError`` naming the argument
   (:func:`real_array`: masked, object, string, bytes, complex and boolean arrays,
   booleans hidden in sequences); scalar options go through :func:`real` and
@@ -39,11 +39,14 @@ from __future__ import annotations
 import math
 import operator
 import sys
+import warnings
 from collections.abc import Callable, Sequence
 from types import ModuleType
 from typing import Any, Literal, TypeAlias
 
 import numpy as np
+
+from ._messages import ShadowFitWarning
 
 #: Any array accepted or returned by shadowmath: ``numpy.ndarray`` or ``jax.Array``
 #: (nested sequences and scalars are accepted as inputs and become NumPy arrays).
@@ -84,6 +87,10 @@ class Context:
         return float(np.finfo(self.dtype).eps)
 
 
+#: What an array of each refused dtype kind holds, in a message.
+_KINDS = {"b": "booleans", "U": "text", "S": "bytes", "O": "Python objects", "c": "complex numbers"}
+
+
 def real_array(name: str, value: Any) -> Any:
     """``value`` as an array of real numbers (integers or floats; NumPy or JAX, as given).
 
@@ -103,7 +110,8 @@ def real_array(name: str, value: Any) -> Any:
     if kind in "iuf" and isinstance(value, list | tuple) and _holds_bool(value):
         kind = "b"  # NumPy reads [0, 1, True] as integers
     if kind not in "iuf":
-        what = "booleans, not numbers" if kind == "b" else f"an array of dtype {arr.dtype}"
+        what = _KINDS.get(kind, "values")
+        what = what if kind == "b" else f"{what} (dtype {arr.dtype})"
         raise ValueError(
             f"{name}: expected real numbers, got {what}; convert it to float64 or float32 first"
         )
@@ -186,10 +194,25 @@ def convert(**arrays: Any) -> tuple[Context, tuple[Array, ...]]:
     use_jax = any(is_jax(v) for v in inputs)
     lazy = use_jax and any(is_tracer(v) for v in inputs)
     xp, dtype = _result_dtype(inputs, use_jax)
+    if dtype == np.float32 and all(v.dtype != np.float32 for v in inputs):
+        _warn_half(arrays, inputs)
     ctx = Context(xp, dtype, lazy, use_jax)
     it = iter(inputs)
     out = tuple(None if v is None else _as_dtype(xp, next(it), dtype) for v in arrays.values())
     return ctx, out
+
+
+def _warn_half(arrays: dict[str, Any], inputs: list[Any]) -> None:
+    """Warn that float16 arguments (none float32) are computed and returned in float32."""
+    names = [n for n, v in arrays.items() if v is not None]
+    half = [n for n, v in zip(names, inputs, strict=True) if v.dtype == np.float16]
+    if half:
+        warnings.warn(
+            f"{', '.join(half)}: float16 is computed and returned in float32 (a shadow "
+            "matrix needs more than float16's 11 bits); pass float32 to say so",
+            ShadowFitWarning,
+            stacklevel=4,
+        )
 
 
 _NUMPY_CONTEXTS = {

@@ -138,7 +138,7 @@ def views(key: FitKey, shape: tuple[int, ...], out: Buffers, used: Array) -> Sha
         frame = LightFrame._make((v[0:3], v[3:6], v[6:9], v[9:12]))
         fields = v[12:20]
     frustum = volume(fields, key.directional)
-    return ShadowSetup._make((frame, frustum, M[0], M[3], M[1], M[2], used))
+    return ShadowSetup._make((frame, frustum, M[0], M[3], M[1], M[2], used, key.texels))
 
 
 #: The compiled loop's options record: :class:`FitOptions`' fields by name, then the

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 from typing import Any, Literal, NamedTuple
 
 import numpy as np
@@ -41,7 +42,17 @@ from ._light_kinds import homogeneous, spot_rows
 from ._spec import FitKey, ShadowMapSpec, api_rows
 from ._spot_select import spot_selection
 
-__all__ = ["Door", "Operands", "PreparedDoor", "open_door", "select_casters", "signature"]
+__all__ = [
+    "Door",
+    "Operands",
+    "PreparedDoor",
+    "open_door",
+    "precision",
+    "refine",
+    "select_casters",
+    "signature",
+    "warn_precision",
+]
 
 
 class Operands(NamedTuple):
@@ -130,6 +141,110 @@ def _fit_key(
         spec.size,
         api_rows(spec.api, bool(spec.reversed_z)),
         *given,
+    )
+
+
+class Precision(NamedTuple):
+    """How finely a fit's coordinates resolve its casters (:func:`precision`)."""
+
+    step: float  # eps max |p|: the rounding step of the largest coordinate
+    extent: float  # the casters' extent: the widest side of their box (world units)
+    texel: float  # extent / n: a texel's size across the casters (n the map's larger side)
+    dtype: str
+
+
+#: The fit's refusals that a coarse rounding step can cause: renamed by :func:`refine`.
+_ROUNDING_REFUSALS = frozenset({msg.ZERO_DIRECTION, msg.ZERO_SILHOUETTE, msg.BEHIND_LIGHT})
+
+#: A rounding step over ``1 / TEXEL_FRACTION`` of a texel warns (:func:`warn_precision`).
+TEXEL_FRACTION = 4.0
+
+#: A rounding step of ``1 / ROUNDING_MARGIN`` of the casters' extent makes their whole shape
+#: rounding noise: the fit's rounding tolerance (``32 eps`` times the coordinates).
+ROUNDING_MARGIN = 32.0
+
+
+_EPS = {np.dtype(t): float(np.finfo(t).eps) for t in (np.float32, np.float64)}
+
+
+def precision(door: Door) -> Precision | None:
+    """The coarsest entry's rounding step against its casters' extent and texel, from the
+    light (a position) and the casters in world coordinates; None for traced arrays or
+    casters of no extent (refused by the fit's own checks)."""
+    a, key = door.a, door.key
+    if door.ctx.lazy and (is_tracer(a.verts) or is_tracer(a.light) or is_tracer(a.B)):
+        return None
+    V = a.verts if type(a.verts) is np.ndarray else np.asarray(a.verts)
+    if V.size == 0:  # no casters, or an empty batch: nothing to resolve
+        return None
+    eps = _EPS.get(V.dtype) or float(np.finfo(V.dtype).eps)
+    if a.B is None and V.ndim == 2 and a.light.ndim == 1:  # one entry: on Python floats
+        x0, y0, z0 = V.min(axis=0).tolist()
+        x1, y1, z1 = V.max(axis=0).tolist()
+        big = max(x1, -x0, y1, -y0, z1, -z0)  # max |p| over the casters' box
+        if not key.directional:
+            lx, ly, lz = np.asarray(a.light)[:3].tolist()
+            big = max(big, abs(lx), abs(ly), abs(lz))
+        e = max(x1 - x0, y1 - y0, z1 - z0)
+        if not (e > 0 and math.isfinite(big) and math.isfinite(e)):
+            return None
+        return Precision(eps * big, e, e / max(key.texels), V.dtype.name)
+    if a.B is not None:
+        B = np.asarray(a.B)
+        V = V @ np.swapaxes(B[..., :3, :3], -1, -2) + B[..., None, :3, 3]
+    with np.errstate(all="ignore"):
+        lo, hi = V.min(axis=-2), V.max(axis=-2)
+        coords = np.maximum(np.abs(lo), np.abs(hi)).max(axis=-1)
+        if not door.key.directional:  # a position: rounded as the casters are
+            coords = np.maximum(coords, np.abs(np.asarray(a.light)[..., :3]).max(axis=-1))
+        coords, extent = np.broadcast_arrays(coords, (hi - lo).max(axis=-1))
+        ratio = eps * coords / extent  # the rounding step in casters' extents
+    ratio = np.where(extent > 0, ratio, 0.0)  # (NaN: non-finite input, refused by the fit)
+    i = int(np.argmax(np.nan_to_num(ratio, nan=0.0)))
+    if not ratio.flat[i] > 0:
+        return None
+    e = float(extent.flat[i])
+    return Precision(eps * float(coords.flat[i]), e, e / max(key.texels), V.dtype.name)
+
+
+def warn_precision(door: Door) -> None:
+    """Warn (NumPy input) where the coordinates' rounding step exceeds a quarter texel.
+
+    A coordinate of magnitude ``|p|`` is rounded to within ``eps |p|``, and the fit's
+    differences (a caster about the light or the frame's origin) carry that step. The
+    map resolves its casters' extent ``E`` to a texel, ``E / n``: a step over a quarter
+    texel moves shadow edges and stored depths by a visible part of one (the map's own
+    rasterization is exact to well under a quarter texel), so the fit is only as good as
+    its rounding. :func:`fit_shadow` asks for float32 only: in float64 the step reaches a
+    quarter texel at ``max |p| > E / (4 n eps)``, about ``10^15 E / n``, and the check's
+    few microseconds would be spent on every call for nothing."""
+    p = precision(door)
+    if p is not None and p.step > p.texel / TEXEL_FRACTION:
+        warnings.warn(
+            f"blocker_vertices: {p.dtype} coordinates this far from the origin are rounded in "
+            f"steps of {p.step:.2g}, more than a quarter of a texel ({p.texel:.2g}: casters "
+            f"{p.extent:.3g} across on {max(door.key.texels)} texels); shadow edges and "
+            "depths are off by that much: pass float64 arrays, or recentre the coordinates "
+            "(subtract a nearby origin from the light, casters and receivers)",
+            msg.ShadowFitWarning,
+            stacklevel=3,
+        )
+
+
+def refine(door: Door, err: ValueError) -> ValueError:
+    """The fit's refusal ``err``, or, where the coordinates' rounding step reaches the
+    casters' extent within the fit's rounding tolerance (the casters' shape is rounding
+    noise), the refusal that names the precision instead of its symptom."""
+    if str(err) not in _ROUNDING_REFUSALS:
+        return err
+    p = precision(door)
+    if p is None or ROUNDING_MARGIN * p.step < p.extent:
+        return err
+    return ValueError(
+        f"blocker_vertices: {p.dtype} coordinates this far from the origin are rounded in "
+        f"steps of {p.step:.2g}, too coarse for casters {p.extent:.3g} across (their shape and the "
+        "light's direction are rounding noise): pass float64 arrays, or recentre the "
+        "coordinates (subtract a nearby origin from the light, casters and receivers)"
     )
 
 

@@ -103,14 +103,16 @@ def pcss_parameters(
     ``K`` is the same world penumbra in every cascade, tile and face.
 
     Arguments:
-        fit: a :class:`ShadowSetup` (:func:`fit_shadow`: give ``map_size``),
+        fit: a :class:`ShadowSetup` (:func:`fit_shadow`'s records its map size),
             :class:`Cascades` (one entry per cascade), :class:`AtlasFit` (one per tile),
             or :class:`CubeDepthRange` (every face alike: give ``map_size`` and the
             ``border_texels`` and ``reversed_z`` of :func:`cube_face_projection`).
         light_radius: ``(*lights,)`` the radius of a point or spot light (world units).
         angular_radius: ``(*lights,)`` a sun's angular radius in radians, ``[0, pi/2)``.
         map_size: the map's ``size`` or ``(width, height)`` in texels, or its
-            :class:`ShadowMapSpec`: for a :class:`ShadowSetup` or a cube.
+            :class:`ShadowMapSpec`: for a cube, or a :class:`ShadowSetup` that does not
+            record its size (made by hand). Given for a setup that records one, it must
+            be that size.
         border_texels: a cube face's border ring.
         reversed_z: a cube's, or an atlas's of directional lights only (the other fits
             show it in their matrices; given anyway, it must agree).
@@ -124,7 +126,8 @@ def pcss_parameters(
         ValueError: a negative or non-finite size, an angular radius outside
             ``[0, pi/2)``, the wrong size for the light (``light_radius`` for a
             directional map, ``angular_radius`` for a perspective one, neither given),
-            a missing ``map_size``, a warped (``warp="lispsm"``) cascade, a ``reversed_z``
+            a missing ``map_size``, a ``map_size`` other than the one the fit records,
+            a warped (``warp="lispsm"``) cascade, a ``reversed_z``
             the fit contradicts. Under JAX transformations the affected entries are NaN.
             An atlas tile whose light failed to fit (``near == far == 0``) is NaN.
 
@@ -132,7 +135,7 @@ def pcss_parameters(
         >>> import numpy as np, shadowmath as sm
         >>> box = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 5)], float)
         >>> fit = sm.fit_shadow([0.0, 0.0, 0.0], box, 512)
-        >>> p = sm.pcss_parameters(fit, light_radius=0.1, map_size=512)
+        >>> p = sm.pcss_parameters(fit, light_radius=0.1)  # the fit records its 512x512
         >>> p.texels_per_depth.shape, float(p.near_depth)
         ((2,), 0.0)
     """
@@ -159,15 +162,20 @@ def _require_sizes(m: Maps, R: Any, theta: Any) -> None:
     else:
         needs = (bool(persp.any()), not bool(persp.all()))
     named = (
-        ("light_radius", R, needs[0], "a point or spot light's", "angular_radius"),
-        ("angular_radius", theta, needs[1], "a directional light's", "light_radius"),
+        ("light_radius", R, needs[0], "a point or spot light's", "the light's radius"),
+        ("angular_radius", theta, needs[1], "a directional light's", "the sun's angular radius"),
     )
-    for name, given, need, kind, other in named:  # the wrong size first: it says which
+    for i, (name, given, need, _, what) in enumerate(named):  # the wrong size first
         if given is not None and not need:
-            raise ValueError(f"{name}: the fit has no {kind} map (give {other})")
-    for name, given, need, kind, _ in named:
+            other, other_given, _, kind, other_what = named[1 - i]
+            raise ValueError(
+                f"{name}: the fit's maps are all {kind}, which take {other_what} "
+                f"({other}), not {what}; give {other} "
+                f"{'only' if other_given is not None else 'instead'}"
+            )
+    for name, given, need, kind, what in named:
         if given is None and need:
-            raise ValueError(f"{name}: {kind} map needs it")
+            raise ValueError(f"{name}: the fit has {kind} map, which needs {what}: give {name}")
 
 
 #: The sizes the Python-float path takes as they are (no bool: it is an int).

@@ -10,7 +10,7 @@ import numpy as np
 
 from shadowmath._api._adaptive_frustum import texel_counts
 from shadowmath._api._cube_faces import face_scale
-from shadowmath._boundary._validate import Array, convert
+from shadowmath._boundary._validate import Array, convert, is_tracer
 from shadowmath._math import _cube
 from shadowmath._math._frustum import OrthographicBox
 from shadowmath._math._specialize import scalar_formulas
@@ -54,6 +54,37 @@ def _texels(map_size: object, what: str) -> tuple[int, int]:
     return texel_counts("map_size", map_size)
 
 
+def _setup_texels(recorded: Any, map_size: object) -> tuple[int, int]:
+    """``(W, H)`` of a :class:`ShadowSetup`: the size it records (:func:`fit_shadow`'s),
+    which a given ``map_size`` must equal; a setup made by hand records none."""
+    if recorded is None:
+        return _texels(map_size, "a ShadowSetup made without fit_shadow")
+    if not all(type(n) is int for n in recorded):  # arrays: out of jax.jit or jax.vmap
+        if any(is_tracer(n) for n in recorded):
+            if map_size is None:
+                raise ValueError(
+                    "map_size: the fit's recorded map size is traced (a ShadowSetup passed "
+                    "into a JAX transformation): give its map_size"
+                )
+            return _texels(map_size, "")
+        sizes = [np.unique(np.asarray(n)) for n in recorded]
+        if any(len(v) != 1 for v in sizes):
+            raise ValueError(
+                "fit: its entries were fitted for maps of different sizes; call "
+                "pcss_parameters once per size"
+            )
+        recorded = (int(sizes[0][0]), int(sizes[1][0]))
+    if map_size is not None:
+        given = _texels(map_size, "")
+        if given != tuple(recorded):
+            raise ValueError(
+                f"map_size: the fit was made for a {recorded[0]}x{recorded[1]} map, not "
+                f"{given[0]}x{given[1]}; leave map_size out (a ShadowSetup from fit_shadow "
+                "records its size) or refit for the new size"
+            )
+    return recorded[0], recorded[1]
+
+
 def fit_maps(fit: object, map_size: Any, border_texels: Any, rev: bool | None) -> Maps:
     """The maps of ``fit``, its arguments checked."""
     kind = type(fit)  # the four are NamedTuples: their exact types, without isinstance's cost
@@ -64,7 +95,7 @@ def fit_maps(fit: object, map_size: Any, border_texels: Any, rev: bool | None) -
         )
     if kind is ShadowSetup:
         setup: Any = fit
-        size = _texels(map_size, "a ShadowSetup")
+        size = _setup_texels(setup.map_size, map_size)
         if type(setup.frustum) is not OrthographicBox:
             return Maps(setup.world_to_texture, size, True, None)
         return Maps(setup.world_to_texture, size, False, setup.world_to_light[..., 2, :3])

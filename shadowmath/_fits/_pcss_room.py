@@ -111,7 +111,12 @@ def widen_cascades(cascades: Cascades, *, angular_radius: Real[ArrayLike, "*#bat
         half_width=cascades.state.half_width,
     )
     xp, checks = ctx.xp, Checks(ctx)
-    checks.require(~xp.isfinite(stable), "cascades: stable cascades keep their size (refit)")
+    checks.require(
+        ~xp.isfinite(stable),
+        "cascades: stable cascades cannot be widened (their squares keep a fixed size on a "
+        "fixed texel grid, so that they do not shimmer); fit them with stable=False to widen "
+        "them, or widen the stable squares by refitting with a larger border_texels",
+    )
     checks.require(xp.isfinite(theta) & (theta >= 0) & (theta < math.pi / 2), BAD_ANGLE)
     if not ctx.lazy and not bool(xp.all(tex[..., 3, :3] == 0)):
         raise ValueError("cascades: warped cascades (warp='lispsm') are not boxes")

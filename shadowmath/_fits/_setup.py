@@ -45,7 +45,7 @@ from shadowmath.lights import Light
 from shadowmath.receivers import Mesh, Triangles
 
 from . import _compiled
-from ._door import Operands, _check_shapes, door_for, select_casters
+from ._door import Operands, _check_shapes, door_for, refine, select_casters, warn_precision
 from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
 from ._shadow_setup import ShadowSetup
 from ._spec import FitKey, ShadowMapSpec, map_spec
@@ -187,7 +187,9 @@ def fit_shadow(
 
     Raises:
         ValueError: everything :func:`light_frame` and :func:`adaptive_frustum`
-            raise, a non-finite or wrongly shaped ``blocker_to_world``, a zero
+            raise, a non-finite or wrongly shaped ``blocker_to_world``, one whose last row
+            is not ``(0, 0, 0, 1)`` to rounding (``4 eps`` times its largest entry: a
+            row-major, transposed, or a projective placement), a zero
             directional light, receivers of the wrong shape or non-finite or with batch
             dimensions that no other argument has, an
             unknown ``api`` (the message lists the valid ones), an ``up`` zero or
@@ -196,7 +198,10 @@ def fit_shadow(
             caster within rounding of a point or spot light (``z <= 32 eps`` times the
             coordinates' magnitude; for a point light also a caster behind it), a
             point-light frustum wider than 170 degrees (the light too
-            close to the blocker: use a cube map or a spot cone) (value errors are
+            close to the blocker: use a cube map or a spot cone), coordinates so far from
+            the origin for their dtype that the casters' extent is within 32 rounding steps
+            (``eps`` times the largest coordinate; the message names the precision where the
+            fit's own rounding checks would have refused) (value errors are
             NaN outputs under JAX transformations); and, whatever the values:
             ``stable=True`` for a point light without ``up``, ``near``/``far`` for a
             directional light, a batch of homogeneous lights mixing ``w = 0`` and
@@ -206,8 +211,12 @@ def fit_shadow(
     Warns:
         ShadowFitWarning: NumPy input only (JAX gives no warnings): a point-light
             frustum wider than 120 degrees (a texel at the edge then sees a quarter
-            of the angle of one at the centre or less), and a map whose border
-            leaves less than half of its texels per axis (from :class:`ShadowMapSpec`).
+            of the angle of one at the centre or less), a map whose border
+            leaves less than half of its texels per axis (from :class:`ShadowMapSpec`),
+            and float32 coordinates whose rounding step (``eps`` times the largest
+            coordinate of the light and casters) exceeds a quarter of a texel (the casters'
+            extent over the map's larger side): far from the origin; pass float64, or
+            recentre the coordinates about a nearby origin.
 
     Example:
         >>> import numpy as np
@@ -229,8 +238,20 @@ def fit_shadow(
                     stable=stable)  # fmt: skip
     operands = Operands(light, blocker_vertices, blocker_to_world, receivers, up, near, far)
     door = door_for(operands, spec, aim == "bbox", method)
-    a, used = select_casters(door)
-    return _fit(door.ctx, a, door.shape, door.key, method, used=used)
+    try:
+        a, used = select_casters(door)
+        setup = _fit(door.ctx, a, door.shape, door.key, method, used=used)
+    except ValueError as err:
+        refined = refine(door, err)
+        if refined is err:
+            raise
+        raise refined from err
+    if door.ctx.dtype == _SINGLE and not door.ctx.is_jax:  # (float64: see warn_precision)
+        warn_precision(door)
+    return setup
+
+
+_SINGLE = np.dtype(np.float32)
 
 
 def _fit(
@@ -239,14 +260,14 @@ def _fit(
     """The fit of trusted, shape-checked inputs by the driver that suits them, with
     ``casters_used``."""
     if method == "optimized":
-        return _optimized(ctx, a, key.margins)._replace(casters_used=used)
+        return _optimized(ctx, a, key.margins)._replace(casters_used=used, map_size=key.texels)
     if not ctx.is_jax:
         if _kernels.available():
             return _compiled.fit(ctx, key, shape, a, used=used)
         small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
         if small and _kernels.python_loop():
             return _compiled.fit(ctx, key, shape, a, used=used, python=True)
-    return _fit_on_arrays(ctx, a, shape, key)._replace(casters_used=used)
+    return _fit_on_arrays(ctx, a, shape, key)._replace(casters_used=used, map_size=key.texels)
 
 
 def _fit_on_arrays(ctx: Context, a: Inputs, shape: tuple[int, ...], key: FitKey) -> ShadowSetup:
@@ -286,6 +307,8 @@ def _optimized(ctx: Context, a: Inputs, m: tuple[float, float]) -> ShadowSetup:
     if a.B is not None:
         checks.require(all_finite(xp, a.B, 2), non_finite("blocker_to_world"))
         F = formulas(xp)
+        entries = tuple(a.B[..., i // 4, i % 4] for i in range(16))
+        checks.require(F.placement_affine(entries, ctx.eps), msg.AFFINE_PLACEMENT)
         b = tuple(a.B[..., None, i // 4, i % 4] for i in range(16))
         *p, w = F.place(b, a.verts[..., 0], a.verts[..., 1], a.verts[..., 2])
         checks.require(xp.all(w > 0, axis=-1), msg.PROJECTIVE_PLACEMENT)
@@ -391,7 +414,9 @@ def receiver_texture_matrix(
         ``(*batch, 4, 4)``.
 
     Raises:
-        ValueError: wrong shape or non-finite values (NaN under JAX transformations).
+        ValueError: wrong shape, non-finite values, or a last row other than
+            ``(0, 0, 0, 1)`` to rounding (a row-major or projective matrix) (NaN under
+            JAX transformations).
 
     Example:
         >>> import numpy as np
@@ -406,4 +431,7 @@ def receiver_texture_matrix(
     require_matrix("receiver_to_world", R)
     checks = Checks(ctx)
     checks.require(all_finite(xp, R, 2), non_finite("receiver_to_world"))
+    entries = tuple(R[..., i // 4, i % 4] for i in range(16))
+    affine = formulas(xp).placement_affine(entries, ctx.eps)
+    checks.require(affine, msg.not_affine("receiver_to_world"))
     return checks.poison(matmul(xp, M, R), 2)

@@ -31,6 +31,12 @@ class ShadowSetup(NamedTuple):
             empty fit (nothing to shadow: a frustum inside the pyramid that no caster
             enters). Point and directional lights use every caster. ``None`` from the
             other fits.
+        map_size: ``(width, height)`` in texels of the map the fit was made for, set by
+            :func:`fit_shadow` (and :class:`ShadowFitter`), so that
+            :func:`pcss_parameters` reads it; ``None`` from the other fits. Python ints
+            (out of ``jax.jit`` or ``jax.vmap`` JAX makes them arrays, as it does every
+            leaf of a result: ``pcss_parameters`` reads those too, outside the
+            transformation).
     """
 
     frame: LightFrame
@@ -40,6 +46,7 @@ class ShadowSetup(NamedTuple):
     blocker_to_clip: Float[Array, "*batch 4 4"]
     world_to_texture: Float[Array, "*batch 4 4"]
     casters_used: Int[Array, "*#batch"] | None = None
+    map_size: tuple[int, int] | tuple[Int[Array, "*#batch"], Int[Array, "*#batch"]] | None = None
 
 
 def setup_from(

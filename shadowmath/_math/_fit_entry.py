@@ -27,6 +27,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from shadowmath._boundary._status import (
+    AFFINE_PLACEMENT,
     FORMULA_BITS,
     LIGHT,
     NEAR_ROUNDING,
@@ -50,6 +51,7 @@ from ._fit_formulas import (
     fit_rows,
     fov_ok,
     near_clear,
+    placement_affine,
     placement_ok,
     point_sides,
     safe_box,
@@ -145,7 +147,8 @@ def input_checks(given: Any, o: Any) -> Any:
         ok = isfinite(b[0])
         for j in range(1, 16):
             ok = ok & isfinite(b[j])
-        st = st | flag(ok, PLACEMENT) | flag(placement_ok(b, o.eps), SINGULAR_PLACEMENT)
+        st = st | flag(ok, PLACEMENT) | flag(placement_affine(b, o.eps), AFFINE_PLACEMENT)
+        st = st | flag(placement_ok(b, o.eps), SINGULAR_PLACEMENT)
     return st
 
 

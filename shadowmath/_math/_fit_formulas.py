@@ -141,6 +141,20 @@ def placement_ok(b: tuple[Any, ...], eps: float) -> Any:
     return fabs(det) > 64.0 * eps * (n0 * n1 * n2)
 
 
+def placement_affine(b: tuple[Any, ...], eps: float) -> Any:
+    """The placement ``b`` (16 row-major entries) has the last row ``(0, 0, 0, 1)`` to rounding.
+
+    ``|b_3j - (0, 0, 0, 1)_j| <= 4 eps max |b|`` for every ``j``: rounding only, whatever
+    the matrix's scale. A row-major (transposed) placement, its translation in the
+    bottom row, fails, and so does a projective one.
+    """
+    big = fabs(b[0])
+    for j in range(1, 16):
+        big = maximum(big, fabs(b[j]))
+    off = maximum(maximum(fabs(b[12]), fabs(b[13])), maximum(fabs(b[14]), fabs(b[15] - 1.0)))
+    return off <= 4.0 * eps * big
+
+
 def near_clear(z_min: Any, coords: Any, eps: float) -> Any:
     """The nearest caster clears the rounding of the coordinates (``z > 32 eps coords``)."""
     return z_min > 32.0 * eps * coords
@@ -584,6 +598,7 @@ FUNCTIONS = (
     "_largest",
     "fit_axes",
     "placement_ok",
+    "placement_affine",
     "near_clear",
     "fov_ok",
     "point_sides",

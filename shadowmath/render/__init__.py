@@ -39,8 +39,16 @@ does not.
 
 The shaders are files in ``shadowmath/render/shaders``. No GL context, no
 picture: :class:`GLUnavailableError` names the Debian packages to install
-(:data:`DEBIAN_PACKAGES`).
+(:data:`DEBIAN_PACKAGES`). Without moderngl, importing this module raises an
+``ImportError`` that names the extra to install (``pip install 'shadowmath[render]'``).
 """
+
+try:
+    import moderngl  # noqa: F401  (the render extra; imported by the passes below)
+except ImportError as err:
+    raise ImportError(
+        "shadowmath.render needs moderngl (the render extra): pip install 'shadowmath[render]'"
+    ) from err
 
 from ._context import DEBIAN_PACKAGES as DEBIAN_PACKAGES
 from ._context import GLUnavailableError as GLUnavailableError
