@@ -479,16 +479,28 @@ class ShadowScene:
         world, all at once: each triangle row by its object's matrix."""
         if len(objects) == 0:
             return
-        picked = np.zeros(len(self._M), dtype=bool)
-        picked[objects] = True
-        rows = np.flatnonzero(picked[self._owner])
-        owner = self._owner[rows]
-        M = self._M[owner]
-        world = self._local[rows] @ np.swapaxes(M[:, :3, :3], -1, -2) + M[:, None, :3, 3]
+        every = len(objects) == len(self._M)  # (a renderer moving everything: no gathers)
+        if every:
+            rows: Any = slice(None)
+            owner = self._owner
+        else:
+            picked = np.zeros(len(self._M), dtype=bool)
+            picked[objects] = True
+            rows = np.flatnonzero(picked[self._owner])
+            owner = self._owner[rows]
+        C = self._M[:, :3, :].reshape(-1, 12)[owner].T  # (12, R): each row's matrix entries
+        local = self._local[rows]  # (R, 3 corners, 3)
+        x, y, z = local[..., 0], local[..., 1], local[..., 2]
+        world = np.empty_like(local)  # p_i = A_i0 x + A_i1 y + A_i2 z + t_i, (R, 3) at a time
+        for i in range(3):
+            a = C[4 * i : 4 * i + 4, :, None]
+            world[..., i] = a[0] * x + a[1] * y + a[2] * z + a[3]
         self._world[rows] = world
+        lo = np.minimum(np.minimum(world[:, 0], world[:, 1]), world[:, 2])
+        hi = np.maximum(np.maximum(world[:, 0], world[:, 1]), world[:, 2])
         starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
-        self._bounds[objects, 0] = np.minimum.reduceat(world.min(axis=1), starts)
-        self._bounds[objects, 1] = np.maximum.reduceat(world.max(axis=1), starts)
+        self._bounds[objects, 0] = np.minimum.reduceat(lo, starts)
+        self._bounds[objects, 1] = np.maximum.reduceat(hi, starts)
         c, r = _cull.world_spheres(self._M[objects], self._local_center[objects],
                                    self._local_radius[objects])  # fmt: skip
         self._center[objects], self._radius[objects] = c, r
