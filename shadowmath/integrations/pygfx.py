@@ -302,15 +302,7 @@ def gather_scene(scene: Any) -> SceneSurfaces:
     for mesh in scene.iter(lambda o: isinstance(o, gfx.Mesh), skip_invisible=True):
         if not (mesh.cast_shadow or mesh.receive_shadow):
             continue
-        geometry = mesh.geometry
-        positions = np.asarray(geometry.positions.data)[:, :3]
-        indices = getattr(geometry, "indices", None)
-        faces = (
-            np.arange(len(positions) - len(positions) % 3)
-            if indices is None
-            else np.asarray(indices.data)
-        )
-        part = Mesh(positions, faces.reshape(-1, 3).astype(np.int64))
+        part = _geometry_mesh(mesh.geometry)
         for matrix in _placements(mesh):
             if mesh.cast_shadow:
                 casters.append((part, matrix))
@@ -603,19 +595,26 @@ class _SceneState:
 _CACHE: weakref.WeakKeyDictionary[Any, _SceneState] = weakref.WeakKeyDictionary()
 
 
-def _summarize(root: Any, geometry: Any) -> GeometrySummary | None:
-    """A pygfx geometry's summary (None: no faces), or gather_scene's ValueError."""
+def _geometry_mesh(geometry: Any) -> Mesh:
+    """A pygfx geometry's ``positions`` and ``indices`` (or its positions three at a time)
+    as an :class:`~shadowmath.Mesh` in its local coordinates."""
     positions = np.asarray(geometry.positions.data)[:, :3]
     indices = getattr(geometry, "indices", None)
     faces = (
         np.arange(len(positions) - len(positions) % 3)
         if indices is None
         else np.asarray(indices.data)
-    ).reshape(-1, 3)
-    if len(faces) == 0:
+    )
+    return Mesh(positions, faces.reshape(-1, 3).astype(np.int64))
+
+
+def _summarize(root: Any, geometry: Any) -> GeometrySummary | None:
+    """A pygfx geometry's summary (None: no faces), or gather_scene's ValueError."""
+    mesh = _geometry_mesh(geometry)
+    if len(mesh.faces) == 0:
         return None
     try:
-        return summarize_geometry(Mesh(positions, faces.astype(np.int64)))
+        return summarize_geometry(mesh)
     except ValueError:
         gather_scene(root)  # raises the per-entry message (non-finite positions...)
         raise
