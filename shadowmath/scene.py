@@ -342,6 +342,7 @@ class ShadowScene:
         map_size: int | tuple[int, int] | ShadowMapSpec,
         *,
         up: Real[ArrayLike, "3"] | None = None,
+        camera: Real[ArrayLike, "4 4"] | None = None,
     ) -> list[LightShadows]:
         """Fit every light to the scene as it is now, with its draw lists.
 
@@ -355,7 +356,9 @@ class ShadowScene:
           :func:`cube_face_projection` of that range, the spec's size and border).
 
         Every map's draw list holds the casters whose sphere reaches into its clip volume
-        (:func:`._cull.clip_visible`): leaving the others out changes no texel.
+        (:func:`._cull.clip_visible`): leaving the others out changes no texel. With
+        ``camera``, a map that no receiver the camera sees reaches is sampled by no pixel:
+        its list is empty (a cube face behind the camera needs no drawing).
 
         Arguments:
             lights: typed lights, each unbatched (``position`` and ``direction`` ``(3,)``).
@@ -363,20 +366,24 @@ class ShadowScene:
                 (cube maps use its size and border for their depth range).
             up: an optional up hint for the suns' and spots' frames (see
                 :func:`fit_shadow`).
+            camera: ``(4, 4)`` the viewer's world-to-clip matrix (projection @ view, any
+                graphics API's: only its side planes are read), or None.
 
         Returns:
             One :class:`LightShadows` per light, in order.
 
         Raises:
             ValueError: a light that is not a typed, unbatched, finite light; an empty
-                scene; what :func:`fit_shadow` refuses of ``map_size`` or ``up``.
+                scene; a ``camera`` that is not a finite ``(4, 4)`` matrix; what
+                :func:`fit_shadow` refuses of ``map_size`` or ``up``.
         """
         spec = map_size if isinstance(map_size, ShadowMapSpec) else ShadowMapSpec(map_size)
         if len(self._M) == 0:
             raise ValueError("the scene has no objects: add some with add_objects")
         checked = [_light(i, light) for i, light in enumerate(lights)]
         up_array = None if up is None else np.asarray(up, dtype=np.float64)
-        return [self._fit_light(light, spec, up_array) for light in checked]
+        seen = self._seen(camera)
+        return [self._fit_light(light, spec, up_array, seen) for light in checked]
 
     def fit_cascades(
         self,
@@ -401,6 +408,8 @@ class ShadowScene:
         self,
         lights: Sequence[PointLight | SpotLight | DirectionalLight],
         atlas: ShadowAtlas,
+        *,
+        camera: Real[ArrayLike, "4 4"] | None = None,
         **options: Any,
     ) -> SceneAtlas:
         """:func:`fit_atlas` of the lights over the scene, with one draw list per tile.
@@ -414,6 +423,9 @@ class ShadowScene:
         light's padded to the longest by repeating its first triangle (which
         changes no extreme; a 2D point light's mean direction is taken over them).
 
+        With ``camera`` (the viewer's world-to-clip matrix), a tile that no receiver the
+        camera sees reaches gets an empty list, as in :meth:`fit`.
+
         ``options`` are :func:`fit_atlas`' keywords (``api``, ``pcf_radius``, ``spec``...);
         the receivers are the scene's. What :func:`fit_atlas` raises, this raises; and a
         scene without casters is refused.
@@ -421,6 +433,7 @@ class ShadowScene:
         if not self._casts.any():
             raise ValueError("the scene has no casters: add objects with casts=True")
         checked = [_light(i, light) for i, light in enumerate(lights)]
+        seen = self._seen(camera)
         if not isinstance(atlas, ShadowAtlas) or len(atlas.light_cube) != len(checked):
             raise ValueError(
                 "atlas: expected the ShadowAtlas of these lights (allocate_atlas with one "
@@ -434,7 +447,7 @@ class ShadowScene:
         )
         recv = self._triangles(self._receives) if self._receives.any() else None
         fit = fit_atlas(checked, Triangles(batch), atlas, receivers=recv, **options)
-        drawn = self._drawn(np.asarray(fit.world_to_clip))
+        drawn = self._drawn(np.asarray(fit.world_to_clip), seen)
         failed = [e is not None for e in fit.light_errors]
         tiles = tuple(
             np.zeros(0, np.int64) if failed and failed[light] else d
@@ -466,12 +479,34 @@ class ShadowScene:
             return np.asarray(self._triangles(reach, position).corners)
         return np.asarray(self._triangles(casts).corners)
 
-    def _drawn(self, world_to_clip: np.ndarray) -> tuple[IntArray, ...]:
+    def _drawn(
+        self, world_to_clip: np.ndarray, seen: np.ndarray | None = None
+    ) -> tuple[IntArray, ...]:
         """The draw list of each map ``world_to_clip`` ``(maps, 4, 4)``: the casters whose
-        sphere reaches into its clip volume (:func:`._cull.clip_visible`)."""
+        sphere reaches into its clip volume (:func:`._cull.clip_visible`); none where no
+        receiver of the mask ``seen`` (those the camera sees) reaches it."""
         casting = np.flatnonzero(self._casts)
         keep = _cull.clip_visible(world_to_clip, self._center[casting], self._radius[casting])
+        if seen is not None:
+            looked = np.flatnonzero(seen)
+            used = _cull.clip_visible(world_to_clip, self._center[looked], self._radius[looked])
+            keep = keep & np.any(used, axis=-1)[..., None]
         return tuple(casting[k] for k in keep)
+
+    def _seen(self, camera: object) -> np.ndarray | None:
+        """The receivers whose sphere reaches into the camera's clip volume (None: no
+        camera), the camera checked."""
+        if camera is None:
+            return None
+        C = np.asarray(camera)
+        if C.shape != (4, 4) or not np.issubdtype(C.dtype, np.number):
+            raise ValueError(f"camera: expected a (4, 4) world-to-clip matrix, got {C.shape}")
+        if not np.all(np.isfinite(C)):
+            raise ValueError("camera: contains non-finite values (NaN or inf)")
+        seen: np.ndarray = self._receives & _cull.clip_visible(
+            C.astype(np.float64), self._center, self._radius
+        )
+        return seen
 
     # -- the steps ------------------------------------------------------------------
     def _place(self, objects: IntArray) -> None:
@@ -531,11 +566,11 @@ class ShadowScene:
 
     def _fit_light(
         self, light: PointLight | SpotLight | DirectionalLight, spec: ShadowMapSpec,
-        up: np.ndarray | None,
+        up: np.ndarray | None, seen: np.ndarray | None,
     ) -> LightShadows:  # fmt: skip
         casts, receives = self._casts, self._receives
         if isinstance(light, PointLight):
-            return self._fit_cube(light, spec)
+            return self._fit_cube(light, spec, seen)
         if isinstance(light, SpotLight):
             reach = _cull.spot_visible(
                 np.asarray(light.position), np.asarray(light.direction),
@@ -554,7 +589,9 @@ class ShadowScene:
                 fit = fit_shadow(light, self._triangles(casts, at), spec, receivers=recv, up=up)
         except ValueError as err:
             return LightShadows(light, None, none, str(err))
-        return LightShadows(light, fit, self._drawn(np.asarray(fit.blocker_to_clip)[None]), "")
+        return LightShadows(
+            light, fit, self._drawn(np.asarray(fit.blocker_to_clip)[None], seen), ""
+        )
 
     def _fit_sun(
         self, light: DirectionalLight, casts: np.ndarray, receives: np.ndarray,
@@ -599,7 +636,9 @@ class ShadowScene:
         owner = self._owner[rows]
         return np.array([bool(np.all(ok[owner == k])) for k in objects])
 
-    def _fit_cube(self, light: PointLight, spec: ShadowMapSpec) -> LightShadows:
+    def _fit_cube(
+        self, light: PointLight, spec: ShadowMapSpec, seen: np.ndarray | None
+    ) -> LightShadows:
         position = np.asarray(light.position, dtype=np.float64)
         none = tuple(np.zeros(0, np.int64) for _ in range(6))
         if not self._casts.any():
@@ -614,7 +653,7 @@ class ShadowScene:
         except ValueError as err:
             return LightShadows(light, None, none, str(err))
         faces = _cube_clip(np, position, fit, spec)
-        return LightShadows(light, fit, self._drawn(faces), "")
+        return LightShadows(light, fit, self._drawn(faces, seen), "")
 
 
 def _cube_clip(xp: Any, position: Any, fit: CubeDepthRange, spec: ShadowMapSpec) -> Any:

@@ -547,3 +547,49 @@ def test_fit_summaries_under_jit_and_vmap() -> None:
 
     g = jax.jit(jax.grad(size))(jnp.asarray(spots.position[0]))
     assert np.all(np.isfinite(np.asarray(g))) and np.any(np.asarray(g) != 0)
+
+
+def _camera(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """An OpenGL world-to-clip matrix: a 60-degree perspective looking from ``eye`` at
+    ``target`` (gluLookAt, gluPerspective)."""
+    f = (target - eye) / np.linalg.norm(target - eye)
+    r = np.cross(f, [0.0, 1.0, 0.0])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    view = np.eye(4)
+    view[:3, :3] = np.stack([r, u, -f])
+    view[:3, 3] = -view[:3, :3] @ eye
+    k, n, far = 1 / np.tan(np.radians(30.0)), 0.5, 100.0
+    a, b = -(far + n) / (far - n), -2 * far * n / (far - n)
+    proj = np.array([[k, 0, 0, 0], [0, k, 0, 0], [0, 0, a, b], [0, 0, -1, 0]])
+    return proj @ view
+
+
+@given(SEEDS)
+@settings(max_examples=10, deadline=None)
+def test_a_camera_skips_the_maps_no_visible_receiver_reaches(seed: int) -> None:
+    """With a camera, a map whose list is emptied has no receiver point that the camera
+    sees (sampled on the receivers' own triangles, inside the camera's clip volume) in
+    its clip volume; the lists it keeps are those without a camera; and a camera that
+    sees no receiver skips every face."""
+    rng = np.random.default_rng(seed)
+    scene, objects = _random_scene(rng)
+    point = sm.PointLight(np.r_[rng.uniform(-3, 3, 2), rng.uniform(6, 10)])
+    camera = _camera(np.r_[rng.uniform(-4, 4, 2), 25.0], np.zeros(3))
+    (plain,) = scene.fit([point], 512)
+    (looked,) = scene.fit([point], 512, camera=camera)
+    assert plain.fit is not None
+    P = sm.cube_face_projection(plain.fit.near, plain.fit.far, map_size=512, border_texels=1)
+    faces = P @ sm.cube_face_views(point.position)
+    seen = [_samples(_world(mesh, M), 3) for mesh, M in objects]
+    seen = np.concatenate([p[_clip_inside(camera, p)] for p in seen])
+    for face in range(6):
+        if len(looked.draws[face]):
+            assert looked.draws[face].tolist() == plain.draws[face].tolist()
+        elif len(plain.draws[face]):  # emptied by the camera: no pixel samples it
+            assert not np.any(_clip_inside(faces[face], seen))
+    away = _camera(np.array([0.0, 0.1, 40.0]), np.array([0.0, 0.0, 80.0]))  # at the sky
+    (skipped,) = scene.fit([point], 512, camera=away)
+    assert all(len(d) == 0 for d in skipped.draws) and any(len(d) for d in plain.draws)
+    with pytest.raises(ValueError, match=r"camera: expected a \(4, 4\)"):
+        scene.fit([point], 512, camera=np.eye(3))

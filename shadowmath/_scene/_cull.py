@@ -7,11 +7,11 @@ Each object is read through its world-space bounding sphere (centre ``c``, radiu
 a cube face, a cascade, an atlas tile). A map's texels are what its ``world_to_clip``
 rasterizes inside the clip volume; its four side planes are the rows
 ``P_3 + P_0, P_3 - P_0, P_3 + P_1, P_3 - P_1`` (``|x| <= w``, ``|y| <= w``, the same in
-every graphics API; their intersection also has ``w >= 0``). A sphere wholly outside one
-of them (signed distance ``pi . (c, 1) / |pi_xyz| < -r``) puts no fragment in the map, so
-leaving it out of the draw list changes no texel: the map, and every lookup of it (any
-filter, any offset), is the one drawn with every caster. Depth is not tested: what the
-near and far planes clip is drawn by neither.
+every graphics API), and ``P_3`` (``w >= 0``: in front of a perspective map's eye). A
+sphere wholly outside one of them (signed distance ``pi . (c, 1) / |pi_xyz| < -r``) puts
+no fragment in the map, so leaving it out of the draw list changes no texel: the map,
+and every lookup of it (any filter, any offset), is the one drawn with every caster.
+Depth is not tested: what the near and far planes clip is drawn by neither.
 
 **What a fit reads**, before it has a map:
 
@@ -89,16 +89,18 @@ def clip_visible(
     xp: ModuleType = np,
 ) -> Bool[Array, "*maps N"]:
     """``(*maps, N)`` the spheres that may put a fragment in each map (see the module):
-    not wholly outside one of the four side planes of ``world_to_clip``."""
+    not wholly outside one of the four side planes of ``world_to_clip``, nor behind its
+    eye (``w >= 0``, the row ``P_3``: it has no normal for an orthographic map, where it
+    holds everywhere)."""
     P = world_to_clip
     planes = xp.stack(
         [P[..., 3, :] + P[..., 0, :], P[..., 3, :] - P[..., 0, :],
-         P[..., 3, :] + P[..., 1, :], P[..., 3, :] - P[..., 1, :]],
+         P[..., 3, :] + P[..., 1, :], P[..., 3, :] - P[..., 1, :], P[..., 3, :]],
         axis=-2,
     )  # fmt: skip
-    planes = planes / xp.sqrt(xp.sum(planes[..., :3] ** 2, axis=-1))[..., None]  # unit normals
-    value = xp.matmul(planes[..., :3], xp.matrix_transpose(center))
-    value = value + planes[..., 3:4]  # (*maps, 4, N): signed distances
+    norm = xp.sqrt(xp.sum(planes[..., :3] ** 2, axis=-1))
+    value = xp.matmul(planes[..., :3], xp.matrix_transpose(center)) + planes[..., 3:4]
+    value = value / xp.where(norm > 0, norm, 1.0)[..., None]  # (*maps, 5, N): distances
     return xp.all(value >= -radius, axis=-2)
 
 
