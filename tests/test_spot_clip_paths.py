@@ -119,7 +119,7 @@ def _summary(points: np.ndarray, position: Any, axes: Any) -> tuple[bool, np.nda
 def _python_loop(planes: np.ndarray, tris: np.ndarray, eps: float) -> tuple[np.ndarray, int]:
     """The compiled loop's source run by Python (no Numba needed)."""
     out = np.empty((19 * len(tris), 3), dtype=tris.dtype)
-    stop, at, kept = scalar_formulas().spot_clip_loop(tris.reshape(-1), planes, eps, 0, out, 0)
+    stop, at, kept = scalar_formulas().spot_clip_loop(tris.reshape(-1), planes, eps, out, (0, 0))
     assert stop == len(tris)
     return out[:at], kept
 
@@ -234,11 +234,11 @@ def test_the_loop_resumes_where_its_output_is_full() -> None:
     loop = _kernels.loops().spot_clip_loop
     flat = tris.reshape(-1)
     whole = np.empty((19 * len(tris), 3))
-    stop, end, kept = loop(flat, planes, eps, 0, whole, 0)
+    stop, end, kept = loop(flat, planes, eps, whole, (0, 0))
     assert stop == len(tris)
     out, start, at, total = np.empty((20, 3)), 0, 0, 0
     while start < len(tris):
-        start, at, more = loop(flat, planes, eps, start, out, at)
+        start, at, more = loop(flat, planes, eps, out, (start, at))
         total += more
         if start < len(tris):
             out = np.concatenate([out[:at], np.empty((len(out), 3))])

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._boundary._shapes import Bool
+from shadowmath._boundary._shapes import ArrayLike, Bool, Integer
 
 from ._atlas_allocate import find_tiles
 from ._atlas_fit import AtlasFit
@@ -26,9 +26,9 @@ def atlas_redraw(
     fit: AtlasFit,
     previous: AtlasFit | None,
     *,
-    draws: Sequence[Any] | None = None,
-    previous_draws: Sequence[Any] | None = None,
-    moved: Any = None,
+    draws: Sequence[Integer[ArrayLike, " _"]] | None = None,
+    previous_draws: Sequence[Integer[ArrayLike, " _"]] | None = None,
+    moved: Integer[ArrayLike, " K"] | None = None,
 ) -> Bool[NDArray[np.bool_], " T"]:
     r"""Which tiles of ``fit`` to draw this frame; the others already hold their depths.
 

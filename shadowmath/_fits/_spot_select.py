@@ -77,7 +77,7 @@ def clipped(
     loop = _kernels.loops().spot_clip_loop
     start = at = kept = 0
     while True:
-        start, at, more = loop(flat, rows, eps, start, out, at)
+        start, at, more = loop(flat, rows, eps, out, (start, at))
         kept += more
         if start >= count:
             break

@@ -57,9 +57,11 @@ def _spot_put(out: Any, at: int, x: float, y: float, z: float) -> int:
     return at + 1
 
 
-def _spot_candidate(w: Any, ok: bool, c: Any, g: Any, tau: float, out: Any, at: int) -> int:
-    """One candidate of barycentric weights ``w`` (3), which exists when ``ok``: stored
-    when valid (its four values ``sum_i w_i g_ik >= -tau``) or not finite; the next row."""
+def _spot_candidate(w: Any, ok: bool, tri: Any, out: Any, at: int) -> int:
+    """One candidate of barycentric weights ``w`` (3), which exists when ``ok``, of the
+    triangle ``tri = (c, g, tau)`` (corners, values, tolerance): stored when valid (its
+    four values ``sum_i w_i g_ik >= -tau``) or not finite; the next row."""
+    c, g, tau = tri
     w0, w1, w2 = w[0], w[1], w[2]
     g0, g1, g2 = g[0], g[1], g[2]
     valid = ok
@@ -98,21 +100,22 @@ def _spot_lateral(g: Any, k: int, m: int) -> tuple[float, float, float, bool]:
 def _spot_clip(c: Any, g: Any, tau: float, out: Any, at: int) -> int:
     """A straddling triangle's 19 candidates (corners ``c``, 9 floats; values ``g``, three
     4-tuples), the kept ones stored from row ``at``; the next row."""
-    at = _spot_candidate((1.0, 0.0, 0.0), True, c, g, tau, out, at)
-    at = _spot_candidate((0.0, 1.0, 0.0), True, c, g, tau, out, at)
-    at = _spot_candidate((0.0, 0.0, 1.0), True, c, g, tau, out, at)
+    tri = (c, g, tau)
+    at = _spot_candidate((1.0, 0.0, 0.0), True, tri, out, at)
+    at = _spot_candidate((0.0, 1.0, 0.0), True, tri, out, at)
+    at = _spot_candidate((0.0, 0.0, 1.0), True, tri, out, at)
     for k in range(4):  # edge 0 -> 1
         s, ok = _spot_edge(g[0][k], g[1][k])
-        at = _spot_candidate((1.0 - s, s, 0.0), ok, c, g, tau, out, at)
+        at = _spot_candidate((1.0 - s, s, 0.0), ok, tri, out, at)
     for k in range(4):  # edge 1 -> 2
         s, ok = _spot_edge(g[1][k], g[2][k])
-        at = _spot_candidate((0.0, 1.0 - s, s), ok, c, g, tau, out, at)
+        at = _spot_candidate((0.0, 1.0 - s, s), ok, tri, out, at)
     for k in range(4):  # edge 2 -> 0
         s, ok = _spot_edge(g[2][k], g[0][k])
-        at = _spot_candidate((s, 0.0, 1.0 - s), ok, c, g, tau, out, at)
+        at = _spot_candidate((s, 0.0, 1.0 - s), ok, tri, out, at)
     for k, m in ((0, 2), (0, 3), (1, 2), (1, 3)):
         w0, w1, w2, ok = _spot_lateral(g, k, m)
-        at = _spot_candidate((w0, w1, w2), ok, c, g, tau, out, at)
+        at = _spot_candidate((w0, w1, w2), ok, tri, out, at)
     return at
 
 
@@ -130,11 +133,11 @@ def _spot_dropped(g: Any, tau: float) -> bool:
     return s0 < behind and s1 < behind and s2 < behind
 
 
-def spot_clip_loop(T: Any, P: Any, eps: float, start: int, out: Any, at: int) -> Any:
+def spot_clip_loop(T: Any, P: Any, eps: float, out: Any, cursor: Any) -> Any:
     """Triangles ``start, start + 1, ...`` of ``T`` (a flat row of ``9 M`` numbers:
     corners ``x0, y0, z0, x1, ...`` per triangle) clipped by the side planes ``P``
     (rows ``(n_k, d_k)``, the first four used), their kept points stored in
-    ``out`` ``(capacity, 3)`` from row ``at`` (see the module).
+    ``out`` ``(capacity, 3)`` from row ``at``, ``cursor = (start, at)`` (see the module).
 
     Returns ``(stop, at, kept)``: the first triangle not done (``M`` when all are; the
     loop stops before a triangle when fewer than 19 rows are left), the next free row
@@ -145,10 +148,11 @@ def spot_clip_loop(T: Any, P: Any, eps: float, start: int, out: Any, at: int) ->
         >>> planes = pyramid_planes(np, np.zeros(3), np.eye(3), np.array(1.0))  # |x|, |y| <= z
         >>> tri = np.array([0.0, 1.0, -1.0, 0.5, 1.0, 3.0, -0.5, 1.0, 3.0])  # y = 1, across y = z
         >>> out = np.empty((19, 3))
-        >>> stop, at, kept = spot_clip_loop(tri, planes, 2.0**-52, 0, out, 0)
+        >>> stop, at, kept = spot_clip_loop(tri, planes, 2.0**-52, out, (0, 0))
         >>> stop, kept, float(out[:at, 2].min()), float(out[:at, 2].max())  # clipped at z = 1
         (1, 1, 1.0, 3.0)
     """
+    start, at = cursor
     S = _spot_sides(P)
     M = len(T) // 9
     cap = len(out)

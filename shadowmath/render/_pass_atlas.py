@@ -298,7 +298,7 @@ def prepare_atlas(
     v, p = check_matrix("view", view), check_camera_projection(projection)
     fit_tiles = _triangle_fit(prepared, cast, lights, k, api)
     if scene_fit is not None:
-        fit_tiles = _scene_fit(prepared, cast, lights, k, api, scene_fit)
+        fit_tiles = _scene_fit(prepared, cast, lights, (k, api), scene_fit)
 
     def allocate_and_fit(border: int) -> tuple[sm.ShadowAtlas, sm.AtlasFit, DrawLists]:
         atlas = sm.allocate_atlas(
@@ -351,12 +351,13 @@ def _scene_fit(
     prepared: Sequence[Prepared],
     cast: Sequence[bool],
     lights: Sequence[AtlasLight],
-    k: int,
-    api: Literal["opengl", "webgpu"],
+    options: tuple[int, Literal["opengl", "webgpu"]],
     scene_fit: Literal["draw_lists", "every_caster"],
 ) -> _FitTiles:
-    """:meth:`shadowmath.ShadowScene.fit_atlas` of :func:`body_scene`; each tile's draw
-    list (``"draw_lists"``) or every caster (``"every_caster"``)."""
+    """:meth:`shadowmath.ShadowScene.fit_atlas` of :func:`body_scene` with ``options = (k,
+    api)`` (the PCF radius, the API); each tile's draw list (``"draw_lists"``) or every
+    caster (``"every_caster"``)."""
+    k, api = options
     scene = body_scene(prepared, cast)
     every = np.flatnonzero(cast)
 
