@@ -3,6 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+DEMO_STAMP := $(VENV)/.demo-installed
 
 .PHONY: demo test lint typecheck pytest docs notebooks bench bench-coverage fuzz gpu-check clean
 
@@ -13,8 +14,17 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
+# What the demo needs only (the render extra: moderngl, Pillow, wgpu; seconds, not the
+# development toolchain); `make test` adds the rest to the same .venv.
+$(DEMO_STAMP): pyproject.toml
+	@bash tools/ensure_gl.sh
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[render]'
+	touch $(DEMO_STAMP)
+
 ## The main job: the default scene (see README). Options: make demo ARGS="--help"
-demo: $(STAMP)
+demo: $(DEMO_STAMP)
 	$(PY) -m shadowmath $(ARGS)
 
 ## The whole suite: lint, strict typing, tests, the docs site and the notebooks, two at a
