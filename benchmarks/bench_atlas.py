@@ -23,7 +23,6 @@ move); the fraction of the atlas used. Nothing is asserted about time.
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 from typing import Any
@@ -32,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from speed._timing import Config, Row, Section, measure, numpy_alone, table
+from speed._timing import Config, Row, Section, measure, numpy_alone, run_alone
 
 import shadowmath as sm
 
@@ -209,14 +208,7 @@ def run(cfg: Config) -> Section:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--tiny", action="store_true", help="each timing once, 3 frames")
-    args = parser.parse_args(argv)
-    section = run(Config(tiny=args.tiny))
-    print(table(section))
-    for name, value in section.figures.items():
-        print(f"* {name}: {value:g}")
-    return 0
+    return run_alone(run, (__doc__ or "").splitlines()[0], "3 frames", argv)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,6 @@ by their bounding boxes).
 
 from __future__ import annotations
 
-import argparse
 import functools
 import os
 import sys
@@ -28,7 +27,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from speed._timing import Config, Row, Section, measure, synced, table
+from speed._timing import Config, Row, Section, measure, run_alone, synced
 
 import shadowmath as sm
 from shadowmath._fits._cube_depth import _candidates
@@ -93,14 +92,7 @@ def jitted(cfg: Config, count: int) -> Row:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--tiny", action="store_true", help="each timing once, 100 triangles")
-    args = parser.parse_args(argv)
-    section = run(Config(tiny=args.tiny))
-    print(table(section))
-    for name, value in section.figures.items():
-        print(f"* {name}: {value:g}")
-    return 0
+    return run_alone(run, (__doc__ or "").splitlines()[0], "100 triangles", argv)
 
 
 if __name__ == "__main__":

@@ -20,21 +20,19 @@ the draws (object x map) the draw lists save against drawing every caster into e
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import os
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from speed._timing import Config, Row, Section, measure, table
+from speed._timing import Config, Row, Section, fast_extra, measure, numpy_alone, run_alone
 
 import shadowmath as sm
 from shadowmath import meshes
-from shadowmath._backends import _kernels
 
 NAME = "scene"
 TITLE = "ShadowScene: 1,000 objects, 32 lights, the whole per-frame update"
@@ -162,11 +160,6 @@ def baseline(scene: sm.ShadowScene, shapes: list[sm.Mesh], order: np.ndarray,
     return frame
 
 
-@contextlib.contextmanager
-def _nothing() -> Iterator[None]:
-    yield
-
-
 def run(cfg: Config) -> Section:
     section = Section(NAME, TITLE)
     sizes = (10_000, 1_000_000) if not cfg.tiny else (2_000,)
@@ -177,9 +170,9 @@ def run(cfg: Config) -> Section:
         triangles = sum(len(shapes[g].faces) for g in order)
         base = measure(baseline(base_scene, shapes, order, all_lights, spec),
                        repeats=cfg.repeats(3 if total <= 10_000 else 1), warmup=0)  # fmt: skip
-        modes = [("fast extra", 1e-3, "≤ 1 ms")] if _kernels.available() else []
+        modes = [("fast extra", 1e-3, "≤ 1 ms")] if fast_extra() else []
         for mode, target, label in [*modes, ("NumPy alone", 10e-3, "≤ 10 ms")]:
-            with _kernels.disabled() if mode == "NumPy alone" else _nothing():
+            with numpy_alone() if mode == "NumPy alone" else contextlib.nullcontext():
                 timing = measure(frame, repeats=cfg.repeats(21), warmup=2)
             section.rows.append(
                 Row(f"one frame, {triangles:,} caster triangles, {mode}", timing,
@@ -205,14 +198,7 @@ def run(cfg: Config) -> Section:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--tiny", action="store_true", help="each timing once, a small scene")
-    args = parser.parse_args(argv)
-    section = run(Config(tiny=args.tiny))
-    print(table(section))
-    for name, value in section.figures.items():
-        print(f"* {name}: {value:g}")
-    return 0
+    return run_alone(run, (__doc__ or "").splitlines()[0], "a small scene", argv)
 
 
 if __name__ == "__main__":

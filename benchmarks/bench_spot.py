@@ -21,7 +21,6 @@ ones and the points the fit reads after the selection.
 
 from __future__ import annotations
 
-import argparse
 import functools
 import os
 import sys
@@ -31,11 +30,10 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from speed._timing import Config, Row, Section, measure, table
+from speed._timing import Config, Row, Section, fast_extra, measure, numpy_alone, run_alone
 
 import shadowmath as sm
 from shadowmath import meshes
-from shadowmath._backends import _kernels
 
 NAME = "spot"
 TITLE = "fit_shadow: one spot light over 43,212 caster triangles (clipped to its cone)"
@@ -111,7 +109,7 @@ def run(cfg: Config) -> Section:
     count = f"{len(triangles):,} triangles"
     spot_fit = functools.partial(sm.fit_shadow, spot, casters, 1024)
     sun_fit = functools.partial(sm.fit_shadow, sun, casters, 1024)
-    if _kernels.available():
+    if fast_extra():
         fast = measure(spot_fit, repeats=repeats, min_time=min_time)
         base = measure(sun_fit, repeats=repeats, min_time=min_time)
         row = Row(f"spot fit, {count}, fast extra", fast, BASELINE, base, "≤ 2 ms", TARGET,
@@ -119,7 +117,7 @@ def run(cfg: Config) -> Section:
         section.rows.append(row)
     else:
         section.notes.append("Numba is not installed: no row for the fast extra.")
-    with _kernels.disabled():
+    with numpy_alone():
         alone = measure(spot_fit, repeats=repeats, min_time=min_time)
         base = measure(sun_fit, repeats=repeats, min_time=min_time)
     section.rows.append(Row(f"spot fit, {count}, NumPy alone", alone, BASELINE, base))
@@ -138,14 +136,7 @@ def run(cfg: Config) -> Section:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--tiny", action="store_true", help="each timing once, a tiny scene")
-    args = parser.parse_args(argv)
-    section = run(Config(tiny=args.tiny))
-    print(table(section))
-    for name, value in section.figures.items():
-        print(f"* {name}: {value:g}")
-    return 0
+    return run_alone(run, (__doc__ or "").splitlines()[0], "a tiny scene", argv)
 
 
 if __name__ == "__main__":

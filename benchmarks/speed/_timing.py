@@ -10,6 +10,7 @@ that NumPy timings carry no synchronisation overhead.
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import gc
 import json
@@ -258,6 +259,20 @@ def table(section: Section) -> str:
         lines.append("")
         lines.append(f"ERROR: {section.error}")
     return "\n".join(lines)
+
+
+def run_alone(
+    run: Callable[[Config], Section], description: str, tiny: str, argv: list[str] | None
+) -> int:
+    """A section run on its own (``python benchmarks/bench_<name>.py [--tiny]``): its table,
+    then its figures; ``tiny`` says what ``--tiny`` shrinks."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--tiny", action="store_true", help=f"each timing once, {tiny}")
+    section = run(Config(tiny=parser.parse_args(argv).tiny))
+    print(table(section))
+    for name, value in section.figures.items():
+        print(f"* {name}: {value:g}")
+    return 0
 
 
 def target_line(section: str, row: Row) -> str:
