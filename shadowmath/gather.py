@@ -22,6 +22,7 @@ from ._boundary._validate import (
     is_tracer,
     non_finite,
 )
+from ._math._specialize import formulas
 from .receivers import Mesh, Triangles
 
 
@@ -150,9 +151,9 @@ def _placed(ctx: Context, V: Array, M: Array | None, name: str) -> Array:
     if M is None:
         return checks.poison(V, 2)
     checks.require(xp.all(xp.isfinite(M)), non_finite(f"{name} transform"))
-    last = M[3] - ctx.constant([0.0, 0.0, 0.0, 1.0])
+    entries = tuple(M[i // 4, i % 4] for i in range(16))
     checks.require(
-        xp.all(xp.abs(last) <= 4 * ctx.eps),
+        formulas(xp).placement_affine(entries, ctx.eps),
         f"{name}: its transform's last row is not (0, 0, 0, 1) (a projective transform); "
         "give an affine local-to-world matrix",
     )

@@ -35,6 +35,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ._api._cube_faces import cube_face_projection, cube_face_views
+from ._boundary._messages import not_affine
 from ._boundary._shapes import ArrayLike, Float, Int, Real
 from ._boundary._validate import Array, check_faces, is_jax
 from ._fits._atlas_allocate import ShadowAtlas
@@ -44,6 +45,7 @@ from ._fits._cube_depth import CubeDepthRange, cube_depth_range
 from ._fits._setup import fit_shadow
 from ._fits._shadow_setup import ShadowSetup
 from ._fits._spec import ShadowMapSpec
+from ._math._specialize import formulas
 from ._scene import _cull
 from ._scene._summary import GeometrySummary, summarize
 from .lights import DirectionalLight, PointLight, SpotLight
@@ -733,15 +735,10 @@ def _placements(name: str, value: object) -> np.ndarray:
     bad = np.flatnonzero(~np.all(np.isfinite(flat), axis=(1, 2)))
     if len(bad):
         raise ValueError(f"{name}[{int(bad[0])}]: contains non-finite values (NaN or inf)")
-    scale = np.max(np.abs(flat), axis=(1, 2))
-    last = np.max(np.abs(flat[:, 3] - [0.0, 0.0, 0.0, 1.0]), axis=1)
-    bad = np.flatnonzero(last > 4 * np.finfo(np.float64).eps * scale)
+    entries = tuple(flat[:, i // 4, i % 4] for i in range(16))
+    bad = np.flatnonzero(~formulas(np).placement_affine(entries, float(np.finfo(np.float64).eps)))
     if len(bad):
-        raise ValueError(
-            f"{name}[{int(bad[0])}]: its last row is not (0, 0, 0, 1): give affine "
-            "local-to-world matrices in column-vector form (p_world = M @ p; a row-major "
-            "matrix has its translation in the last row)"
-        )
+        raise ValueError(not_affine(f"{name}[{int(bad[0])}]"))
     return M
 
 
