@@ -153,11 +153,6 @@ class SummaryFit(NamedTuple):
     draws: Any
 
 
-class _Geometry(NamedTuple):
-    summary: GeometrySummary
-    triangles: int  # how many the summary has
-
-
 class ShadowScene:
     r"""Geometries and their placements, kept across frames, fitted for many lights.
 
@@ -180,7 +175,7 @@ class ShadowScene:
     """
 
     def __init__(self) -> None:
-        self._geometries: list[_Geometry] = []
+        self._geometries: list[GeometrySummary] = []
         self._geometry_of = np.zeros(0, dtype=np.int64)
         self._casts = np.zeros(0, dtype=bool)
         self._receives = np.zeros(0, dtype=bool)
@@ -221,7 +216,7 @@ class ShadowScene:
         summary = (
             geometry if isinstance(geometry, GeometrySummary) else summarize_geometry(geometry)
         )
-        self._geometries.append(_Geometry(summary, len(summary.triangles)))
+        self._geometries.append(summary)
         return len(self._geometries) - 1
 
     def add_objects(
@@ -260,21 +255,20 @@ class ShadowScene:
         M = M[None] if M.ndim == 2 else M
         first, K = len(self._M), len(M)
         g = self._geometries[geometry]
+        T = len(g.triangles)
         self._geometry_of = np.concatenate([self._geometry_of, np.full(K, geometry)])
         self._casts = np.concatenate([self._casts, np.full(K, bool(casts))])
         self._receives = np.concatenate([self._receives, np.full(K, bool(receives))])
         self._static = np.concatenate([self._static, np.full(K, bool(static))])
         self._M = np.concatenate([self._M, M])
-        ends = self._offsets[-1] + g.triangles * np.arange(1, K + 1)
+        ends = self._offsets[-1] + T * np.arange(1, K + 1)
         self._offsets = np.concatenate([self._offsets, ends])
-        self._world = np.concatenate([self._world, np.zeros((K * g.triangles, 3, 3))])
-        local = np.broadcast_to(g.summary.triangles, (K, *g.summary.triangles.shape))
+        self._world = np.concatenate([self._world, np.zeros((K * T, 3, 3))])
+        local = np.broadcast_to(g.triangles, (K, *g.triangles.shape))
         self._local = np.concatenate([self._local, local.reshape(-1, 3, 3)])
-        self._local_center = np.concatenate([self._local_center, np.tile(g.summary.center, (K, 1))])
-        self._local_radius = np.concatenate([self._local_radius, np.full(K, g.summary.radius)])
-        self._owner = np.concatenate(
-            [self._owner, np.repeat(np.arange(first, first + K), g.triangles)]
-        )
+        self._local_center = np.concatenate([self._local_center, np.tile(g.center, (K, 1))])
+        self._local_radius = np.concatenate([self._local_radius, np.full(K, g.radius)])
+        self._owner = np.concatenate([self._owner, np.repeat(np.arange(first, first + K), T)])
         self._center = np.concatenate([self._center, np.zeros((K, 3))])
         self._radius = np.concatenate([self._radius, np.zeros(K)])
         self._bounds = np.concatenate([self._bounds, np.zeros((K, 2, 3))])
@@ -562,7 +556,7 @@ class ShadowScene:
             return Triangles(self._world[self._rows(objects)])
         parts = [self._world[self._rows(objects & ~around)]]
         for k in np.flatnonzero(around):
-            own, M = self._geometries[self._geometry_of[k]].summary.own, self._M[k]
+            own, M = self._geometries[self._geometry_of[k]].own, self._M[k]
             parts.append(np.einsum("ij,tcj->tci", M[:3, :3], own) + M[:3, 3])
         return Triangles(np.concatenate(parts))
 
@@ -635,8 +629,8 @@ class ShadowScene:
             np.abs(y - float(box.center_y)) <= float(box.half_height)
         )
         ok = np.all(ok & (z >= float(box.near)) & (z <= float(box.far)), axis=1)
-        owner = self._owner[rows]
-        return np.array([bool(np.all(ok[owner == k])) for k in objects])
+        owner = self._owner[rows]  # increasing: each object's rows in one run
+        return np.logical_and.reduceat(ok, np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]]))
 
     def _fit_cube(
         self, light: PointLight, spec: ShadowMapSpec, seen: np.ndarray | None

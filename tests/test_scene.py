@@ -593,3 +593,26 @@ def test_a_camera_skips_the_maps_no_visible_receiver_reaches(seed: int) -> None:
     assert all(len(d) == 0 for d in skipped.draws) and any(len(d) for d in plain.draws)
     with pytest.raises(ValueError, match=r"camera: expected a \(4, 4\)"):
         scene.fit([point], 512, camera=np.eye(3))
+
+
+@given(SEEDS)
+def test_light_intervals_hold_every_corner_and_reach_a_box(seed: int) -> None:
+    """A sun's candidate and inside tests read each object's light-coordinate interval: it
+    holds every corner of the object's summary (a random rigid frame), and for a box whose
+    faces are the frame's planes it is the box itself (no looser than the sphere or box)."""
+    rng = np.random.default_rng(seed)
+    scene, _ = _random_scene(rng, 6)
+    frame = np.eye(4)
+    frame[:3, :3], frame[:3, 3] = _rotation(rng), rng.normal(size=3)
+    lo, hi = _cull.light_intervals(frame, scene._center, scene._radius, scene._bounds)
+    p = scene._world @ frame[:3, :3].T + frame[:3, 3]
+    for k in range(len(scene._M)):
+        corners = p[scene._owner == k].reshape(-1, 3)
+        tol = 1e-9 * (1 + np.max(np.abs(corners)))
+        assert np.all(corners >= lo[k] - tol) and np.all(corners <= hi[k] + tol)
+    box = sm.ShadowScene()
+    place = np.eye(4)
+    place[:3, 3] = [2.0, -1.0, 4.0]
+    box.add_objects(box.add_geometry(meshes.box((1.0, 0.5, 0.3))), place)
+    lo, hi = _cull.light_intervals(np.eye(4), box._center, box._radius, box._bounds)
+    assert np.allclose(lo[0], [1.5, -1.25, 3.85]) and np.allclose(hi[0], [2.5, -0.75, 4.15])
