@@ -7,21 +7,22 @@ DEMO_STAMP := $(VENV)/.demo-installed
 
 .PHONY: demo test lint typecheck pytest docs notebooks bench bench-coverage fuzz gpu-check clean
 
-$(STAMP): pyproject.toml
+# .venv with the package and the extras $(1), then the stamp ($@).
+define install
 	@bash tools/ensure_gl.sh
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev]'
-	touch $(STAMP)
+	$(PY) -m pip install --quiet -e '.[$(1)]'
+	touch $@
+endef
+
+$(STAMP): pyproject.toml
+	$(call install,dev)
 
 # What the demo needs only (the render extra: moderngl, Pillow, wgpu; seconds, not the
 # development toolchain); `make test` adds the rest to the same .venv.
 $(DEMO_STAMP): pyproject.toml
-	@bash tools/ensure_gl.sh
-	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[render]'
-	touch $(DEMO_STAMP)
+	$(call install,render)
 
 ## The main job: the default scene (see README). Options: make demo ARGS="--help"
 demo: $(DEMO_STAMP)
