@@ -9,8 +9,8 @@ from typing import NamedTuple
 
 import moderngl
 import numpy as np
-from pcss_moderngl import MAP_FRAGMENT, MAP_VERTEX
-from pcss_scene import TRIANGLES, Vector, look_at, normals, perspective, shader
+from pcss_moderngl import MAP_FRAGMENT, MAP_VERTEX, lookup_pass
+from pcss_scene import CASCADES_PROJECTION, CASCADES_VIEW, TRIANGLES, Vector, normals, shader
 
 import shadowmath as sm
 
@@ -134,8 +134,6 @@ def render(
     ctx.disable(moderngl.CULL_FACE)
 
     # Pass 2, the lookup: every surface from the camera, in the cascade of its view depth.
-    target = ctx.texture((size, size), 4, dtype="f4")
-    fbo = ctx.framebuffer([target], ctx.depth_renderbuffer((size, size)))
     prog = ctx.program(vertex_shader=LOOKUP_VERTEX, fragment_shader=LOOKUP_FRAGMENT)
     prog["camera"].write((projection @ view).T.astype("f4").tobytes())
     prog["sun"].value = tuple(sun)
@@ -150,19 +148,11 @@ def render(
     prog["bias"].value = bias
     prog["shadow_map"].value = 0
     shadow_map.use(location=0)
-    vao = ctx.vertex_array(prog, [(ctx.buffer(data), "3f 3f", "position", "normal")])
-    fbo.use()
-    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-    vao.render()
-    pixels = np.frombuffer(target.read(), "f4").reshape(size, size, 4)
+    pixels = lookup_pass(ctx, prog, data, size)
     return Picture(pixels[..., :3].copy(), pixels[..., 3].copy(), cascades, pcss)
 
 
-#: The camera: low over the floor, the box's shadow running across the first split.
-VIEW = look_at((2.2, -2.2, 1.6), (-0.2, 0.0, 0.0))
-PROJECTION = perspective(60.0, 1.0, 0.3, 12.0)
-
 if __name__ == "__main__":
     context = moderngl.create_standalone_context(backend="egl")
-    picture = render(context, VIEW, PROJECTION, size=256)
+    picture = render(context, CASCADES_VIEW, CASCADES_PROJECTION, size=256)
     print(f"splits {picture.cascades.splits}, lit fraction {picture.lit.mean():.3f}")

@@ -9,13 +9,13 @@ from typing import NamedTuple
 
 import numpy as np
 import wgpu
-from pcss_cascades_moderngl import ANGLE, PROJECTION, VIEW
-from pcss_scene import TRIANGLES, Vector, normals, shader
-from pcss_wgpu import DEPTH_TEST, MAP_SHADER, POSITIONS, POSITIONS_NORMALS, column_major
+from pcss_scene import CASCADES_PROJECTION, CASCADES_VIEW, TRIANGLES, Vector, normals, shader
+from pcss_wgpu import DEPTH_TEST, MAP_SHADER, POSITIONS, column_major, lookup_pass
 
 import shadowmath as sm
 
 MAX_CASCADES = 4
+ANGLE = float(np.radians(3.0))  # the sun's angular radius
 
 LOOKUP_SHADER = (
     shader("pcss.wgsl")
@@ -195,76 +195,18 @@ def render(
     # Pass 2, the lookup: every surface from the camera, in the cascade of its view depth.
     to_webgpu = np.asarray(sm.api_convention(api="webgpu").gl_clip_to_clip)
     uniforms = uniform_bytes(to_webgpu @ projection @ view, sun, view, cascades, pcss, bias)
-    target = device.create_texture(
-        size=(size, size, 1),
-        format="rgba32float",
-        usage=wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC,
+    pixels = lookup_pass(
+        device,
+        LOOKUP_SHADER,
+        uniforms=uniforms,
+        shadow_map=shadow_map,
+        vertices=vertex_data,
+        count=count,
+        size=size,
     )
-    depth = device.create_texture(
-        size=(size, size, 1), format="depth32float", usage=wgpu.TextureUsage.RENDER_ATTACHMENT
-    )
-    module = device.create_shader_module(code=LOOKUP_SHADER)
-    pipeline = device.create_render_pipeline(
-        layout="auto",
-        vertex={
-            "module": module,
-            "entry_point": "vs_main",
-            "buffers": [POSITIONS_NORMALS],
-        },
-        primitive={"topology": "triangle-list"},
-        depth_stencil=DEPTH_TEST,
-        fragment={
-            "module": module,
-            "entry_point": "fs_main",
-            "targets": [{"format": "rgba32float"}],
-        },
-    )
-    group = device.create_bind_group(
-        layout=pipeline.get_bind_group_layout(0),
-        entries=[
-            {
-                "binding": 0,
-                "resource": {
-                    "buffer": device.create_buffer_with_data(
-                        data=uniforms, usage=wgpu.BufferUsage.UNIFORM
-                    )
-                },
-            },
-            {"binding": 1, "resource": shadow_map.create_view()},
-        ],
-    )
-    encoder = device.create_command_encoder()
-    rp = encoder.begin_render_pass(
-        color_attachments=[
-            {
-                "view": target.create_view(),
-                "clear_value": (0, 0, 0, 0),
-                "load_op": "clear",
-                "store_op": "store",
-            }
-        ],
-        depth_stencil_attachment={
-            "view": depth.create_view(),
-            "depth_clear_value": 1.0,
-            "depth_load_op": "clear",
-            "depth_store_op": "store",
-        },
-    )
-    rp.set_pipeline(pipeline)
-    rp.set_bind_group(0, group)
-    rp.set_vertex_buffer(0, vertex_data)
-    rp.draw(count)
-    rp.end()
-    device.queue.submit([encoder.finish()])
-    pixels = device.queue.read_texture(
-        {"texture": target, "origin": (0, 0, 0)},
-        {"offset": 0, "bytes_per_row": 16 * size},
-        (size, size, 1),
-    )
-    pixels = np.frombuffer(pixels, "f4").reshape(size, size, 4)
     return Picture(pixels[..., :3].copy(), pixels[..., 3].copy(), cascades, pcss)
 
 
 if __name__ == "__main__":
-    picture = render(wgpu.utils.get_default_device(), VIEW, PROJECTION, size=256)
+    picture = render(wgpu.utils.get_default_device(), CASCADES_VIEW, CASCADES_PROJECTION, size=256)
     print(f"splits {picture.cascades.splits}, lit fraction {picture.lit.mean():.3f}")

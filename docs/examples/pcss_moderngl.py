@@ -69,6 +69,20 @@ class Picture(NamedTuple):
     parameters: sm.PcssParameters
 
 
+def lookup_pass(
+    ctx: moderngl.Context, prog: moderngl.Program, data: np.ndarray, size: int
+) -> np.ndarray:
+    """The triangles (positions and normals: ``data``) through ``prog`` into a
+    ``(size, size, 4)`` float picture with a depth test; row 0 at the bottom."""
+    target = ctx.texture((size, size), 4, dtype="f4")
+    fbo = ctx.framebuffer([target], ctx.depth_renderbuffer((size, size)))
+    vao = ctx.vertex_array(prog, [(ctx.buffer(data), "3f 3f", "position", "normal")])
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+    vao.render()
+    return np.frombuffer(target.read(), "f4").reshape(size, size, 4)
+
+
 def render(
     ctx: moderngl.Context,
     camera: np.ndarray,
@@ -121,8 +135,6 @@ def render(
     ctx.disable(moderngl.CULL_FACE)
 
     # Pass 2, the lookup: every surface from the camera.
-    target = ctx.texture((size, size), 4, dtype="f4")
-    fbo = ctx.framebuffer([target], ctx.depth_renderbuffer((size, size)))
     prog = ctx.program(vertex_shader=LOOKUP_VERTEX, fragment_shader=LOOKUP_FRAGMENT)
     prog["camera"].write(np.asarray(camera, "f4").T.tobytes())
     prog["world_to_texture"].write(world_to_texture.T.astype("f4").tobytes())
@@ -132,11 +144,7 @@ def render(
     prog["bias"].value = bias
     prog["shadow_map"].value = 0
     shadow_map.use(location=0)
-    vao = ctx.vertex_array(prog, [(ctx.buffer(data), "3f 3f", "position", "normal")])
-    fbo.use()
-    fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-    vao.render()
-    pixels = np.frombuffer(target.read(), "f4").reshape(size, size, 4)
+    pixels = lookup_pass(ctx, prog, data, size)
     return Picture(pixels[..., :3].copy(), pixels[..., 3].copy(), fit, pcss)
 
 

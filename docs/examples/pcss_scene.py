@@ -66,3 +66,8 @@ def perspective(fovy_degrees: float, aspect: float, near: float, far: float) -> 
             [0, 0, -1, 0],
         ]
     )
+
+
+#: The cascades programs' camera: low over the floor, the box's shadow across a split.
+CASCADES_VIEW = look_at((2.2, -2.2, 1.6), (-0.2, 0.0, 0.0))
+CASCADES_PROJECTION = perspective(60.0, 1.0, 0.3, 12.0)

@@ -88,6 +88,88 @@ def column_major(m: np.ndarray) -> bytes:
     return np.asarray(m, "f4").T.tobytes()
 
 
+def lookup_pass(
+    device: wgpu.GPUDevice,
+    code: str,
+    *,
+    uniforms: bytes,
+    shadow_map: wgpu.GPUTexture,
+    vertices: wgpu.GPUBuffer,
+    count: int,
+    size: int,
+) -> np.ndarray:
+    """The triangles (positions and normals) through ``code``'s vs_main and fs_main, its
+    bindings the ``uniforms`` and the map, into a ``(size, size, 4)`` float picture with a
+    depth test; row 0 at the top."""
+    target = device.create_texture(
+        size=(size, size, 1),
+        format="rgba32float",
+        usage=wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC,
+    )
+    depth = device.create_texture(
+        size=(size, size, 1), format="depth32float", usage=wgpu.TextureUsage.RENDER_ATTACHMENT
+    )
+    module = device.create_shader_module(code=code)
+    pipeline = device.create_render_pipeline(
+        layout="auto",
+        vertex={
+            "module": module,
+            "entry_point": "vs_main",
+            "buffers": [POSITIONS_NORMALS],
+        },
+        primitive={"topology": "triangle-list"},
+        depth_stencil=DEPTH_TEST,
+        fragment={
+            "module": module,
+            "entry_point": "fs_main",
+            "targets": [{"format": "rgba32float"}],
+        },
+    )
+    group = device.create_bind_group(
+        layout=pipeline.get_bind_group_layout(0),
+        entries=[
+            {
+                "binding": 0,
+                "resource": {
+                    "buffer": device.create_buffer_with_data(
+                        data=uniforms, usage=wgpu.BufferUsage.UNIFORM
+                    )
+                },
+            },
+            {"binding": 1, "resource": shadow_map.create_view()},
+        ],
+    )
+    encoder = device.create_command_encoder()
+    rp = encoder.begin_render_pass(
+        color_attachments=[
+            {
+                "view": target.create_view(),
+                "clear_value": (0, 0, 0, 0),
+                "load_op": "clear",
+                "store_op": "store",
+            }
+        ],
+        depth_stencil_attachment={
+            "view": depth.create_view(),
+            "depth_clear_value": 1.0,
+            "depth_load_op": "clear",
+            "depth_store_op": "store",
+        },
+    )
+    rp.set_pipeline(pipeline)
+    rp.set_bind_group(0, group)
+    rp.set_vertex_buffer(0, vertices)
+    rp.draw(count)
+    rp.end()
+    device.queue.submit([encoder.finish()])
+    pixels = device.queue.read_texture(
+        {"texture": target, "origin": (0, 0, 0)},
+        {"offset": 0, "bytes_per_row": 16 * size},
+        (size, size, 1),
+    )
+    return np.frombuffer(pixels, "f4").reshape(size, size, 4)
+
+
 def render(
     device: wgpu.GPUDevice,
     camera: np.ndarray,
@@ -168,73 +250,15 @@ def render(
     uniforms = column_major(to_webgpu @ camera) + column_major(world_to_texture)
     tail = [*light, 1.0, *pcss.texels_per_depth, float(pcss.near_depth), bias]
     uniforms += np.asarray(tail, "f4").tobytes()
-    target = device.create_texture(
-        size=(size, size, 1),
-        format="rgba32float",
-        usage=wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.COPY_SRC,
+    pixels = lookup_pass(
+        device,
+        LOOKUP_SHADER,
+        uniforms=uniforms,
+        shadow_map=shadow_map,
+        vertices=vertex_data,
+        count=count,
+        size=size,
     )
-    depth = device.create_texture(
-        size=(size, size, 1), format="depth32float", usage=wgpu.TextureUsage.RENDER_ATTACHMENT
-    )
-    module = device.create_shader_module(code=LOOKUP_SHADER)
-    pipeline = device.create_render_pipeline(
-        layout="auto",
-        vertex={
-            "module": module,
-            "entry_point": "vs_main",
-            "buffers": [POSITIONS_NORMALS],
-        },
-        primitive={"topology": "triangle-list"},
-        depth_stencil=DEPTH_TEST,
-        fragment={
-            "module": module,
-            "entry_point": "fs_main",
-            "targets": [{"format": "rgba32float"}],
-        },
-    )
-    group = device.create_bind_group(
-        layout=pipeline.get_bind_group_layout(0),
-        entries=[
-            {
-                "binding": 0,
-                "resource": {
-                    "buffer": device.create_buffer_with_data(
-                        data=uniforms, usage=wgpu.BufferUsage.UNIFORM
-                    )
-                },
-            },
-            {"binding": 1, "resource": shadow_map.create_view()},
-        ],
-    )
-    encoder = device.create_command_encoder()
-    rp = encoder.begin_render_pass(
-        color_attachments=[
-            {
-                "view": target.create_view(),
-                "clear_value": (0, 0, 0, 0),
-                "load_op": "clear",
-                "store_op": "store",
-            }
-        ],
-        depth_stencil_attachment={
-            "view": depth.create_view(),
-            "depth_clear_value": 1.0,
-            "depth_load_op": "clear",
-            "depth_store_op": "store",
-        },
-    )
-    rp.set_pipeline(pipeline)
-    rp.set_bind_group(0, group)
-    rp.set_vertex_buffer(0, vertex_data)
-    rp.draw(count)
-    rp.end()
-    device.queue.submit([encoder.finish()])
-    pixels = device.queue.read_texture(
-        {"texture": target, "origin": (0, 0, 0)},
-        {"offset": 0, "bytes_per_row": 16 * size},
-        (size, size, 1),
-    )
-    pixels = np.frombuffer(pixels, "f4").reshape(size, size, 4)
     return Picture(pixels[..., :3].copy(), pixels[..., 3].copy(), fit, pcss)
 
 

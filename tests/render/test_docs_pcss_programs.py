@@ -184,10 +184,10 @@ def test_the_map_culled_the_other_way_shadows_the_lit_box_top(gl):
 def cascade_view_truth(size: int) -> tuple[Floor, np.ndarray, np.ndarray]:
     """The floor pixels of the cascades' camera, the sun's true visibility, and each
     pixel's view depth."""
-    program = example("pcss_cascades_moderngl")
-    view = program.VIEW
+    scene = example("pcss_scene")
+    view = scene.CASCADES_VIEW
     eye = np.append(np.linalg.inv(view)[:3, 3], 1.0)
-    floor = floor_pixels(program.PROJECTION @ view, size, eye)
+    floor = floor_pixels(scene.CASCADES_PROJECTION @ view, size, eye)
     true = np.ones(floor.visible.shape)
     true[floor.visible] = truth(floor.points[floor.visible], SUN, None)
     depth = -(floor.points @ view[2, :3] + view[2, 3])
@@ -204,12 +204,14 @@ def check_cascades(lit: np.ndarray, splits: Any) -> None:
 
 
 def test_the_moderngl_cascades_program_draws_the_true_soft_shadow(gl):
-    program = example("pcss_cascades_moderngl")
-    picture = program.render(gl, program.VIEW, program.PROJECTION, size=CASCADE_PIXELS)
+    scene, program = example("pcss_scene"), example("pcss_cascades_moderngl")
+    camera = scene.CASCADES_VIEW, scene.CASCADES_PROJECTION
+    picture = program.render(gl, *camera, size=CASCADE_PIXELS)
     check_cascades(picture.lit, picture.cascades.splits)
 
 
 def test_the_wgpu_cascades_program_draws_the_true_soft_shadow(wgpu_device):
-    program = example("pcss_cascades_wgpu")
-    picture = program.render(wgpu_device, program.VIEW, program.PROJECTION, size=CASCADE_PIXELS)
+    scene, program = example("pcss_scene"), example("pcss_cascades_wgpu")
+    camera = scene.CASCADES_VIEW, scene.CASCADES_PROJECTION
+    picture = program.render(wgpu_device, *camera, size=CASCADE_PIXELS)
     check_cascades(np.flipud(picture.lit), picture.cascades.splits)
