@@ -91,14 +91,18 @@ def render(
     radius: float = 0.25,
     map_size: int = 512,
     size: int = 128,
+    reversed_z: bool = False,
     mistake: str | None = None,
 ) -> Picture:
-    """The scene seen through ``camera`` (world to clip), shadowed by PCSS; ``mistake``
-    ``"compare"`` or ``"cull"`` makes the docs' two mistakes (for their tests)."""
+    """The scene seen through ``camera`` (world to clip), shadowed by PCSS (``reversed_z``:
+    the map's depth 1 at the near plane); ``mistake`` ``"compare"`` or ``"cull"`` makes
+    the docs' two mistakes (for their tests)."""
     receivers = sm.Triangles(TRIANGLES.reshape(-1, 3, 3))
-    fit = sm.fit_shadow(light, CASTER, map_size, receivers=receivers)
+    fit = sm.fit_shadow(light, CASTER, map_size, receivers=receivers, reversed_z=reversed_z)
     border = sm.pcss_border_texels(sm.pcss_parameters(fit, light_radius=radius))
-    fit = sm.fit_shadow(light, CASTER, map_size, receivers=receivers, border_texels=border)
+    fit = sm.fit_shadow(
+        light, CASTER, map_size, receivers=receivers, border_texels=border, reversed_z=reversed_z
+    )
     pcss = sm.pcss_parameters(fit, light_radius=radius)
     world_to_texture = np.asarray(fit.world_to_texture)
     light_clip = np.asarray(fit.blocker_to_clip) @ np.linalg.inv(fit.blocker_to_world)
@@ -123,16 +127,20 @@ def render(
     map_prog["light_clip"].write(light_clip.T.astype("f4").tobytes())
     map_vao = ctx.vertex_array(map_prog, [(ctx.buffer(vertices), "3f", "position")])
     map_fbo.use()
-    map_fbo.clear(depth=1.0)
+    map_fbo.clear(depth=0.0 if reversed_z else 1.0)
+    ctx.depth_func = ">" if reversed_z else "<"
     ctx.enable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
     # Cull the faces that face the light: GL's front faces (counter-clockwise on the
-    # map) where light_clip reverses orientation (det < 0, as every projection that
-    # looks down -z does), its back faces where it keeps it.
-    ctx.cull_face = "front" if np.linalg.det(light_clip) < 0 else "back"
+    # map) where det(light_clip) < 0 (as every projection that looks down -z does),
+    # its back faces where det > 0. Reversed Z negates the depth row, and with it the
+    # determinant but not the winding: there the other way round.
+    sgn = -1.0 if reversed_z else 1.0
+    ctx.cull_face = "front" if sgn * np.linalg.det(light_clip) < 0 else "back"
     if mistake == "cull":
         ctx.cull_face = "back" if ctx.cull_face == "front" else "front"
     map_vao.render()
     ctx.disable(moderngl.CULL_FACE)
+    ctx.depth_func = "<"
 
     # Pass 2, the lookup: every surface from the camera.
     prog = ctx.program(vertex_shader=LOOKUP_VERTEX, fragment_shader=LOOKUP_FRAGMENT)

@@ -178,14 +178,15 @@ def render(
     radius: float = 0.25,
     map_size: int = 512,
     size: int = 128,
+    reversed_z: bool = False,
 ) -> Picture:
-    """The scene seen through ``camera`` (world to OpenGL clip), shadowed by PCSS."""
+    """The scene seen through ``camera`` (world to OpenGL clip), shadowed by PCSS
+    (``reversed_z``: the map's depth 1 at the near plane)."""
     receivers = sm.Triangles(TRIANGLES.reshape(-1, 3, 3))
-    fit = sm.fit_shadow(light, CASTER, map_size, receivers=receivers, api="webgpu")
+    options = {"receivers": receivers, "api": "webgpu", "reversed_z": reversed_z}
+    fit = sm.fit_shadow(light, CASTER, map_size, **options)
     border = sm.pcss_border_texels(sm.pcss_parameters(fit, light_radius=radius))
-    fit = sm.fit_shadow(
-        light, CASTER, map_size, receivers=receivers, border_texels=border, api="webgpu"
-    )
+    fit = sm.fit_shadow(light, CASTER, map_size, border_texels=border, **options)
     pcss = sm.pcss_parameters(fit, light_radius=radius)
     world_to_texture = np.asarray(fit.world_to_texture)
     light_clip = np.asarray(fit.blocker_to_clip) @ np.linalg.inv(fit.blocker_to_world)
@@ -203,14 +204,17 @@ def render(
     count = len(TRIANGLES)
 
     # Pass 1, the map: depth only, the faces turned from the light. Cull the faces that
-    # face the light: the front faces (counter-clockwise) where light_clip reverses
-    # orientation (det < 0, as every projection that looks down -z does), else the back.
+    # face the light: the front faces (counter-clockwise) where det(light_clip) < 0 (as
+    # every projection that looks down -z does), the back faces where det > 0. Reversed Z
+    # negates the depth row, and with it the determinant but not the winding: there the
+    # other way round.
     shadow_map = device.create_texture(
         size=(map_size, map_size, 1),
         format="depth32float",
         usage=wgpu.TextureUsage.RENDER_ATTACHMENT | wgpu.TextureUsage.TEXTURE_BINDING,
     )
-    cull = "front" if np.linalg.det(light_clip) < 0 else "back"
+    sgn = -1.0 if reversed_z else 1.0
+    cull = "front" if sgn * np.linalg.det(light_clip) < 0 else "back"
     map_pipeline = device.create_render_pipeline(
         layout="auto",
         vertex={
@@ -219,7 +223,7 @@ def render(
             "buffers": [POSITIONS],
         },
         primitive={"topology": "triangle-list", "front_face": "ccw", "cull_mode": cull},
-        depth_stencil=DEPTH_TEST,
+        depth_stencil={**DEPTH_TEST, "depth_compare": "greater" if reversed_z else "less"},
     )
     map_uniforms = device.create_buffer_with_data(
         data=column_major(light_clip), usage=wgpu.BufferUsage.UNIFORM
@@ -233,7 +237,7 @@ def render(
         color_attachments=[],
         depth_stencil_attachment={
             "view": shadow_map.create_view(),
-            "depth_clear_value": 1.0,
+            "depth_clear_value": 0.0 if reversed_z else 1.0,
             "depth_load_op": "clear",
             "depth_store_op": "store",
         },

@@ -3,12 +3,13 @@ held to the true soft shadow (ray cast, tests/render/pcss_scenes.py's disk), wit
 bounds tests/render/test_render_pcss.py argues for casters with depth.
 
 A unit box on the floor under a point light of radius 0.25 (the 2D map, moderngl and
-WebGPU), and under a sun of angular radius 3 degrees through PCSS cascades. Per floor
-pixel: the hard-shadow core (no sample of the light's disk reaches it) is dark, the
-fully lit floor away from a band along the penumbra is lit, and over the shadow's region
-the errors and the penumbra's width are those of the reference renderer's PCSS.
-The docs' two mistakes are real: a depth texture that compares, or the map's faces culled
-the other way, gives a wrong picture.
+WebGPU, standard and reversed Z: the culling rule turns with the depth's direction), and
+under a sun of angular radius 3 degrees through PCSS cascades. Per floor pixel: the
+hard-shadow core (no sample of the light's disk reaches it) is dark, the fully lit floor
+away from a band along the penumbra is lit, and over the shadow's region the errors and
+the penumbra's width are those of the reference renderer's PCSS. The docs' two mistakes
+are real: a depth texture that compares, or the map's faces culled the other way, gives
+a wrong picture.
 """
 
 from __future__ import annotations
@@ -144,15 +145,19 @@ def check_box_top_is_lit(lit: np.ndarray, floor: Floor) -> None:
     assert top.sum() > 500 and lit[top].min() == 1.0, (top.sum(), lit[top].min())
 
 
-def test_the_moderngl_program_draws_the_true_soft_shadow(gl):
-    picture = example("pcss_moderngl").render(gl, TOP.world_to_clip(), size=TOP.pixels)
+@pytest.mark.parametrize("reversed_z", [False, True])
+def test_the_moderngl_program_draws_the_true_soft_shadow(gl, reversed_z):
+    program = example("pcss_moderngl")
+    picture = program.render(gl, TOP.world_to_clip(), size=TOP.pixels, reversed_z=reversed_z)
     floor, true = top_view_truth(map_axis(picture.fit))
     check_against_truth(picture.lit, floor, true)
     check_box_top_is_lit(picture.lit, floor)
 
 
-def test_the_wgpu_program_draws_the_true_soft_shadow(wgpu_device):
-    picture = example("pcss_wgpu").render(wgpu_device, TOP.world_to_clip(), size=TOP.pixels)
+@pytest.mark.parametrize("reversed_z", [False, True])
+def test_the_wgpu_program_draws_the_true_soft_shadow(wgpu_device, reversed_z):
+    program, camera = example("pcss_wgpu"), TOP.world_to_clip()
+    picture = program.render(wgpu_device, camera, size=TOP.pixels, reversed_z=reversed_z)
     lit = np.flipud(picture.lit)  # WebGPU's row 0 is the top: as OpenGL's, row 0 the bottom
     floor, true = top_view_truth(map_axis(picture.fit))
     check_against_truth(lit, floor, true)
