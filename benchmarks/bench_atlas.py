@@ -36,9 +36,9 @@ from speed._timing import Config, Row, Section, measure, numpy_alone, run_alone
 import shadowmath as sm
 
 # Until shadowmath exports them (sm.allocate_atlas, ...), from their module.
-from shadowmath._fits._atlas_allocate import ShadowAtlas, allocate_atlas
-from shadowmath._fits._atlas_fit import fit_atlas
-from shadowmath._fits._atlas_viewports import atlas_tile_transforms
+from shadowmath._fits.atlas._allocate import ShadowAtlas, allocate_atlas
+from shadowmath._fits.atlas._fit import fit_atlas
+from shadowmath._fits.atlas._viewports import atlas_tile_transforms
 
 NAME = "atlas"
 TITLE = "Shadow atlas: 64 lights allocated and fitted per frame, atlas use, tiles moved"

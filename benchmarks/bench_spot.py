@@ -63,7 +63,7 @@ def figures(spot: sm.SpotLight, triangles: np.ndarray) -> dict[str, float]:
     """Triangles kept and straddling, and the points the fit reads after the selection."""
     from shadowmath._boundary._validate import convert
     from shadowmath._fits._light_kinds import spot_rows
-    from shadowmath._fits._spot_select import _frame, spot_selection
+    from shadowmath._fits.shadow._spot_select import _frame, spot_selection
     from shadowmath._math import _spot_casters as sc
 
     ctx, (position, direction, angle) = convert(p=spot[0], d=spot[1], a=spot[2])
@@ -84,7 +84,7 @@ def _former_selection(spot: sm.SpotLight, triangles: np.ndarray) -> Any:
     """The selection before the loop: every triangle's 19 candidates (``clip_triangles``)."""
     from shadowmath._boundary._validate import convert
     from shadowmath._fits._light_kinds import spot_rows
-    from shadowmath._fits._spot_select import _frame
+    from shadowmath._fits.shadow._spot_select import _frame
     from shadowmath._math import _spot_casters as sc
 
     ctx, (position, direction, angle) = convert(p=spot[0], d=spot[1], a=spot[2])

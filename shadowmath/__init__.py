@@ -43,72 +43,72 @@ CONVENTIONS
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on first use
-    from ._api._adaptive_frustum import adaptive_frustum as adaptive_frustum
-    from ._api._adaptive_frustum import blocker_projection as blocker_projection
-    from ._api._adaptive_frustum import border_margin as border_margin
-    from ._api._adaptive_frustum import receiver_projection as receiver_projection
-    from ._api._api_convention import api_convention as api_convention
-    from ._api._area_light import area_light_samples as area_light_samples
-    from ._api._area_light import area_light_samples_jax as area_light_samples_jax
-    from ._api._area_light import pyramid_to_unit_cube as pyramid_to_unit_cube
-    from ._api._checks import check_finite as check_finite
-    from ._api._checks import check_projection as check_projection
-    from ._api._column_major import column_major_bytes as column_major_bytes
-    from ._api._cube_faces import cube_face as cube_face
-    from ._api._cube_faces import cube_face_depth as cube_face_depth
-    from ._api._cube_faces import cube_face_direction as cube_face_direction
-    from ._api._cube_faces import cube_face_projection as cube_face_projection
-    from ._api._cube_faces import cube_face_views as cube_face_views
-    from ._api._depth_bias import normal_offset as normal_offset
-    from ._api._depth_bias import slope_scaled_bias as slope_scaled_bias
-    from ._api._depth_bias import texel_world_size as texel_world_size
-    from ._api._light_frame import helper_axis as helper_axis
-    from ._api._light_frame import light_frame as light_frame
-    from ._api._light_frame import light_frame_from_direction as light_frame_from_direction
-    from ._api._light_frame import light_to_world as light_to_world
-    from ._api._light_frame import mean_direction_vector as mean_direction_vector
-    from ._api._light_frame import world_to_light as world_to_light
-    from ._api._pcf_lookup import pcf as pcf
-    from ._api._pcf_lookup import pcf_border_texels as pcf_border_texels
-    from ._api._planar_projection import planar_projection as planar_projection
-    from ._api._shadow_measures import cross_section_area as cross_section_area
-    from ._api._shadow_measures import receiver_texel_size as receiver_texel_size
-    from ._api._shadow_measures import silhouette_coverage as silhouette_coverage
-    from ._api._smooth_frustum import offcenter_frustum as offcenter_frustum
-    from ._api._smooth_frustum import rolled_light_frame as rolled_light_frame
-    from ._api._smooth_frustum import smooth_frustum as smooth_frustum
-    from ._api._smooth_frustum import smooth_max as smooth_max
     from ._boundary._messages import ShadowFitWarning as ShadowFitWarning
-    from ._fits._atlas_allocate import ShadowAtlas as ShadowAtlas
-    from ._fits._atlas_allocate import allocate_atlas as allocate_atlas
-    from ._fits._atlas_fit import AtlasFit as AtlasFit
-    from ._fits._atlas_fit import fit_atlas as fit_atlas
-    from ._fits._atlas_redraw import atlas_redraw as atlas_redraw
-    from ._fits._atlas_viewports import atlas_tile_transforms as atlas_tile_transforms
-    from ._fits._atlas_viewports import atlas_viewports as atlas_viewports
-    from ._fits._cascade_splits import cascade_splits as cascade_splits
-    from ._fits._cascades import Cascades as Cascades
-    from ._fits._cascades import CascadeState as CascadeState
-    from ._fits._cascades import fit_cascades as fit_cascades
-    from ._fits._cube_depth import CubeDepthRange as CubeDepthRange
-    from ._fits._cube_depth import cube_depth_range as cube_depth_range
-    from ._fits._fitting import FrustumFit as FrustumFit
-    from ._fits._fitting import optimize_frustum as optimize_frustum
-    from ._fits._pcss import PcssParameters as PcssParameters
-    from ._fits._pcss import PcssWidths as PcssWidths
-    from ._fits._pcss import pcss_parameters as pcss_parameters
-    from ._fits._pcss import pcss_widths as pcss_widths
-    from ._fits._pcss_room import pcss_border_texels as pcss_border_texels
-    from ._fits._pcss_room import widen_cascades as widen_cascades
-    from ._fits._prepared import PreparedFit as PreparedFit
-    from ._fits._prepared import ShadowFitter as ShadowFitter
-    from ._fits._setup import fit_shadow as fit_shadow
-    from ._fits._setup import receiver_texture_matrix as receiver_texture_matrix
-    from ._fits._shadow_camera import ShadowCamera as ShadowCamera
-    from ._fits._shadow_camera import camera_to_world as camera_to_world
-    from ._fits._shadow_camera import shadow_camera as shadow_camera
-    from ._fits._shadow_setup import ShadowSetup as ShadowSetup
     from ._fits._spec import ShadowMapSpec as ShadowMapSpec
+    from ._fits.atlas._allocate import ShadowAtlas as ShadowAtlas
+    from ._fits.atlas._allocate import allocate_atlas as allocate_atlas
+    from ._fits.atlas._fit import AtlasFit as AtlasFit
+    from ._fits.atlas._fit import fit_atlas as fit_atlas
+    from ._fits.atlas._redraw import atlas_redraw as atlas_redraw
+    from ._fits.atlas._viewports import atlas_tile_transforms as atlas_tile_transforms
+    from ._fits.atlas._viewports import atlas_viewports as atlas_viewports
+    from ._fits.camera._shadow_camera import ShadowCamera as ShadowCamera
+    from ._fits.camera._shadow_camera import camera_to_world as camera_to_world
+    from ._fits.camera._shadow_camera import shadow_camera as shadow_camera
+    from ._fits.cascades._fit import Cascades as Cascades
+    from ._fits.cascades._fit import CascadeState as CascadeState
+    from ._fits.cascades._fit import fit_cascades as fit_cascades
+    from ._fits.cascades._splits import cascade_splits as cascade_splits
+    from ._fits.cube._depth_range import CubeDepthRange as CubeDepthRange
+    from ._fits.cube._depth_range import cube_depth_range as cube_depth_range
+    from ._fits.pcss._parameters import PcssParameters as PcssParameters
+    from ._fits.pcss._parameters import PcssWidths as PcssWidths
+    from ._fits.pcss._parameters import pcss_parameters as pcss_parameters
+    from ._fits.pcss._parameters import pcss_widths as pcss_widths
+    from ._fits.pcss._room import pcss_border_texels as pcss_border_texels
+    from ._fits.pcss._room import widen_cascades as widen_cascades
+    from ._fits.shadow._driver import fit_shadow as fit_shadow
+    from ._fits.shadow._driver import receiver_texture_matrix as receiver_texture_matrix
+    from ._fits.shadow._optimize_frustum import FrustumFit as FrustumFit
+    from ._fits.shadow._optimize_frustum import optimize_frustum as optimize_frustum
+    from ._fits.shadow._prepared import PreparedFit as PreparedFit
+    from ._fits.shadow._prepared import ShadowFitter as ShadowFitter
+    from ._fits.shadow._result import ShadowSetup as ShadowSetup
+    from ._geometry._adaptive_frustum import adaptive_frustum as adaptive_frustum
+    from ._geometry._adaptive_frustum import blocker_projection as blocker_projection
+    from ._geometry._adaptive_frustum import border_margin as border_margin
+    from ._geometry._adaptive_frustum import receiver_projection as receiver_projection
+    from ._geometry._api_convention import api_convention as api_convention
+    from ._geometry._area_light import area_light_samples as area_light_samples
+    from ._geometry._area_light import area_light_samples_jax as area_light_samples_jax
+    from ._geometry._area_light import pyramid_to_unit_cube as pyramid_to_unit_cube
+    from ._geometry._checks import check_finite as check_finite
+    from ._geometry._checks import check_projection as check_projection
+    from ._geometry._column_major import column_major_bytes as column_major_bytes
+    from ._geometry._cube_faces import cube_face as cube_face
+    from ._geometry._cube_faces import cube_face_depth as cube_face_depth
+    from ._geometry._cube_faces import cube_face_direction as cube_face_direction
+    from ._geometry._cube_faces import cube_face_projection as cube_face_projection
+    from ._geometry._cube_faces import cube_face_views as cube_face_views
+    from ._geometry._depth_bias import normal_offset as normal_offset
+    from ._geometry._depth_bias import slope_scaled_bias as slope_scaled_bias
+    from ._geometry._depth_bias import texel_world_size as texel_world_size
+    from ._geometry._light_frame import helper_axis as helper_axis
+    from ._geometry._light_frame import light_frame as light_frame
+    from ._geometry._light_frame import light_frame_from_direction as light_frame_from_direction
+    from ._geometry._light_frame import light_to_world as light_to_world
+    from ._geometry._light_frame import mean_direction_vector as mean_direction_vector
+    from ._geometry._light_frame import world_to_light as world_to_light
+    from ._geometry._pcf_lookup import pcf as pcf
+    from ._geometry._pcf_lookup import pcf_border_texels as pcf_border_texels
+    from ._geometry._planar_projection import planar_projection as planar_projection
+    from ._geometry._shadow_measures import cross_section_area as cross_section_area
+    from ._geometry._shadow_measures import receiver_texel_size as receiver_texel_size
+    from ._geometry._shadow_measures import silhouette_coverage as silhouette_coverage
+    from ._geometry._smooth_frustum import offcenter_frustum as offcenter_frustum
+    from ._geometry._smooth_frustum import rolled_light_frame as rolled_light_frame
+    from ._geometry._smooth_frustum import smooth_frustum as smooth_frustum
+    from ._geometry._smooth_frustum import smooth_max as smooth_max
     from ._math._conventions import GRAPHICS_APIS as GRAPHICS_APIS
     from ._math._conventions import ApiConvention as ApiConvention
     from ._math._cube import CubeFaceCoords as CubeFaceCoords
@@ -137,36 +137,36 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
 # shadowmath`` costs a dictionary, not the package (tests/test_lazy_import.py checks that this
 # table and the imports above name the same things).
 _MODULES: dict[str, tuple[str, ...]] = {
-    "._api._adaptive_frustum": (
+    "._geometry._adaptive_frustum": (
         "adaptive_frustum",
         "blocker_projection",
         "border_margin",
         "receiver_projection",
     ),
-    "._api._api_convention": ("api_convention",),
-    "._api._area_light": (
+    "._geometry._api_convention": ("api_convention",),
+    "._geometry._area_light": (
         "area_light_samples",
         "area_light_samples_jax",
         "pyramid_to_unit_cube",
     ),
-    "._api._checks": (
+    "._geometry._checks": (
         "check_finite",
         "check_projection",
     ),
-    "._api._column_major": ("column_major_bytes",),
-    "._api._cube_faces": (
+    "._geometry._column_major": ("column_major_bytes",),
+    "._geometry._cube_faces": (
         "cube_face",
         "cube_face_depth",
         "cube_face_direction",
         "cube_face_projection",
         "cube_face_views",
     ),
-    "._api._depth_bias": (
+    "._geometry._depth_bias": (
         "normal_offset",
         "slope_scaled_bias",
         "texel_world_size",
     ),
-    "._api._light_frame": (
+    "._geometry._light_frame": (
         "helper_axis",
         "light_frame",
         "light_frame_from_direction",
@@ -174,65 +174,65 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "mean_direction_vector",
         "world_to_light",
     ),
-    "._api._pcf_lookup": (
+    "._geometry._pcf_lookup": (
         "pcf",
         "pcf_border_texels",
     ),
-    "._api._planar_projection": ("planar_projection",),
-    "._api._shadow_measures": (
+    "._geometry._planar_projection": ("planar_projection",),
+    "._geometry._shadow_measures": (
         "cross_section_area",
         "receiver_texel_size",
         "silhouette_coverage",
     ),
-    "._api._smooth_frustum": (
+    "._geometry._smooth_frustum": (
         "offcenter_frustum",
         "rolled_light_frame",
         "smooth_frustum",
         "smooth_max",
     ),
     "._boundary._messages": ("ShadowFitWarning",),
-    "._fits._atlas_allocate": ("ShadowAtlas", "allocate_atlas"),
-    "._fits._atlas_fit": ("AtlasFit", "fit_atlas"),
-    "._fits._atlas_redraw": ("atlas_redraw",),
-    "._fits._atlas_viewports": ("atlas_tile_transforms", "atlas_viewports"),
-    "._fits._cascade_splits": ("cascade_splits",),
-    "._fits._cascades": (
+    "._fits.atlas._allocate": ("ShadowAtlas", "allocate_atlas"),
+    "._fits.atlas._fit": ("AtlasFit", "fit_atlas"),
+    "._fits.atlas._redraw": ("atlas_redraw",),
+    "._fits.atlas._viewports": ("atlas_tile_transforms", "atlas_viewports"),
+    "._fits.cascades._splits": ("cascade_splits",),
+    "._fits.cascades._fit": (
         "CascadeState",
         "Cascades",
         "fit_cascades",
     ),
-    "._fits._cube_depth": (
+    "._fits.cube._depth_range": (
         "CubeDepthRange",
         "cube_depth_range",
     ),
-    "._fits._fitting": (
+    "._fits.shadow._optimize_frustum": (
         "FrustumFit",
         "optimize_frustum",
     ),
-    "._fits._pcss": (
+    "._fits.pcss._parameters": (
         "PcssParameters",
         "PcssWidths",
         "pcss_parameters",
         "pcss_widths",
     ),
-    "._fits._pcss_room": (
+    "._fits.pcss._room": (
         "pcss_border_texels",
         "widen_cascades",
     ),
-    "._fits._prepared": (
+    "._fits.shadow._prepared": (
         "PreparedFit",
         "ShadowFitter",
     ),
-    "._fits._setup": (
+    "._fits.shadow._driver": (
         "fit_shadow",
         "receiver_texture_matrix",
     ),
-    "._fits._shadow_camera": (
+    "._fits.camera._shadow_camera": (
         "ShadowCamera",
         "camera_to_world",
         "shadow_camera",
     ),
-    "._fits._shadow_setup": ("ShadowSetup",),
+    "._fits.shadow._result": ("ShadowSetup",),
     "._fits._spec": ("ShadowMapSpec",),
     "._math._conventions": (
         "GRAPHICS_APIS",

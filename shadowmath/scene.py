@@ -34,17 +34,17 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._api._cube_faces import cube_face_projection, cube_face_views
 from ._boundary._messages import not_affine
 from ._boundary._shapes import ArrayLike, Float, Int, Real
 from ._boundary._validate import Array, check_faces, is_jax
-from ._fits._atlas_allocate import ShadowAtlas
-from ._fits._atlas_fit import AtlasFit, fit_atlas
-from ._fits._cascades import Cascades, fit_cascades
-from ._fits._cube_depth import CubeDepthRange, cube_depth_range
-from ._fits._setup import fit_shadow
-from ._fits._shadow_setup import ShadowSetup
 from ._fits._spec import ShadowMapSpec
+from ._fits.atlas._allocate import ShadowAtlas
+from ._fits.atlas._fit import AtlasFit, fit_atlas
+from ._fits.cascades._fit import Cascades, fit_cascades
+from ._fits.cube._depth_range import CubeDepthRange, cube_depth_range
+from ._fits.shadow._driver import fit_shadow
+from ._fits.shadow._result import ShadowSetup
+from ._geometry._cube_faces import cube_face_projection, cube_face_views
 from ._math._specialize import formulas
 from ._scene import _cull
 from ._scene._summary import GeometrySummary, summarize

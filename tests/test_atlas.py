@@ -19,9 +19,9 @@ import pytest
 
 import shadowmath as sm
 from shadowmath._backends import _kernels
-from shadowmath._fits._atlas_allocate import ShadowAtlas, allocate_atlas
-from shadowmath._fits._atlas_fit import fit_atlas
-from shadowmath._fits._atlas_viewports import atlas_tile_transforms, atlas_viewports
+from shadowmath._fits.atlas._allocate import ShadowAtlas, allocate_atlas
+from shadowmath._fits.atlas._fit import fit_atlas
+from shadowmath._fits.atlas._viewports import atlas_tile_transforms, atlas_viewports
 
 APIS: tuple[Any, ...] = ("opengl", "vulkan", "direct3d", "metal", "webgpu")
 

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 import shadowmath as sm
 from shadowmath._boundary._validate import convert
-from shadowmath._fits._spot_select import _frame
+from shadowmath._fits.shadow._spot_select import _frame
 from shadowmath._math import _spot_casters as sc
 from shadowmath.meshes import box
 

@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import shadowmath as sm
-from shadowmath._fits import _door
+from shadowmath._fits.shadow import _door
 
 FIELDS = ("world_to_light", "blocker_to_clip", "world_to_texture", "blocker_to_world")
 

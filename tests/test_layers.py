@@ -2,14 +2,15 @@
 
 Bottom to top: ``_boundary`` (argument checks) -> ``_math`` and ``_scene`` (trusted
 cores) ->
-``_backends`` (the compiled loops) -> ``_api`` (the public functions, each at its
-door, with the public modules ``lights``, ``receivers``, ``meshes``, ``gather`` and
-``groundtruth``) -> ``_fits`` (with the public ``scene``) -> ``shadowmath`` (the
+``_backends`` (the compiled loops) -> ``_geometry`` (the public functions of the geometry,
+each at its door, with the public modules ``lights``, ``receivers``, ``meshes``, ``gather``
+and ``groundtruth``) -> ``_fits`` (with the public ``scene``) -> ``shadowmath`` (the
 re-exports) -> ``render`` and ``integrations`` -> ``cli`` -> ``__main__``. A module
 imports its own layer or lower ones, never a higher one; the clients on top import
 public names only; the cores take types and constants from the boundary, never its
-checks. ``docs/architecture.md``
-draws the picture.
+checks. Inside ``_fits`` each fit is a package of the parts listed in :data:`FITS`, the
+shared modules beside them, and the packages have layers of their own
+(:data:`FIT_LAYERS`). ``docs/architecture.md`` draws the picture.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("_boundary",),
     ("_math", "_scene"),
     ("_backends",),
-    ("_api", "lights", "receivers", "meshes", "gather", "groundtruth"),
+    ("_geometry", "lights", "receivers", "meshes", "gather", "groundtruth"),
     ("_fits", "scene"),
     ("",),  # shadowmath/__init__.py
     ("render", "integrations"),
@@ -38,6 +39,53 @@ CLIENTS = ("render", "integrations", "cli", "__main__")
 #: field of a public type that a core defines (``Frustum``'s and ``OrthographicBox``'s).
 BOUNDARY_TYPES = {"Array", "Context", "ArrayLike", "Bool", "Float", "Int", "IntLike", "Integer"}
 BOUNDARY_TYPES |= {"MapSize", "Real", "warn_renamed"}
+
+#: Each fit's package under ``shadowmath/_fits/``: its modules and what each is.
+FITS: dict[str, dict[str, str]] = {
+    "shadow": {
+        "_door": "fit_shadow's door: the arguments converted and checked once",
+        "_driver": "fit_shadow: door -> the driver's form that suits the input -> result",
+        "_arrays": "the driver on whole arrays (NumPy, JAX)",
+        "_compiled": "the driver through the compiled loop (NumPy with Numba)",
+        "_result": "ShadowSetup, what the fit returns",
+        "_spot_select": "a spot light's casters, selected at the door",
+        "_prepared": "ShadowFitter: the door opened once, the driver every frame",
+        "_optimize_frustum": "optimize_frustum, and fit_shadow(method='optimized')",
+    },
+    "cascades": {
+        "_fit": "fit_cascades: its door, its two drivers and its result Cascades",
+        "_splits": "cascade_splits",
+        "_lispsm": "the LiSPSM warp (warp='lispsm')",
+        "_orientation": "the fitted orientation (orientation='fitted')",
+    },
+    "atlas": {
+        "_allocate": "allocate_atlas: the tiles' sizes and places (ShadowAtlas)",
+        "_fit": "fit_atlas: its door and its result AtlasFit",
+        "_lights": "the atlas's lights read into kinds and rows",
+        "_fit_2d": "the 2D lights' driver, one group at a time",
+        "_fit_cubes": "the cube lights' driver, six faces each",
+        "_report": "what is reported per light; the tiles gathered in order",
+        "_viewports": "atlas_viewports, atlas_tile_transforms",
+        "_redraw": "atlas_redraw",
+    },
+    "cube": {"_depth_range": "cube_depth_range: door, driver and result CubeDepthRange"},
+    "pcss": {
+        "_parameters": "pcss_parameters, pcss_widths: door, drivers and results",
+        "_maps": "each fit's maps as the PCSS formulas read them",
+        "_room": "pcss_border_texels, widen_cascades",
+    },
+    "camera": {"_shadow_camera": "shadow_camera of any fit, camera_to_world"},
+}
+#: The pieces the fits share, once, beside the packages (top-level modules of ``_fits``).
+FITS_SHARED = ("_spec", "_light_kinds")
+#: Inside ``_fits``, bottom to top: the shared modules, then the fits that build on others.
+FIT_LAYERS: tuple[tuple[str, ...], ...] = (
+    FITS_SHARED,
+    ("shadow",),
+    ("cascades", "cube"),
+    ("atlas",),
+    ("pcss", "camera"),
+)
 
 
 class Import(NamedTuple):
@@ -108,12 +156,46 @@ def test_every_module_has_a_layer_and_the_imports_are_read() -> None:
     for module in {i.importer for i in imports} | {i.module for i in imports}:
         layer(module)  # StopIteration: a new top-level part needs its place in LAYERS
     assert Import(
-        "shadowmath._api._planar_projection", "shadowmath._backends", ("_kernels",)
+        "shadowmath._geometry._planar_projection", "shadowmath._backends", ("_kernels",)
     ) in imports  # fmt: skip
 
 
 def test_no_layer_imports_a_higher_one() -> None:
     assert upward(package_imports()) == []
+
+
+def fit_layer(module: str) -> int:
+    """The layer inside ``_fits`` of ``shadowmath._fits.NAME...``."""
+    part = module.split(".")[2]
+    return next(i for i, parts in enumerate(FIT_LAYERS) if part in parts)
+
+
+def upward_in_fits(imports: list[Import]) -> list[Import]:
+    """Imports inside ``_fits`` of a package or module from a higher fit layer."""
+    inside = [
+        i for i in imports if all(m.startswith("shadowmath._fits.") for m in (i.importer, i.module))
+    ]
+    return [i for i in inside if fit_layer(i.module) > fit_layer(i.importer)]
+
+
+def test_each_fit_is_a_package_of_the_parts_listed() -> None:
+    fits = ROOT / "_fits"
+    packages = {p.name for p in fits.iterdir() if (p / "__init__.py").is_file()}
+    assert packages == set(FITS)
+    for name, parts in FITS.items():
+        modules = {p.stem for p in (fits / name).glob("*.py") if p.name != "__init__.py"}
+        assert modules == set(parts), name
+    shared = {p.stem for p in fits.glob("*.py") if p.name != "__init__.py"}
+    assert shared == set(FITS_SHARED)
+    assert {"_door", "_driver", "_result"} <= set(FITS["shadow"])
+
+
+def test_no_fit_imports_a_higher_one() -> None:
+    imports = package_imports()
+    for module in {i.importer for i in imports} | {i.module for i in imports}:
+        if module.startswith("shadowmath._fits."):
+            fit_layer(module)  # StopIteration: a new package or module needs its FIT_LAYERS place
+    assert upward_in_fits(imports) == []
 
 
 def test_render_cli_and_integrations_import_public_names_only() -> None:
@@ -127,7 +209,7 @@ def test_the_cores_take_types_and_constants_from_the_boundary_not_its_checks() -
 def test_the_rules_find_what_they_forbid() -> None:
     """Each rule flags a planted violation (and leaves its allowed neighbour alone)."""
     core_to_backend = Import("shadowmath._math._planar", "shadowmath._backends", ("_kernels",))
-    door_to_backend = Import("shadowmath._api._planar_projection", "shadowmath._backends", ())
+    door_to_backend = Import("shadowmath._geometry._planar_projection", "shadowmath._backends", ())
     boundary_to_core = Import("shadowmath._boundary._x", "shadowmath._math._frame", ("f",))
     assert upward([core_to_backend, door_to_backend, boundary_to_core]) == [
         core_to_backend,
@@ -144,3 +226,10 @@ def test_the_rules_find_what_they_forbid() -> None:
     types = Import("shadowmath._math._loops", "shadowmath._boundary._status", ("LIGHT", "Array"))
     module = Import("shadowmath._math._planar", "shadowmath._boundary", ("_status",))
     assert checks_in_cores([check, types, module]) == [check, module]
+    shadow_to_atlas = Import("shadowmath._fits.shadow._door", "shadowmath._fits.atlas._fit", ())
+    atlas_to_shadow = Import("shadowmath._fits.atlas._fit", "shadowmath._fits.shadow._door", ())
+    spec_to_cube = Import("shadowmath._fits._spec", "shadowmath._fits.cube", ("_depth_range",))
+    assert upward_in_fits([shadow_to_atlas, atlas_to_shadow, spec_to_cube]) == [
+        shadow_to_atlas,
+        spec_to_cube,
+    ]

@@ -19,7 +19,7 @@ from scipy.optimize import linprog
 from scipy.spatial import HalfspaceIntersection
 
 import shadowmath as sm
-from shadowmath._fits._lispsm import WARP_MIN_SIN
+from shadowmath._fits.cascades._lispsm import WARP_MIN_SIN
 
 from .cameras import look_at, perspective
 from .cameras import scene as _scene

@@ -1,5 +1,5 @@
 """The LiSPSM warp's strength: capped so that the warp never makes a map coarser, faded
-as the view turns toward the light (``shadowmath/_fits/_lispsm.py``, ``docs/lispsm.md``).
+as the view turns toward the light (``shadowmath/_fits/cascades/_lispsm.py``, ``docs/lispsm.md``).
 
 The resolution is measured as ``benchmarks/bench_cascades.py`` measures it (its scenes'
 camera, its analytic ray casting and its texel-area-per-pixel-footprint ratio), the
@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import shadowmath as sm
-from shadowmath._fits._lispsm import WARP_CHECK_DEPTH, WARP_MIN_STRENGTH, WARP_RAYS
+from shadowmath._fits.cascades._lispsm import WARP_CHECK_DEPTH, WARP_MIN_STRENGTH, WARP_RAYS
 
 from .test_lispsm import SIZE, axis_point, body, horizon, scene, texel_size, warped
 

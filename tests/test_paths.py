@@ -182,7 +182,7 @@ def test_concrete_jax_runs_one_cached_jit_and_raises_eagerly() -> None:
     np.testing.assert_allclose(
         setup.blocker_to_clip, on_numpy.blocker_to_clip, rtol=1e-12, atol=1e-12
     )
-    from shadowmath._fits._setup import _jitted_fit
+    from shadowmath._fits.shadow._driver import _jitted_fit
 
     before = _jitted_fit.cache_info().currsize
     sm.fit_shadow(light + 1.0, verts, 256)

@@ -28,9 +28,11 @@ def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> Non
     """Every test on each of the door's paths: a few NumPy maps compiled by Numba (where it
     is installed) or on Python floats, and whole arrays (JAX, batches, atlases)."""
     if request.param == "floats":
-        monkeypatch.setattr("shadowmath._fits._pcss._kernels", SimpleNamespace(available=bool))
+        monkeypatch.setattr(
+            "shadowmath._fits.pcss._parameters._kernels", SimpleNamespace(available=bool)
+        )
     if request.param == "arrays":
-        monkeypatch.setattr("shadowmath._fits._pcss._SCALAR_MAPS", 0)
+        monkeypatch.setattr("shadowmath._fits.pcss._parameters._SCALAR_MAPS", 0)
 
 
 def caster_box(rng: np.random.Generator) -> np.ndarray:

@@ -268,7 +268,7 @@ def test_the_array_paths_receiver_blocks_change_nothing(
     # Without Numba the receivers' pass runs in blocks of receivers (NumPy temporaries of
     # at most _fit_arrays._BLOCK numbers): with blocks of one to three receivers per entry
     # the batch fits as the compiled loop does, entry by entry, points and triangles alike.
-    from shadowmath._fits import _fit_arrays
+    from shadowmath._fits.shadow import _arrays as _fit_arrays
 
     scenes = [_scene(seed, directional) for seed in range(4)]
     light = type(scenes[0][0])(np.stack([s[0][0] for s in scenes]))

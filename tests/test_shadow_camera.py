@@ -15,7 +15,7 @@ import pytest
 from pyglm import glm
 
 import shadowmath as sm
-from shadowmath._fits._shadow_camera import ShadowCamera, camera_to_world, shadow_camera
+from shadowmath._fits.camera._shadow_camera import ShadowCamera, camera_to_world, shadow_camera
 
 from .cameras import frustum, ortho, scene
 

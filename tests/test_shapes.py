@@ -21,9 +21,9 @@ import pytest
 from jaxtyping import TypeCheckError
 
 import shadowmath as sm
-from shadowmath._api import _light_frame
 from shadowmath._boundary._shapes import Array, ArrayLike, Float, MapSize, Real, shapes_checked
-from shadowmath._fits import _setup
+from shadowmath._fits.shadow import _driver as _setup
+from shadowmath._geometry import _light_frame
 from shadowmath._math import _cube, _pcf
 
 BOX = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], np.float64)
@@ -111,7 +111,7 @@ def test_every_public_annotation_evaluates(name):
 def test_no_checker_and_no_jaxtyping_outside_the_test_suite():
     code = (
         "import json, sys, numpy as np, shadowmath as sm, shadowmath.meshes as meshes\n"
-        "from shadowmath._fits._setup import fit_shadow\n"
+        "from shadowmath._fits.shadow._driver import fit_shadow\n"
         "sm.fit_shadow([0.0, 0, 0], [[-1, -1, 4], [1, 1, 4], [1, -1, 5]], 64)\n"
         "meshes.torus()\n"
         "print(json.dumps([sm.fit_shadow is fit_shadow,\n"
@@ -130,7 +130,7 @@ def test_no_checker_and_no_jaxtyping_outside_the_test_suite():
     assert json.loads(out.strip().splitlines()[-1]) == [True, False, []]
 
 
-# The functions of shadowmath._api: checked as the fits are. Each test replaces a core with
+# The functions of shadowmath._geometry: checked as the fits are. Each test replaces a core with
 # one that returns a wrong shape or dtype; with the checking off, the call would return it.
 
 

@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 import shadowmath as sm
 from shadowmath._backends import _kernels
 from shadowmath._boundary._validate import convert
-from shadowmath._fits._spot_select import _frame, clipped
+from shadowmath._fits.shadow._spot_select import _frame, clipped
 from shadowmath._math import _spot_casters as sc
 from shadowmath._math._specialize import scalar_formulas
 

@@ -124,7 +124,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     ),
     Mutation(
         "frustum-near-slack",
-        "shadowmath/_api/_adaptive_frustum.py",
+        "shadowmath/_geometry/_adaptive_frustum.py",
         "near = z_min * (1 - NEAR_FAR_SLACK) if given_near is None else given_near",
         "near = z_min * (1 + NEAR_FAR_SLACK) if given_near is None else given_near",
         "adaptive_frustum's default near plane behind the nearest vertex (slack added)",
@@ -218,14 +218,14 @@ MUTATIONS: tuple[Mutation, ...] = (
 CASCADES = ("tests/test_cascades.py",)
 SURVIVORS = ("tests/test_mutation_survivors.py",)
 CASCADE_F = "shadowmath/_math/_cascade_formulas.py"
-SPLITS_F = "shadowmath/_fits/_cascade_splits.py"
-LISPSM_F = "shadowmath/_fits/_lispsm.py"
+SPLITS_F = "shadowmath/_fits/cascades/_splits.py"
+LISPSM_F = "shadowmath/_fits/cascades/_lispsm.py"
 TILES_F = "shadowmath/_math/_atlas_tiles.py"
-ATLAS_F = "shadowmath/_fits/_atlas_allocate.py"
+ATLAS_F = "shadowmath/_fits/atlas/_allocate.py"
 ATLAS = ("tests/test_atlas.py",)
-CAMERA_F = "shadowmath/_fits/_shadow_camera.py"
+CAMERA_F = "shadowmath/_fits/camera/_shadow_camera.py"
 CAMERA = ("tests/test_shadow_camera.py",)
-CUBE_DEPTH_F = "shadowmath/_fits/_cube_depth.py"
+CUBE_DEPTH_F = "shadowmath/_fits/cube/_depth_range.py"
 CUBE_DEPTH = ("tests/test_cube_depth.py",)
 CUBE_F = "shadowmath/_math/_cube.py"
 CUBE = ("tests/test_cube.py",)
@@ -586,7 +586,7 @@ MODULES: tuple[Mutation, ...] = (
     ),
     Mutation(
         "cube-face-scale",
-        "shadowmath/_api/_cube_faces.py",
+        "shadowmath/_geometry/_cube_faces.py",
         "return (size - 2 * border) / size",
         "return (size - border) / size",
         "face_scale: (N - b) / N instead of (N - 2 b) / N (one side's ring only)",
@@ -643,7 +643,7 @@ MODULES: tuple[Mutation, ...] = (
     ),
     Mutation(
         "bias-depth-bits",
-        "shadowmath/_api/_depth_bias.py",
+        "shadowmath/_geometry/_depth_bias.py",
         "r_min = 1.0 / (2.0**depth_bits - 1)",
         "r_min = 1.0 / 2.0**depth_bits",
         "slope_scaled_bias: a fixed-point depth step 1 / 2^b instead of 1 / (2^b - 1)",

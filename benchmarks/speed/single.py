@@ -172,7 +172,7 @@ def pcss_rows(cfg: Config, setup: sm.ShadowSetup) -> list[Row]:
 def _full_door_row(cfg: Config, light: np.ndarray, verts: np.ndarray, base: Timing) -> Row:
     """A call whose arguments are of a kind not seen before: the whole door (conversion,
     kinds, shapes, static key) runs, as on the first call of each kind."""
-    from shadowmath._fits import _door
+    from shadowmath._fits.shadow import _door
 
     def fresh() -> object:
         _door._DOORS.clear()

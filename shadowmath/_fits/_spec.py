@@ -16,10 +16,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from shadowmath._api._adaptive_frustum import derived_margins, texel_counts
-from shadowmath._api._api_convention import check_api
-from shadowmath._api._depth_bias import check_kernel
 from shadowmath._boundary._messages import ShadowFitWarning
+from shadowmath._geometry._adaptive_frustum import derived_margins, texel_counts
+from shadowmath._geometry._api_convention import check_api
+from shadowmath._geometry._depth_bias import check_kernel
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi, clip_from_gl, texture_from_gl_clip
 from shadowmath._math._fit_entry import FitOptions

@@ -16,7 +16,7 @@ entries of row ``u``), and the **ray** through ``p`` is the direction along whic
 ``s`` and ``t`` do not change: ``D = grad s x grad t``.
 
 Trusted cores only: the public functions, which check their arguments and
-call these, are in :mod:`shadowmath._api._depth_bias`.
+call these, are in :mod:`shadowmath._geometry._depth_bias`.
 """
 
 from __future__ import annotations

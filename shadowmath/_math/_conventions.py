@@ -42,7 +42,7 @@ range is the default ``[0, 1]``, so the stored depth is ``(z + 1) / 2`` for Open
 ``z`` for the others (the reversal lives in ``C``, so ``T`` does not depend on it).
 
 Trusted cores only: the public functions, which check their arguments and
-call these, are in :mod:`shadowmath._api._api_convention`.
+call these, are in :mod:`shadowmath._geometry._api_convention`.
 """
 
 from __future__ import annotations

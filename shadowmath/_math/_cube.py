@@ -28,7 +28,7 @@ and :func:`cube_face_projection` holds at texel ``(s, t)`` what the direction
 engines' conventions are on ``docs/cube-maps.md``.
 
 Trusted cores only: the public functions, which check their arguments and
-call these, are in :mod:`shadowmath._api._cube_faces`.
+call these, are in :mod:`shadowmath._geometry._cube_faces`.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ is written here once, and every backend runs this code:
 * **per entry** (Numba, or Python floats for one small fit): :func:`._loops.fit_loop`
   calls :func:`fit_entry` for each batch entry with Python/Numba floats;
 * **on whole arrays** (NumPy, JAX under ``jit``, ``vmap``, ``grad``):
-  :func:`shadowmath._fits._fit_arrays.fit_arrays` calls it once, and each per-entry
+  :func:`shadowmath._fits.shadow._arrays.fit_arrays` calls it once, and each per-entry
   value is an array of the batch shape.
 
 So the code uses no data-dependent Python branch: a choice between values is the
@@ -16,7 +16,7 @@ So the code uses no data-dependent Python branch: a choice between values is the
 plain branches. The O(N) work over the vertices is the only thing with one form per
 backend: the passes ``spread``, ``light_pass``, ``receiver_far`` and ``enclosing_ball``
 (loops over the vertices in :mod:`._loops`, reductions over the last axis in
-:mod:`shadowmath._fits._fit_arrays`), both calling the same per-vertex formulas. The
+:mod:`shadowmath._fits.shadow._arrays`), both calling the same per-vertex formulas. The
 vertex source ``vs`` and the receivers ``R`` are whatever the backend's passes read.
 """
 

@@ -7,7 +7,7 @@ it is an OpenGL right-handed look-at camera at the light with its ``z`` axis
 flipped (the camera looks down its ``-z``, which is our ``+Z``).
 
 Trusted cores only: the public functions, which check their arguments and
-call these, are in :mod:`shadowmath._api._light_frame`.
+call these, are in :mod:`shadowmath._geometry._light_frame`.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ border of untouched texels. A directional light's map is an orthographic box
 instead (:class:`OrthographicBox`): two types, so that no field changes meaning.
 
 Trusted cores only: the public functions, which check their arguments and
-call these, are in :mod:`shadowmath._api._adaptive_frustum`.
+call these, are in :mod:`shadowmath._geometry._adaptive_frustum`.
 """
 
 from __future__ import annotations

@@ -89,7 +89,7 @@ def fit_loop(operands: Any, opts: Any, out: Any) -> None:
     ``operands = (light, verts, placement, recv, ups, near, far)``, each
     ``(count or 1, ...)`` and read at ``i % len`` (``verts``: flat rows of ``3 N``
     numbers; ``near``, ``far``: ``(count or 1,)``, ignored unless given); ``opts``: the
-    options record (one row of :data:`shadowmath._fits._compiled.OPTIONS`: the fields of
+    options record (one row of :data:`shadowmath._fits.shadow._compiled.OPTIONS`: the fields of
     :class:`._fit_entry.FitOptions`, then the API's rows ``C`` and ``T C``);
     ``out = (rows, mats, status)``: the output blocks.
     """

@@ -20,7 +20,7 @@ anything). Texel ``(row i, column j)`` of a ``W x H`` map has its centre at
   texel centres); the weights sum to ``1`` and vary continuously with ``(s, t)``.
 
 Trusted cores only: the public functions, which check their arguments and
-call these, are in :mod:`shadowmath._api._pcf_lookup`.
+call these, are in :mod:`shadowmath._geometry._pcf_lookup`.
 """
 
 from __future__ import annotations

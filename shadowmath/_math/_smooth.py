@@ -13,7 +13,7 @@ components of ``Z`` tie. For optimisation this module offers
   about it, continuous in both (the reference ``up`` axis is fixed, not chosen).
 
 Trusted cores only: the public functions, which check their arguments and
-call these, are in :mod:`shadowmath._api._smooth_frustum`.
+call these, are in :mod:`shadowmath._geometry._smooth_frustum`.
 """
 
 from __future__ import annotations

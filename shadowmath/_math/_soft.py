@@ -9,7 +9,7 @@ receiver lands on the same texels. The derivation and the seed's errata are on
 ``docs/soft-shadows.md``.
 
 Trusted cores only: the public functions, which check their arguments and
-call these, are in :mod:`shadowmath._api._area_light`.
+call these, are in :mod:`shadowmath._geometry._area_light`.
 """
 
 from __future__ import annotations

@@ -33,7 +33,7 @@ import numpy as np
 import pytest
 
 import shadowmath as sm
-from shadowmath._fits import _door, _spot_select
+from shadowmath._fits.shadow import _door, _spot_select
 from shadowmath.meshes import box
 from shadowmath.render import Body as RenderBody
 

@@ -25,7 +25,8 @@ import numpy as np
 import pytest
 
 import shadowmath as sm
-from shadowmath._fits import _atlas_2d, _spot_select
+from shadowmath._fits.atlas import _fit_2d as _atlas_2d
+from shadowmath._fits.shadow import _spot_select
 from shadowmath.render import render_atlas
 
 from .depth_scenes import compare

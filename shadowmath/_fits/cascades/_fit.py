@@ -23,7 +23,6 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from shadowmath._api._api_convention import check_api as _check_api
 from shadowmath._backends import _kernels
 from shadowmath._boundary._projection import check_projection
 from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Int, Real
@@ -41,6 +40,8 @@ from shadowmath._boundary._validate import (
     require_last,
     require_matrix,
 )
+from shadowmath._fits._spec import ShadowMapSpec, api_rows, map_spec
+from shadowmath._geometry._api_convention import check_api as _check_api
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._cascade_steps import ROW, CascadeOptions, options_record
 from shadowmath._math._conventions import GraphicsApi
@@ -50,10 +51,9 @@ from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath._math._vector import matmul
 from shadowmath.lights import DirectionalLight
 
-from ._cascade_splits import CascadeScheme, check_count, scheme_lam
 from ._lispsm import check_warp, warp_cascades
 from ._orientation import check_orientation, fitted_cascade
-from ._spec import ShadowMapSpec, api_rows, map_spec
+from ._splits import CascadeScheme, check_count, scheme_lam
 
 __all__ = ["CascadeState", "Cascades", "fit_cascades"]
 

@@ -34,12 +34,12 @@ from shadowmath._boundary._validate import (
     require_vertices,
     shape_error,
 )
+from shadowmath._fits._light_kinds import homogeneous, spot_rows
+from shadowmath._fits._spec import FitKey, ShadowMapSpec, api_rows
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
 from shadowmath.receivers import Mesh, Triangles
 
-from ._fit_arrays import Inputs
-from ._light_kinds import homogeneous, spot_rows
-from ._spec import FitKey, ShadowMapSpec, api_rows
+from ._arrays import Inputs
 from ._spot_select import spot_selection
 
 __all__ = [

@@ -19,14 +19,14 @@ from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import Array, Context, flat_batch, raise_status
+from shadowmath._fits._spec import FitKey, fit_options
 from shadowmath._math._fit_entry import FitOptions
 from shadowmath._math._frame import LightFrame
 from shadowmath._math._frustum import volume
 from shadowmath._math._specialize import scalar_formulas
 
-from ._fit_arrays import Inputs
-from ._shadow_setup import ShadowSetup
-from ._spec import FitKey, fit_options
+from ._arrays import Inputs
+from ._result import ShadowSetup
 
 _FIELDS = tuple(typing.get_type_hints(FitOptions).items())
 

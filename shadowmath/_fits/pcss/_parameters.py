@@ -24,14 +24,14 @@ from shadowmath._boundary._validate import (
     is_tracer,
     non_finite,
 )
+from shadowmath._fits._spec import ShadowMapSpec
+from shadowmath._fits.atlas._fit import AtlasFit
+from shadowmath._fits.cascades._fit import Cascades
+from shadowmath._fits.cube._depth_range import CubeDepthRange
 from shadowmath._math._pcss import kernel_widths
 from shadowmath._math._specialize import formulas, scalar_formulas
 
-from ._atlas_fit import AtlasFit
-from ._cascades import Cascades
-from ._cube_depth import CubeDepthRange
-from ._pcss_maps import BAD_CUBE, Maps, PcssFit, fit_maps, switch
-from ._spec import ShadowMapSpec
+from ._maps import BAD_CUBE, Maps, PcssFit, fit_maps, switch
 
 __all__ = ["PcssParameters", "PcssWidths", "pcss_parameters", "pcss_widths"]
 

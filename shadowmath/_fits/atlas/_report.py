@@ -13,8 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shadowmath._boundary._validate import Array, Context
-
-from ._spec import api_rows
+from shadowmath._fits._spec import api_rows
 
 __all__ = ["AtlasInputs", "Report", "gather", "pick"]
 

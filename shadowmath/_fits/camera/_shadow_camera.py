@@ -35,12 +35,11 @@ from shadowmath._boundary._validate import (
     require_last,
     require_matrix,
 )
+from shadowmath._fits.cascades._fit import Cascades
+from shadowmath._fits.shadow._result import ShadowSetup
 from shadowmath._math._frame import LightFrame
 from shadowmath._math._frustum import Frustum, OrthographicBox
 from shadowmath._math._vector import cross
-
-from ._cascades import Cascades
-from ._shadow_setup import ShadowSetup
 
 __all__ = ["CameraLook", "ShadowCamera", "camera_to_world", "shadow_camera"]
 

@@ -46,9 +46,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._fits._spec import ShadowMapSpec, api_rows
 from shadowmath._math._frustum import NEAR_FAR_SLACK
-
-from ._spec import ShadowMapSpec, api_rows
 
 __all__ = ["WARP_MIN_SIN", "WARP_MIN_STRENGTH", "check_warp", "warp_cascades"]
 

@@ -23,10 +23,13 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._api._api_convention import check_api as _check_api
-from shadowmath._api._depth_bias import check_kernel as _check_kernel
 from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Int, Real
 from shadowmath._boundary._validate import RECEIVER_KINDS, Array, convert, non_finite, shape_error
+from shadowmath._fits._light_kinds import POINT
+from shadowmath._fits._spec import ShadowMapSpec, map_spec
+from shadowmath._fits.shadow._door import _receiver_kind, _receiver_rows, caster_triangles
+from shadowmath._geometry._api_convention import check_api as _check_api
+from shadowmath._geometry._depth_bias import check_kernel as _check_kernel
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._pcf import border_texels as _border_texels
@@ -34,15 +37,12 @@ from shadowmath._math._vector import matmul
 from shadowmath.lights import Light
 from shadowmath.receivers import Mesh, Triangles
 
-from ._atlas_2d import fit_2d
-from ._atlas_allocate import ShadowAtlas
-from ._atlas_cubes import fit_cubes
-from ._atlas_lights import read_lights
-from ._atlas_report import AtlasInputs, Report, gather
-from ._atlas_viewports import atlas_viewports, tile_transforms
-from ._door import _receiver_kind, _receiver_rows, caster_triangles
-from ._light_kinds import POINT
-from ._spec import ShadowMapSpec, map_spec
+from ._allocate import ShadowAtlas
+from ._fit_2d import fit_2d
+from ._fit_cubes import fit_cubes
+from ._lights import read_lights
+from ._report import AtlasInputs, Report, gather
+from ._viewports import atlas_viewports, tile_transforms
 
 __all__ = ["AtlasFit", "fit_atlas"]
 

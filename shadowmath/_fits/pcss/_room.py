@@ -12,14 +12,14 @@ import math
 
 import numpy as np
 
-from shadowmath._api._depth_bias import check_kernel
 from shadowmath._boundary._shapes import ArrayLike, Real
 from shadowmath._boundary._validate import Checks, convert
+from shadowmath._fits.cascades._fit import Cascades
+from shadowmath._geometry._depth_bias import check_kernel
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._pcf import border_texels
 
-from ._cascades import Cascades
-from ._pcss import BAD_ANGLE, PcssParameters
+from ._parameters import BAD_ANGLE, PcssParameters
 
 
 def pcss_border_texels(parameters: PcssParameters, *, pcf_filter: PcfFilter = "box") -> int:

@@ -1,5 +1,5 @@
 """The maps of each fit as :mod:`shadowmath._math._pcss` reads them (for
-:func:`~shadowmath._fits._pcss.pcss_parameters`): ``world_to_texture``, the texture's size
+:func:`~shadowmath.pcss_parameters`): ``world_to_texture``, the texture's size
 in texels, perspective or not, and the light's travel of an orthographic map."""
 
 from __future__ import annotations
@@ -8,18 +8,17 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from shadowmath._api._adaptive_frustum import texel_counts
-from shadowmath._api._cube_faces import face_scale
 from shadowmath._boundary._validate import Array, convert, is_tracer
+from shadowmath._fits._spec import ShadowMapSpec
+from shadowmath._fits.atlas._fit import AtlasFit
+from shadowmath._fits.cascades._fit import Cascades
+from shadowmath._fits.cube._depth_range import CubeDepthRange
+from shadowmath._fits.shadow._result import ShadowSetup
+from shadowmath._geometry._adaptive_frustum import texel_counts
+from shadowmath._geometry._cube_faces import face_scale
 from shadowmath._math import _cube
 from shadowmath._math._frustum import OrthographicBox
 from shadowmath._math._specialize import scalar_formulas
-
-from ._atlas_fit import AtlasFit
-from ._cascades import Cascades
-from ._cube_depth import CubeDepthRange
-from ._shadow_setup import ShadowSetup
-from ._spec import ShadowMapSpec
 
 PcssFit = ShadowSetup | Cascades | AtlasFit | CubeDepthRange
 

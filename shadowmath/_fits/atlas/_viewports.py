@@ -9,12 +9,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._api._api_convention import check_api as _check_api
 from shadowmath._boundary._shapes import Float, Int
+from shadowmath._geometry._api_convention import check_api as _check_api
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._rows import tile_rows
 
-from ._atlas_allocate import ShadowAtlas
+from ._allocate import ShadowAtlas
 
 __all__ = ["atlas_tile_transforms", "atlas_viewports", "tile_transforms"]
 

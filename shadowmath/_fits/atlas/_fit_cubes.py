@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shadowmath._boundary._validate import Array, Context, non_finite
+from shadowmath._fits.cube._depth_range import AT_LIGHT, cube_depth_core
 from shadowmath._math._conventions import texture_from_clip as _texture_from_clip
 from shadowmath._math._cube import APIS as _APIS
 from shadowmath._math._cube import cube_face_views as _cube_face_views
@@ -20,9 +21,8 @@ from shadowmath._math._cube import depth_row as _depth_row
 from shadowmath._math._frame import stack_matrix
 from shadowmath._math._vector import matmul
 
-from ._atlas_allocate import ShadowAtlas
-from ._atlas_report import AtlasInputs, Report, pick
-from ._cube_depth import AT_LIGHT, cube_depth_core
+from ._allocate import ShadowAtlas
+from ._report import AtlasInputs, Report, pick
 
 __all__ = ["fit_cubes"]
 

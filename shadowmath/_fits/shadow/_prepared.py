@@ -17,12 +17,12 @@ import numpy as np
 
 from shadowmath._backends import _kernels
 from shadowmath._boundary._validate import Array
+from shadowmath._fits._spec import ShadowMapSpec, map_spec
 
 from . import _compiled
 from ._compiled import Buffers
 from ._door import Door, Operands, PreparedDoor, _check_static, open_door, select_casters, signature
-from ._setup import _fit
-from ._spec import ShadowMapSpec, map_spec
+from ._driver import _fit
 
 __all__ = ["PreparedFit", "ShadowFitter"]
 

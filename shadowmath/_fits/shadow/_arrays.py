@@ -29,6 +29,7 @@ from shadowmath._boundary._status import (
     fit_messages,
 )
 from shadowmath._boundary._validate import Array, Checks, Context, all_finite, raise_status
+from shadowmath._fits._spec import FitKey, fit_options
 from shadowmath._math._fit_entry import Entry
 from shadowmath._math._specialize import (
     array_primitives,
@@ -37,8 +38,6 @@ from shadowmath._math._specialize import (
     scalar_primitives,
     specialize,
 )
-
-from ._spec import FitKey, fit_options
 
 Components = tuple[Array, Array, Array]
 

@@ -30,9 +30,6 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from shadowmath._api._adaptive_frustum import bounded_frustum, check_blocker, margins
-from shadowmath._api._light_frame import frame_along
-from shadowmath._api._smooth_frustum import rolled_frame
 from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
@@ -43,13 +40,16 @@ from shadowmath._boundary._validate import (
     non_finite,
     require_last,
 )
+from shadowmath._geometry._adaptive_frustum import bounded_frustum, check_blocker, margins
+from shadowmath._geometry._light_frame import frame_along
+from shadowmath._geometry._smooth_frustum import rolled_frame
 from shadowmath._math._frame import LightFrame, zero_direction_noise
 from shadowmath._math._frustum import Frustum, blocker_reach
 from shadowmath._math._passes import extent, spread
 from shadowmath._math._smooth import soft_bounds
 from shadowmath._math._specialize import formulas
 
-from ._shadow_setup import ShadowSetup, setup_from
+from ._result import ShadowSetup, setup_from
 
 
 class FrustumFit(NamedTuple):

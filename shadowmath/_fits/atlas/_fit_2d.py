@@ -13,19 +13,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath._api._adaptive_frustum import border_margin
 from shadowmath._backends import _kernels
 from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import Array, Checks, Context
+from shadowmath._fits._light_kinds import SPOT, SUN
+from shadowmath._fits._spec import FitKey
+from shadowmath._fits.shadow import _compiled
+from shadowmath._fits.shadow._arrays import Inputs, driver, fit_arrays
+from shadowmath._fits.shadow._spot_select import spot_selection
+from shadowmath._geometry._adaptive_frustum import border_margin
 from shadowmath._math._frame import stack_matrix
 
-from . import _compiled
-from ._atlas_allocate import ShadowAtlas
-from ._atlas_report import AtlasInputs, Report, pick
-from ._fit_arrays import Inputs, driver, fit_arrays
-from ._light_kinds import SPOT, SUN
-from ._spec import FitKey
-from ._spot_select import spot_selection
+from ._allocate import ShadowAtlas
+from ._report import AtlasInputs, Report, pick
 
 __all__ = ["fit_2d"]
 

@@ -20,7 +20,6 @@ from typing import Any, Literal
 
 import numpy as np
 
-from shadowmath._api._light_frame import check_aim
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Real
@@ -35,6 +34,8 @@ from shadowmath._boundary._validate import (
     recorded_jit,
     require_matrix,
 )
+from shadowmath._fits._spec import FitKey, ShadowMapSpec, map_spec
+from shadowmath._geometry._light_frame import check_aim
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._frame import LightFrame, stack_matrix
@@ -45,10 +46,9 @@ from shadowmath.lights import Light
 from shadowmath.receivers import Mesh, Triangles
 
 from . import _compiled
+from ._arrays import FitEntries, Inputs, driver, fit_arrays
 from ._door import Operands, _check_shapes, door_for, refine, select_casters, warn_precision
-from ._fit_arrays import FitEntries, Inputs, driver, fit_arrays
-from ._shadow_setup import ShadowSetup
-from ._spec import FitKey, ShadowMapSpec, map_spec
+from ._result import ShadowSetup
 
 __all__ = ["ShadowSetup", "fit_shadow", "receiver_texture_matrix"]
 
@@ -297,7 +297,7 @@ def _points(a: Inputs) -> int:
 
 
 def _optimized(ctx: Context, a: Inputs, m: tuple[float, float]) -> ShadowSetup:
-    from ._fitting import optimized_setup
+    from ._optimize_frustum import optimized_setup
 
     checks = Checks(ctx)
     xp = ctx.xp

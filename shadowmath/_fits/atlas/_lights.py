@@ -13,9 +13,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shadowmath._boundary._validate import require_last, shape_error
+from shadowmath._fits._light_kinds import KIND_OF, POINT, SPOT, SUN, homogeneous, spot_row
 from shadowmath.lights import DirectionalLight, PointLight, SpotLight
-
-from ._light_kinds import KIND_OF, POINT, SPOT, SUN, homogeneous, spot_row
 
 __all__ = ["read_lights"]
 

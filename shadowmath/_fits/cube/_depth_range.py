@@ -13,7 +13,6 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from shadowmath._api._cube_faces import face_scale
 from shadowmath._boundary._shapes import ArrayLike, Float, Real
 from shadowmath._boundary._validate import (
     Array,
@@ -26,10 +25,10 @@ from shadowmath._boundary._validate import (
     require_no_new_batch,
     require_vertices,
 )
+from shadowmath._fits.shadow._door import _receiver_kind, _receiver_rows, caster_triangles
+from shadowmath._geometry._cube_faces import face_scale
 from shadowmath._math._frustum import NEAR_FAR_SLACK
 from shadowmath.receivers import Mesh, Triangles
-
-from ._door import _receiver_kind, _receiver_rows, caster_triangles
 
 
 class CubeDepthRange(NamedTuple):

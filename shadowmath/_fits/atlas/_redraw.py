@@ -16,8 +16,8 @@ from numpy.typing import NDArray
 
 from shadowmath._boundary._shapes import ArrayLike, Bool, Integer
 
-from ._atlas_allocate import find_tiles
-from ._atlas_fit import AtlasFit
+from ._allocate import find_tiles
+from ._fit import AtlasFit
 
 __all__ = ["atlas_redraw"]
 
