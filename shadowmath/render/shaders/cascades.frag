@@ -33,7 +33,7 @@
 // Renderer-specific: this pass draws every body again over the lit pass's record
 // (`surface`: world position, w = body id + 1) and keeps the fragment that is visible;
 // mode 0 writes the shadow (1 shadowed, 0 lit), mode 1 the cascade's debug colour.
-const int MAX_CASCADES = 8;
+#include "constants.glsl"
 uniform sampler2DArray maps;  // R32F depths, 1.0 where nothing was drawn; layer i, or 0
 uniform int atlas;            // 1: every cascade is a tile of layer 0
 uniform int count;            // n, the number of cascades

@@ -31,7 +31,7 @@
 //
 // Renderer-specific: the outputs are the shadow (1 shadowed, 0 lit) and a record of the
 // visible surface (world position with body id + 1, face normal) for the tests.
-const MAX_CASCADES = 8;
+#include "constants.wgsl"
 
 struct Cascade {
     world_to_texture: mat4x4<f32>,
