@@ -127,6 +127,16 @@ def uniform(prog: moderngl.Program, name: str) -> moderngl.Uniform:
     return member
 
 
+def bind_block(prog: moderngl.Program, name: str, buffer: moderngl.Buffer) -> None:
+    """Bind ``buffer`` to the program's uniform block ``name`` (binding point 0; a
+    ``TypeError`` if ``name`` is something else)."""
+    block = prog[name]
+    if not isinstance(block, moderngl.UniformBlock):
+        raise TypeError(f"{name}: not a uniform block of the program")
+    block.binding = 0
+    buffer.bind_to_uniform_block(0)
+
+
 def set_uniform(prog: moderngl.Program, name: str, value: Any) -> None:
     uniform(prog, name).value = value
 
