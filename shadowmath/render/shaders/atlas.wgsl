@@ -58,6 +58,7 @@ struct Body {
 @group(0) @binding(4) var<uniform> body: Body;
 
 #include "surface.wgsl"
+#include "camera_vertex.wgsl"
 #include "pcss.wgsl"
 
 var<private> pcss_rect: vec4<i32>;  // the tile pcss_depth reads: (x, y, n, 0) texels
@@ -65,18 +66,6 @@ var<private> pcss_rect: vec4<i32>;  // the tile pcss_depth reads: (x, y, n, 0) t
 fn pcss_depth(uv: vec2<f32>) -> f32 {
     let texel = vec2<i32>(floor(uv * vec2<f32>(textureDimensions(atlas))));
     return textureLoad(atlas, clamp(texel, pcss_rect.xy, pcss_rect.xy + pcss_rect.zz - 1), 0);
-}
-
-struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) @interpolate(flat) face_normal: vec3<f32>,
-};
-
-@vertex
-fn vs_main(@location(0) position: vec3<f32>, @location(1) face_normal: vec3<f32>) -> VertexOut {
-    let v = place(position, face_normal);
-    return VertexOut(frame.world_to_clip * v.world, v.world.xyz / v.world.w, v.face_normal);
 }
 
 fn cube_face(d: vec3<f32>) -> i32 {
