@@ -23,7 +23,7 @@ from ._context import check_camera_projection, check_matrix
 from ._map_draws import DrawLists, MapDraw, map_draws
 from ._pass_depth import depth_bias_option, nonnegative_option, pcf_radius_option
 from ._pass_pcss import PCSS_POLYGON_OFFSET, light_size_option
-from ._resources import Body, Prepared, prepare_body
+from ._resources import Body, Prepared, prepare_bodies
 from ._scene_fit import SceneFit, body_scene, scene_fit_option
 
 #: The default normal-offset bias of :func:`render_atlas`, in texels of each light's map.
@@ -119,7 +119,7 @@ def describe_atlas(
     Raises:
         ValueError: as :func:`render_atlas`.
     """
-    prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
+    prepared = prepare_bodies("bodies", bodies)
     if not prepared:
         raise ValueError("bodies: expected at least one body")
     cast = _casters(casters, len(prepared))

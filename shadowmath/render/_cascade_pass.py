@@ -23,7 +23,7 @@ from ._context import check_camera_projection, check_matrix
 from ._map_draws import DrawLists, MapDraw, map_draws
 from ._pass_depth import depth_bias_option, nonnegative_option, pcf_radius_option
 from ._pass_pcss import light_size_option
-from ._resources import Body, Light, Prepared, PreparedLight, prepare_body, prepare_light
+from ._resources import Body, Light, Prepared, PreparedLight, prepare_bodies, prepare_light
 from ._scene_fit import SceneFit, body_scene, scene_fit_option
 from ._shader_constants import MAX_CASCADES
 
@@ -153,7 +153,7 @@ def describe_cascades(
     Raises:
         ValueError: as :func:`render_cascades`.
     """
-    prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
+    prepared = prepare_bodies("bodies", bodies)
     if not prepared:
         raise ValueError("bodies: expected at least one body")
     sun = prepare_light("light", light)
