@@ -46,7 +46,7 @@ def map_draws(
     Example:
         >>> one = map_draws(np.eye(4)[None], np.array([[0, 0, 8, 8]]), (np.array([0]),),
         ...                 [2 * np.eye(4)], layered=True)
-        >>> one[0].viewport, one[0].bodies, one[0].body_to_clip[0, 0, 0]
+        >>> one[0].viewport, one[0].bodies, float(one[0].body_to_clip[0, 0, 0])
         ((0, 0, 8, 8), (0,), 2.0)
     """
     clip = np.asarray(world_to_clip, dtype=np.float64)

@@ -55,14 +55,9 @@ class WgpuCascadeFrame(NamedTuple):
     """What :func:`render_cascades_wgpu` returns; images have row 0 at the *top*.
 
     Attributes:
-        shadow: ``(H, W)`` float32 shadow mask (1 shadowed, 0 lit; PCF and the blend
-            bands give fractions; 0 on the background).
-        cascade: ``(H, W)`` int32, the cascade serving each pixel's view depth (``-1``
-            on the background and beyond the last split).
-        position: ``(H, W, 3)`` float32 world position of the visible surface (NaN on
-            the background).
-        normal: ``(H, W, 3)`` float32 unit face normal (NaN on the background).
-        body: ``(H, W)`` int32, which body is visible (``-1`` the background).
+        shadow: ``(H, W)`` float32 shadow mask, as in :class:`CascadeFrame` (0 on the
+            background).
+        cascade, position, normal, body: as in :class:`CascadeFrame`.
         cascades: the :class:`shadowmath.Cascades` (``api="webgpu"``) drawn and sampled.
         shadow_maps: ``(layers, h, w)`` float32 depths, row 0 is WebGPU's ``t = 0``: one
             layer per cascade, or the whole atlas as one layer.
