@@ -11,7 +11,7 @@ upload and draw what it holds.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any, Literal, NamedTuple
 
 import numpy as np
@@ -67,6 +67,17 @@ FRAME_DTYPE = np.dtype(
         "itemsize": 128 + MAX_CASCADES * 112,
     }
 )  # fmt: skip
+
+
+#: The arguments of :func:`render_cascades` and :func:`render_cascades_wgpu` that go to the
+#: fit (:func:`shadowmath.fit_cascades`' keywords, ``scene_bounds`` and ``map_size``).
+FIT_KEYWORDS = ("scene_bounds", "map_size", "count", "splits", "scheme", "lam", "max_distance",
+                "overlap", "stable", "warp", "orientation")  # fmt: skip
+
+
+def fit_keywords(arguments: Mapping[str, Any]) -> dict[str, Any]:
+    """The :data:`FIT_KEYWORDS` of a render call's ``arguments`` (its ``locals()``)."""
+    return {name: arguments[name] for name in FIT_KEYWORDS}
 
 
 class CascadeOptions(NamedTuple):

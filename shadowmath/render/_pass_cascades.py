@@ -29,6 +29,7 @@ from ._cascade_pass import (
     cascade_index,
     cascade_options,
     describe_cascades,
+    fit_keywords,
 )
 from ._context import bind_block, program, resolve_context, set_matrix, set_uniform, uniform
 from ._context import image_size as _image_size
@@ -214,11 +215,7 @@ def render_cascades(
         normal_offset=normal_offset, ambient=ambient, background=background,
         cascade_colors=cascade_colors, light_size=light_size,
     )  # fmt: skip
-    fit_options = {
-        "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
-        "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
-        "stable": stable, "warp": warp, "orientation": orientation,
-    }  # fmt: skip
+    fit_options = fit_keywords(locals())
     scene = describe_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options,
         scene_fit=scene_fit,

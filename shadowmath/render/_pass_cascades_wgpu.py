@@ -31,6 +31,7 @@ from ._cascade_pass import (
     cascade_index,
     cascade_options,
     describe_cascades,
+    fit_keywords,
 )
 from ._context import image_size as _image_size
 from ._map_draws import DrawLists
@@ -151,11 +152,7 @@ def render_cascades_wgpu(
     """
     options = cascade_options(layout=layout, pcf_radius=pcf_radius, depth_bias=depth_bias,
                               normal_offset=normal_offset, light_size=light_size)  # fmt: skip
-    fit_options = {
-        "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
-        "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
-        "stable": stable, "warp": warp, "orientation": orientation,
-    }  # fmt: skip
+    fit_options = fit_keywords(locals())
     scene = describe_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options, api="webgpu",
         scene_fit=scene_fit,
