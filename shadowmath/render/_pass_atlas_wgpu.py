@@ -26,6 +26,7 @@ from ._atlas_pass import NORMAL_OFFSET, AtlasLight, AtlasPass, describe_atlas
 from ._context import image_size as _image_size
 from ._map_draws import DrawLists
 from ._pass_wgpu import (
+    CameraDraw,
     adapter_description,
     depth_pipeline,
     draw_camera,
@@ -184,7 +185,7 @@ def _storage(device: Any, data: bytes) -> Any:
 
 def _body_draws(
     device: Any, scene: AtlasPass, buffers: Sequence[tuple[Any, int]], texture: Any
-) -> list[tuple[list[Any], Any, int]]:
+) -> list[CameraDraw]:
     """Each body's bind group entries of atlas.wgsl but the frame's (bindings 1 to 4), its
     vertex buffer and count."""
     tiles, lights = (_storage(device, t.tobytes()) for t in (scene.tiles, scene.lights))
@@ -207,7 +208,7 @@ def _body_draws(
 def _draw_camera(
     device: Any,
     scene: AtlasPass,
-    draws: Sequence[tuple[list[Any], Any, int]],
+    draws: Sequence[CameraDraw],
     size: tuple[int, int],
     which: int,
 ) -> list[Any]:

@@ -29,6 +29,9 @@ VULKAN_DEBIAN_PACKAGES = ("mesa-vulkan-drivers",)
 
 _devices: list[Any] = []
 
+#: One body of a camera pass: its bind group 0 entries, its vertex buffer and vertex count.
+CameraDraw = tuple[list[Any], Any, int]
+
 
 class WgpuUnavailableError(RuntimeError):
     """No WebGPU adapter could be found (no Vulkan driver)."""
@@ -182,7 +185,7 @@ def light_map_draws(
 def camera_frame(
     device: Any,
     shader: str,
-    draws: Sequence[tuple[list[Any], Any, int]],
+    draws: Sequence[CameraDraw],
     *,
     size: tuple[int, int],
     depth_map: Any,
@@ -302,7 +305,7 @@ CAMERA_TARGETS = ("r32float", "rgba32float", "rgba32float")
 
 
 def draw_camera(
-    device: Any, shader: str, size: tuple[int, int], draws: Sequence[tuple[list[Any], Any, int]]
+    device: Any, shader: str, size: tuple[int, int], draws: Sequence[CameraDraw]
 ) -> list[Any]:
     """Each ``(bind group 0 entries, vertex buffer, count)`` through ``shader``'s ``vs_main``
     and ``fs_main`` with a depth test, into cleared :data:`CAMERA_TARGETS` of ``size``
