@@ -118,6 +118,20 @@ def describe_atlas(
 
     Raises:
         ValueError: as :func:`render_atlas`.
+
+    Example:
+        >>> import shadowmath as sm
+        >>> from shadowmath.meshes import box, grid
+        >>> from shadowmath.render import Body, look_at, perspective
+        >>> cube = Body(*box((2.0, 2.0, 2.0)), to_world=np.array(
+        ...     [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1.0]]))
+        >>> described = describe_atlas(
+        ...     [Body(*grid((20.0, 20.0))), cube], [sm.PointLight(np.array([3.0, 0.0, 4.0]))],
+        ...     look_at([0, -12, 8], [0, 0, 0], [0, 0, 1]), perspective(50.0, 1.0, 0.5, 50.0),
+        ...     casters=[False, True], colors=None, coverage=None, atlas_size=512, budget=1.0,
+        ...     previous=None, pcf_radius=1, depth_bias=None, normal_offset=NORMAL_OFFSET)
+        >>> described.tiles.shape, described.lights.shape  # a cube light: six tiles
+        ((6, 6, 4), (1, 6, 4))
     """
     prepared = prepare_bodies("bodies", bodies)
     if not prepared:

@@ -163,6 +163,19 @@ def describe_cascades(
 
     Raises:
         ValueError: as :func:`render_cascades`.
+
+    Example:
+        >>> from shadowmath.meshes import grid
+        >>> from shadowmath.render import Body, Light, look_at, perspective
+        >>> options = cascade_options(layout="layers", pcf_radius=1, depth_bias=None,
+        ...                           normal_offset=NORMAL_OFFSET)
+        >>> keywords = {"scene_bounds": None, "map_size": 256, "count": 3}
+        >>> described = describe_cascades(
+        ...     [Body(*grid((50.0, 50.0)))], Light(direction=(1, 1, 2)),
+        ...     look_at([0, -20, 3], [0, 0, 1], [0, 0, 1]), perspective(50.0, 1.0, 0.5, 60.0),
+        ...     options=options, fit_options=keywords, api="webgpu")
+        >>> len(described.frame.tobytes()), int(described.frame["count"]), len(described.maps)
+        (1024, 3, 3)
     """
     prepared = prepare_bodies("bodies", bodies)
     if not prepared:
