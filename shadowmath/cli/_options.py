@@ -205,15 +205,20 @@ def has_room(size: int | tuple[int, int], border: int) -> bool:
     return True
 
 
-def positive_int(text: str) -> int:
-    """``--size``: an integer ``>= 1``."""
+def _at_least(text: str, least: int, expected: str) -> int:
+    """An integer ``>= least``; the message says ``expected`` for anything else."""
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+        value = least - 1
+    if value < least:
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
     return value
+
+
+def positive_int(text: str) -> int:
+    """``--size``: an integer ``>= 1``."""
+    return _at_least(text, 1, "a positive integer")
 
 
 def _count(text: str, most: int, why: str = "") -> int:
@@ -238,13 +243,7 @@ def sample_count(text: str) -> int:
 
 def non_negative_int(text: str) -> int:
     """``--pcf``, ``--seed``: an integer ``>= 0``."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
+    return _at_least(text, 0, "an integer >= 0")
 
 
 def finite_float(text: str) -> float:

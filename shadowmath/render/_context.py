@@ -11,6 +11,8 @@ from numpy.typing import NDArray
 
 from shadowmath import check_projection, column_major_bytes
 
+from ._shader_constants import shader_constants
+
 #: Debian packages that provide a headless EGL context (Mesa's llvmpipe without a GPU):
 #: the EGL loader, the GL library glcontext opens beside it, and Mesa's drivers.
 DEBIAN_PACKAGES = ("libegl1", "libgl1", "libgl1-mesa-dri")
@@ -71,9 +73,11 @@ def resolve_context(ctx: moderngl.Context | None) -> moderngl.Context:
 
 def shader_source(name: str) -> str:
     """A shader file shipped in ``shadowmath/render/shaders``, each line ``#include "x"``
-    replaced by the source of file ``x`` there (GLSL and WGSL have no includes of their
+    replaced by the source of file ``x`` there, once (a file included again is left out),
+    and ``#include "constants.glsl"`` or ``"constants.wgsl"`` by the shared constants in
+    that language (:func:`shader_constants`). GLSL and WGSL have no includes of their
     own: the snippets that several shaders share are files included at load time;
-    moderngl would expand such a line itself from ``ctx.includes``, but finds none left).
+    moderngl would expand such a line itself from ``ctx.includes``, but finds none left.
 
     Example:
         >>> source = shader_source("depth_scene.wgsl")
@@ -81,12 +85,23 @@ def shader_source(name: str) -> str:
         False
         >>> "fn record(" in source
         True
+        >>> "const PCSS_FILTER_TAPS: i32 = 64;" in shader_source("pcss_scene.wgsl")
+        True
     """
+    return _expand(name, set())
+
+
+def _expand(name: str, done: set[str]) -> str:
+    """:func:`shader_source` of ``name``, leaving out the files in ``done`` (updated)."""
+    done.add(name)
+    if name in ("constants.glsl", "constants.wgsl"):
+        return shader_constants("glsl" if name.endswith(".glsl") else "wgsl")
     text = (resources.files("shadowmath.render") / "shaders" / name).read_text(encoding="utf-8")
     lines = text.splitlines(keepends=True)
     for i, line in enumerate(lines):
         if line.startswith('#include "'):
-            lines[i] = shader_source(line.strip()[len('#include "') : -1]) + "\n"
+            included = line.strip()[len('#include "') : -1]
+            lines[i] = "" if included in done else _expand(included, done) + "\n"
     return "".join(lines)
 
 
@@ -110,6 +125,16 @@ def uniform(prog: moderngl.Program, name: str) -> moderngl.Uniform:
     if not isinstance(member, moderngl.Uniform):
         raise TypeError(f"{name}: not a uniform of the program")
     return member
+
+
+def bind_block(prog: moderngl.Program, name: str, buffer: moderngl.Buffer) -> None:
+    """Bind ``buffer`` to the program's uniform block ``name`` (binding point 0; a
+    ``TypeError`` if ``name`` is something else)."""
+    block = prog[name]
+    if not isinstance(block, moderngl.UniformBlock):
+        raise TypeError(f"{name}: not a uniform block of the program")
+    block.binding = 0
+    buffer.bind_to_uniform_block(0)
 
 
 def set_uniform(prog: moderngl.Program, name: str, value: Any) -> None:

@@ -22,16 +22,11 @@ from numpy.typing import NDArray
 import shadowmath as sm
 from shadowmath import api_convention, column_major_bytes
 
+from ._atlas_pass import NORMAL_OFFSET, AtlasLight, AtlasPass, describe_atlas
 from ._context import image_size as _image_size
-from ._pass_atlas import (
-    NORMAL_OFFSET,
-    AtlasLight,
-    AtlasScene,
-    DrawLists,
-    SceneFit,
-    prepare_atlas,
-)
+from ._map_draws import DrawLists
 from ._pass_wgpu import (
+    CameraDraw,
     adapter_description,
     depth_pipeline,
     draw_camera,
@@ -45,6 +40,7 @@ from ._pass_wgpu import (
     wgpu_device,
 )
 from ._resources import Body
+from ._scene_fit import SceneFit
 
 
 class WgpuAtlasFrame(NamedTuple):
@@ -132,7 +128,7 @@ def render_atlas_wgpu(
         >>> frame.shadow.shape, frame.atlas.tile_light.tolist()
         ((2, 64, 64), [0, 0, 0, 0, 0, 0, 1])
     """
-    scene = prepare_atlas(
+    scene = describe_atlas(
         bodies, lights, view, projection, casters=casters, colors=None, coverage=coverage,
         atlas_size=atlas_size, budget=budget, previous=previous, pcf_radius=pcf_radius,
         depth_bias=depth_bias, normal_offset=normal_offset, light_size=light_size,
@@ -144,7 +140,7 @@ def render_atlas_wgpu(
     texture = _draw_atlas(device, scene, buffers)
     draws = _body_draws(device, scene, buffers, texture)
     shadow = []
-    for light in range(len(scene.lights.cube)):
+    for light in range(len(scene.lights)):
         targets = _draw_camera(device, scene, draws, size, light)
         mask, position, normal, body = read_record(device, targets, size)
         shadow.append(mask)
@@ -161,10 +157,10 @@ def render_atlas_wgpu(
     )
 
 
-def _draw_atlas(device: Any, scene: AtlasScene, buffers: Sequence[tuple[Any, int]]) -> Any:
-    """The depth of the bodies ``scene.draws[t]`` into each tile ``t``'s viewport
-    (scissored) of one ``depth32float`` texture cleared to 1, with the polygon offset
-    ``scene.bias``; returns the texture."""
+def _draw_atlas(device: Any, scene: AtlasPass, buffers: Sequence[tuple[Any, int]]) -> Any:
+    """Each :class:`MapDraw`'s bodies (a tile's draw list) into its viewport (scissored) of
+    one ``depth32float`` texture cleared to 1, with the polygon offset ``scene.bias``;
+    returns the texture."""
     width, height = scene.fit.texture_size
     usage = wgpu.TextureUsage
     texture = device.create_texture(
@@ -174,14 +170,12 @@ def _draw_atlas(device: Any, scene: AtlasScene, buffers: Sequence[tuple[Any, int
     target = texture.create_view()
     pipelines = {c: depth_pipeline(device, scene.bias, c) for c in ("none", "back", "front")}
     draw_depth(device, pipelines["none"], target, [])  # clear
-    clip = np.asarray(scene.fit.world_to_clip, dtype=np.float64)
-    for t, port in enumerate(np.asarray(scene.fit.viewports, dtype=np.int64)):
-        draws = [(clip[t] @ scene.bodies[i].to_world, *buffers[i]) for i in scene.draws[t].tolist()]
-        x, y, w, h = (int(c) for c in port)
+    for drawn in scene.maps:
+        draws = [(m, *buffers[b]) for b, m in zip(drawn.bodies, drawn.body_to_clip, strict=True)]
         if scene.pcss is None:
-            draw_depth(device, pipelines["none"], target, draws, (x, y, w, h))
+            draw_depth(device, pipelines["none"], target, draws, drawn.viewport)
         else:
-            draw_faces_away(device, pipelines, target, draws, (x, y, w, h))
+            draw_faces_away(device, pipelines, target, draws, drawn.viewport)
     return texture
 
 
@@ -189,38 +183,12 @@ def _storage(device: Any, data: bytes) -> Any:
     return device.create_buffer_with_data(data=data, usage=wgpu.BufferUsage.STORAGE)
 
 
-def _tables(device: Any, scene: AtlasScene) -> tuple[Any, Any]:
-    """The ``tiles`` and ``lights`` storage buffers of atlas.wgsl: per tile
-    ``world_to_texture``, ``(x, y, n, 0)`` and ``(K_s, K_t, d_near, 1)`` with PCSS, 0
-    without (96 bytes); per light its position or
-    direction, ``(spot axis, cos)``, the six faces' tiles, ``cube`` (64 bytes)."""
-    rect = np.zeros((len(scene.atlas.tile_rect), 4), dtype=np.int32)
-    rect[:, :3] = scene.atlas.tile_rect
-    texture = np.asarray(scene.fit.world_to_texture, dtype=np.float64)
-    pcss = np.zeros((len(rect), 4), dtype=np.float32)
-    if scene.pcss is not None:
-        k_near = np.column_stack([scene.pcss.texels_per_depth, scene.pcss.near_depth])
-        pcss = np.nan_to_num(np.column_stack([k_near, np.ones(len(rect))])).astype(np.float32)
-    tiles = b"".join(
-        column_major_bytes(m) + r.tobytes() + k.tobytes()
-        for m, r, k in zip(texture, rect, pcss, strict=True)
-    )
-    rows = scene.lights.rows
-    faces = np.zeros((len(rows), 8), dtype=np.int32)
-    faces[:, :6] = scene.atlas.light_tiles
-    faces[:, 6] = scene.lights.cube
-    lights = b"".join(
-        rows[i, 0].tobytes() + rows[i, 2].tobytes() + faces[i].tobytes() for i in range(len(rows))
-    )
-    return _storage(device, tiles), _storage(device, lights)
-
-
 def _body_draws(
-    device: Any, scene: AtlasScene, buffers: Sequence[tuple[Any, int]], texture: Any
-) -> list[tuple[list[Any], Any, int]]:
+    device: Any, scene: AtlasPass, buffers: Sequence[tuple[Any, int]], texture: Any
+) -> list[CameraDraw]:
     """Each body's bind group entries of atlas.wgsl but the frame's (bindings 1 to 4), its
     vertex buffer and count."""
-    tiles, lights = _tables(device, scene)
+    tiles, lights = (_storage(device, t.tobytes()) for t in (scene.tiles, scene.lights))
     view = texture.create_view()
     draws = []
     for i, (body, (vbo, n)) in enumerate(zip(scene.bodies, buffers, strict=True)):
@@ -239,8 +207,8 @@ def _body_draws(
 
 def _draw_camera(
     device: Any,
-    scene: AtlasScene,
-    draws: Sequence[tuple[list[Any], Any, int]],
+    scene: AtlasPass,
+    draws: Sequence[CameraDraw],
     size: tuple[int, int],
     which: int,
 ) -> list[Any]:

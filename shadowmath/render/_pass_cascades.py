@@ -23,44 +23,22 @@ from numpy.typing import NDArray
 
 import shadowmath as sm
 
-from ._context import (
-    check_camera_projection,
-    check_matrix,
-    program,
-    resolve_context,
-    set_matrix,
-    set_uniform,
-    uniform,
+from ._cascade_pass import (
+    NORMAL_OFFSET,
+    CascadePass,
+    cascade_index,
+    cascade_options,
+    describe_cascades,
+    fit_keywords,
 )
+from ._context import bind_block, program, resolve_context, set_matrix, set_uniform, uniform
 from ._context import image_size as _image_size
-from ._pass_atlas import DrawLists, SceneFit, body_scene
-from ._pass_depth import (
-    begin_depth_pass,
-    cull_faces_toward_light,
-    depth_bias_option,
-    pcf_radius_option,
-)
+from ._map_draws import DrawLists, MapDraw
+from ._pass_depth import begin_depth_pass, cull_faces_toward_light
 from ._pass_lit import draw_lit, finish, subtract_light
-from ._pass_pcss import light_size_option
-from ._resources import (
-    Body,
-    GpuScene,
-    Light,
-    Prepared,
-    PreparedLight,
-    prepare_body,
-    prepare_light,
-    read_texture,
-)
-
-#: The most cascades the shader takes (its uniform arrays' size).
-MAX_CASCADES = 8
-
-#: The default scale of the normal offset (:func:`shadowmath.normal_offset`'s derived minimum).
-NORMAL_OFFSET = 1.0
-
-#: The resolution ``r_min`` of a 24-bit depth buffer, the unit of ``depth_bias``'s constant.
-DEPTH_RESOLUTION = 1.0 / (2**24 - 1)
+from ._resources import Body, GpuScene, Light, read_texture
+from ._scene_fit import SceneFit
+from ._shader_constants import MAX_CASCADES as MAX_CASCADES
 
 #: The debug view's cascade colours, multiplied into the picture (cascade ``i`` takes
 #: ``CASCADE_COLORS[i % len]``): red, green, blue, yellow, magenta, cyan, orange, violet.
@@ -109,19 +87,6 @@ class CascadeFrame(NamedTuple):
     cascades: sm.Cascades
     shadow_maps: NDArray[np.float32]
     draws: DrawLists = ()
-
-
-class CascadeOptions(NamedTuple):
-    """The checked options of one :func:`render_cascades` call."""
-
-    layout: Literal["layers", "atlas"]
-    pcf_radius: int
-    bias: tuple[float, float]
-    normal_offset: float
-    ambient: float
-    background: tuple[float, float, float]
-    cascade_colors: bool
-    light_size: float = 0.0
 
 
 def render_cascades(
@@ -206,7 +171,7 @@ def render_cascades(
         depth_bias: ``(factor, units)`` of the slope-scaled bias ``b = units r_min +
             factor m`` (:func:`shadowmath.slope_scaled_bias`'s formula, computed per
             fragment in the shader; ``m`` the receiver's depth slope per texel, ``r_min``
-            :data:`DEPTH_RESOLUTION`); default ``(2 k + 1, 2)``, the derived minimum.
+            ``1 / (2^24 - 1)``); default ``(2 k + 1, 2)``, the derived minimum.
         normal_offset: the scale of :func:`shadowmath.normal_offset`'s offset (computed
             per fragment in the shader; :data:`NORMAL_OFFSET` by default, 0 for none).
         cascade_colors: also render the cascade-coloured picture.
@@ -250,12 +215,8 @@ def render_cascades(
         normal_offset=normal_offset, ambient=ambient, background=background,
         cascade_colors=cascade_colors, light_size=light_size,
     )  # fmt: skip
-    fit_options = {
-        "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
-        "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
-        "stable": stable, "warp": warp, "orientation": orientation,
-    }  # fmt: skip
-    scene = prepare_cascades(
+    fit_options = fit_keywords(locals())
+    scene = describe_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options,
         scene_fit=scene_fit,
     )  # fmt: skip
@@ -264,140 +225,23 @@ def render_cascades(
     gl = resolve_context(ctx)
     v, p = scene.view, scene.projection
     with GpuScene(gl, scene.bodies, (), [scene.sun], p @ v, size=size, map_size=texels) as gpu:
-        return _draw(gpu, v, scene.fit, options, scene.draws)
+        return _draw(gpu, scene)
 
 
-class CascadeScene(NamedTuple):
-    """The checked bodies, sun and camera of a cascades pass, and the fitted cascades."""
-
-    bodies: list[Prepared]
-    sun: PreparedLight
-    view: NDArray[np.float64]
-    projection: NDArray[np.float64]
-    fit: sm.Cascades
-    #: The bodies to draw into each cascade's map (:attr:`CascadeFrame.draws`).
-    draws: DrawLists = ()
-
-
-def cascade_options(
-    *,
-    layout: Literal["layers", "atlas"],
-    pcf_radius: int,
-    depth_bias: tuple[float, float] | None,
-    normal_offset: float,
-    ambient: float = 0.15,
-    background: tuple[float, float, float] = (0.0, 0.0, 0.0),
-    cascade_colors: bool = False,
-    light_size: float = 0.0,
-) -> CascadeOptions:
-    """The options of a cascades pass, checked; ``depth_bias`` defaults to ``(2 k + 1, 2)``,
-    :func:`shadowmath.slope_scaled_bias`'s derived minimum for a box PCF of radius ``k``."""
-    if layout not in ("layers", "atlas"):
-        raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
-    k = pcf_radius_option(pcf_radius)
-    if not (np.isfinite(normal_offset) and normal_offset >= 0):
-        raise ValueError(f"normal_offset: must be finite and >= 0, got {normal_offset!r}")
-    if not (np.isfinite(ambient) and ambient >= 0):
-        raise ValueError(f"ambient: must be finite and >= 0, got {ambient!r}")
-    bias = (2 * k + 1.0, 2.0) if depth_bias is None else depth_bias_option(depth_bias, k)
-    return CascadeOptions(layout, k, bias, float(normal_offset), float(ambient), background,
-                          cascade_colors, light_size_option(light_size))  # fmt: skip
-
-
-def prepare_cascades(
-    bodies: Sequence[Body],
-    light: Light,
-    view: Any,
-    projection: Any,
-    *,
-    options: CascadeOptions,
-    fit_options: dict[str, Any],
-    api: Literal["opengl", "webgpu"] = "opengl",
-    scene_fit: SceneFit = None,
-) -> CascadeScene:
-    """Check the bodies, the sun and the camera (OpenGL conventions); fit the cascades with
-    :func:`shadowmath.fit_cascades` in ``api``'s conventions, given the projection in
-    ``api``'s (``fit_options``: its keywords, ``scene_bounds`` defaulting to the bodies'
-    box), or with ``scene_fit`` :meth:`shadowmath.ShadowScene.fit_cascades` of
-    :func:`body_scene`; widened by :func:`shadowmath.widen_cascades` for PCSS
-    (``options.light_size > 0``, unless ``stable``); each cascade's bodies to draw."""
-    prepared = [prepare_body(f"bodies[{i}]", b) for i, b in enumerate(bodies)]
-    if not prepared:
-        raise ValueError("bodies: expected at least one body")
-    sun = prepare_light("light", light)
-    if not sun.directional:
-        raise ValueError("light: cascades need a directional light, Light(direction=...)")
-    v, p = check_matrix("view", view), check_camera_projection(projection)
-    fit_options = dict(fit_options)
-    bounds = fit_options.pop("scene_bounds")
-    widen = options.light_size > 0 and not fit_options.get("stable")
-    _check_scene_fit(scene_fit, bounds, warp=fit_options.get("warp"), widen=widen)
-    map_size = fit_options.pop("map_size")
-    # The projection in api's own clip conventions, as that API's renderer holds it.
-    camera = sm.api_convention(api=api).gl_clip_to_clip @ p
-    keywords = {"api": api, "pcf_radius": options.pcf_radius, "layout": options.layout,
-                **fit_options}  # fmt: skip
-    every = np.arange(len(prepared))
-    if scene_fit is None:
-        bounds = _bounds(prepared) if bounds is None else bounds
-        fit = sm.fit_cascades(sun.position, v, camera, bounds, map_size, **keywords)
-        draws: DrawLists = tuple(every for _ in range(fit.splits.shape[-1] - 1))
-    else:
-        scene = body_scene(prepared, [True] * len(prepared))
-        fitted = scene.fit_cascades(sm.DirectionalLight(sun.position), v, camera, map_size,
-                                    **keywords)  # fmt: skip
-        fit = fitted.cascades
-        draws = tuple(np.asarray(d, np.int64) for d in fitted.draws)
-        if scene_fit == "every_caster":
-            draws = tuple(every for _ in draws)
-    if widen:
-        fit = sm.widen_cascades(fit, angular_radius=options.light_size)
-    if fit.splits.shape[-1] - 1 > MAX_CASCADES:
-        raise ValueError(f"count: at most {MAX_CASCADES} cascades, got {fit.splits.shape[-1] - 1}")
-    return CascadeScene(prepared, sun, v, p, fit, draws)
-
-
-def _check_scene_fit(scene_fit: SceneFit, bounds: Any, *, warp: Any, widen: bool) -> None:
-    """Refuse what ``scene_fit`` does not take (:func:`render_cascades`)."""
-    if scene_fit not in (None, "draw_lists", "every_caster"):
-        raise ValueError(
-            f"scene_fit: expected None, 'draw_lists' or 'every_caster', got {scene_fit!r}"
-        )
-    if scene_fit is not None and bounds is not None:
-        raise ValueError("scene_bounds: the scene's fit (scene_fit) is over the scene's bounds")
-    if scene_fit == "draw_lists" and warp is not None:
-        raise ValueError("scene_fit: the draw lists are culled to the unwarped maps: no warp")
-    if scene_fit == "draw_lists" and widen:
-        raise ValueError(
-            "scene_fit: the draw lists are culled to the unwidened maps: with light_size > 0, "
-            "only stable cascades (widen_cascades widens the others)"
-        )
-
-
-def _bounds(bodies: Sequence[Prepared]) -> NDArray[np.float64]:
-    """``(2, 3)`` the bodies' world bounding box."""
-    points = np.concatenate([b.world_vertices() for b in bodies])
-    return np.stack([points.min(axis=0), points.max(axis=0)])
-
-
-def _draw(
-    scene: GpuScene,
-    view: NDArray[np.float64],
-    fit: sm.Cascades,
-    options: CascadeOptions,
-    draws: DrawLists,
-) -> CascadeFrame:
+def _draw(scene: GpuScene, described: CascadePass) -> CascadeFrame:
     """The maps (cascade ``i`` the bodies ``draws[i]``), the lit pass, the mask and
     subtractive passes, the debug tint; read back."""
     (sun,) = scene.lights
+    options, fit = described.options, described.fit
     draw_lit(scene, options.ambient, options.background)
-    atlas = options.layout == "atlas"
-    depths = draw_cascade_maps(scene, fit, atlas, draws, back_faces=options.light_size > 0)
+    back_faces = options.light_size > 0
+    depths = draw_cascade_maps(scene, described.maps, fit.texture_size, back_faces=back_faces)
     maps = _depth_array(scene.ctx, depths)
+    block = scene.ctx.buffer(described.frame.tobytes())
     try:
         scene.clear_mask()
         scene.bind_mask()
-        _shade(scene, view, fit, maps, options, mode=0)
+        _shade(scene, block, maps, mode=0)
         shadow = read_texture(scene.mask_tex, 1)[..., 0]
         subtract_light(scene, sun, tuple(range(len(scene.bodies))))
         color = read_texture(scene.color_tex, 4)[..., :3]
@@ -408,9 +252,10 @@ def _draw(
             scene.surface_tex.use(location=1)
             scene.blend(moderngl.FUNC_ADD)
             scene.ctx.blend_func = moderngl.DST_COLOR, moderngl.ZERO  # multiply
-            _shade(scene, view, fit, maps, options, mode=1)
+            _shade(scene, block, maps, mode=1)
             tinted = np.clip(read_texture(scene.color_tex, 4)[..., :3], 0.0, 1.0)
     finally:
+        block.release()
         maps.release()
         finish(scene)
     position, normal, body = scene.read_record()
@@ -418,62 +263,42 @@ def _draw(
         color=np.clip(color, 0.0, 1.0).astype(np.float32),
         cascade_color=None if tinted is None else tinted.astype(np.float32),
         shadow=shadow.astype(np.float32),
-        cascade=cascade_index(position, view, np.asarray(fit.splits)),
+        cascade=cascade_index(position, described.view, np.asarray(fit.splits)),
         position=position,
         normal=normal,
         body=body,
         cascades=fit,
         shadow_maps=depths,
-        draws=draws,
+        draws=described.draws,
     )
-
-
-def cascade_index(
-    position: NDArray[np.float32], view: NDArray[np.float64], splits: NDArray[np.float64]
-) -> NDArray[np.int32]:
-    """``(H, W)`` the cascade ``i`` with ``splits[i] <= d < splits[i + 1]`` for each pixel's
-    view depth ``d = -(view @ p)_z`` (``position`` ``(H, W, 3)``, NaN on the background;
-    ``splits`` ``(n + 1,)``); ``-1`` on the background and outside ``[splits[0], splits[n]]``."""
-    depth = -(position.astype(np.float64) @ view[2, :3] + view[2, 3])
-    valid = np.isfinite(depth) & (depth >= splits[0]) & (depth <= splits[-1])
-    index = np.clip(np.searchsorted(splits, np.where(valid, depth, 0.0), side="right") - 1,
-                    0, len(splits) - 2)  # fmt: skip
-    return np.where(valid, index, -1).astype(np.int32)
 
 
 def draw_cascade_maps(
     scene: GpuScene,
-    fit: sm.Cascades,
-    atlas: bool,
-    draws: DrawLists,
+    maps: Sequence[MapDraw],
+    size: tuple[int, int],
     *,
     back_faces: bool = False,
 ) -> NDArray[np.float32]:
-    """The depth of the bodies ``draws[i]`` (in body order) into each cascade ``i``'s map:
-    ``(n, h, w)`` layers, or ``(1, H, W)``
-    the atlas (each cascade in its viewport), window depths, row 0 ``t = 0``; each layer
-    ``fit.texture_size``; no polygon offset (``cascades.frag`` biases each receiver);
+    """Each :class:`MapDraw`'s bodies into its layer and viewport of depth maps of
+    ``size``: ``(layers, h, w)`` window depths, row 0 ``t = 0`` (one layer per cascade, or
+    one atlas layer); no polygon offset (``cascades.frag`` biases each receiver);
     ``back_faces``: only the faces turned from the sun (:func:`cull_faces_toward_light`)."""
     gl = scene.ctx
-    ports = np.asarray(fit.viewports, dtype=np.int64)
-    clip = np.asarray(fit.world_to_clip, dtype=np.float64)
-    size = fit.texture_size
-    groups = [list(range(len(ports)))] if atlas else [[i] for i in range(len(ports))]
     prog = program(gl, "depth_map.vert", "depth_map.frag")
     layers = []
-    for group in groups:
+    for layer in range(max(m.layer for m in maps) + 1):
         tex = gl.depth_texture(size)
         fbo = gl.framebuffer(depth_attachment=tex)
         try:
             begin_depth_pass(gl, fbo, (0.0, 0.0))
-            for i in group:
-                x, y, w, h = (int(c) for c in ports[i])
-                fbo.viewport = (x, y, w, h)
-                for body, mesh in ((scene.bodies[b], scene.meshes[b]) for b in draws[i].tolist()):
+            for drawn in (m for m in maps if m.layer == layer):
+                fbo.viewport = drawn.viewport
+                for b, body_to_clip in zip(drawn.bodies, drawn.body_to_clip, strict=True):
                     if back_faces:
-                        cull_faces_toward_light(gl, clip[i] @ body.to_world)
-                    set_matrix(prog, "body_to_clip", clip[i] @ body.to_world)
-                    mesh.render(prog)
+                        cull_faces_toward_light(gl, body_to_clip)
+                    set_matrix(prog, "body_to_clip", body_to_clip)
+                    scene.meshes[b].render(prog)
             data = np.frombuffer(tex.read(alignment=1), dtype=np.float32)
             layers.append(data.reshape(size[1], size[0]).copy())
         finally:
@@ -495,64 +320,20 @@ def _depth_array(gl: moderngl.Context, depths: NDArray[np.float32]) -> moderngl.
 
 
 def _shade(
-    scene: GpuScene,
-    view: NDArray[np.float64],
-    fit: sm.Cascades,
-    maps: moderngl.TextureArray,
-    options: CascadeOptions,
-    *,
-    mode: int,
+    scene: GpuScene, block: moderngl.Buffer, maps: moderngl.TextureArray, *, mode: int
 ) -> None:
     """Every body through ``cascades.frag`` in ``mode`` (0 the mask, 1 the cascade tint),
-    into the bound target (the lit pass's record on unit 1, the maps on unit 0)."""
+    into the bound target (the lit pass's record on unit 1, the maps on unit 0, the
+    description's uniform block :data:`FRAME_DTYPE` bound to block 0)."""
     prog = program(scene.ctx, "surface.vert", "cascades.frag")
-    n = int(np.asarray(fit.splits).shape[-1]) - 1
-    pad = MAX_CASCADES - n
-    splits = np.asarray(fit.splits, dtype=np.float32)
-    band = np.asarray(fit.band_end, dtype=np.float32)
-    textures = np.asarray(fit.world_to_texture, dtype=np.float64)
-    ports = np.asarray(fit.viewports, dtype=np.int32)
     colors = np.array([CASCADE_COLORS[i % len(CASCADE_COLORS)] for i in range(MAX_CASCADES)])
     set_matrix(prog, "world_to_clip", scene.world_to_clip)
     set_uniform(prog, "maps", 0)
-    set_uniform(prog, "light", tuple(scene.lights[0].homogeneous))
-    set_uniform(prog, "view_depth", tuple(-view[2]))
-    set_uniform(prog, "count", n)
-    uniform(prog, "splits").write(np.pad(splits, (0, pad)).astype(np.float32).tobytes())
-    uniform(prog, "band_end").write(np.pad(band, (0, pad)).astype(np.float32).tobytes())
-    uniform(prog, "world_to_texture").write(
-        b"".join(sm.column_major_bytes(m) for m in textures) + bytes(64 * pad)
-    )
-    uniform(prog, "viewports").write(np.pad(ports, ((0, pad), (0, 0))).tobytes())
-    set_uniform(prog, "atlas", int(options.layout == "atlas"))
-    set_uniform(prog, "pcf_radius", options.pcf_radius)
-    set_uniform(prog, "normal_offset", options.normal_offset)
-    set_uniform(prog, "slope_factor", options.bias[0])
-    set_uniform(prog, "constant_bias", options.bias[1] * DEPTH_RESOLUTION)
     set_uniform(prog, "mode", mode)
     uniform(prog, "colors").write(colors.astype(np.float32).tobytes())
-    _set_pcss(prog, fit, options.light_size)
+    bind_block(prog, "Frame", block)
     maps.use(location=0)
     for i, (body, mesh) in enumerate(zip(scene.bodies, scene.meshes, strict=True)):
         set_matrix(prog, "body_to_world", body.to_world)
         scene.bind_record(prog, i)
         mesh.render(prog)
-
-
-def cascade_pcss_parameters(fit: sm.Cascades, light_size: float) -> sm.PcssParameters:
-    """The cascades' :func:`shadowmath.pcss_parameters` for a sun of angular radius
-    ``light_size``: ``(n, 2)`` texels per unit of stored depth and ``(n,)`` near depths."""
-    return sm.pcss_parameters(fit, angular_radius=light_size)
-
-
-def _set_pcss(prog: moderngl.Program, fit: sm.Cascades, light_size: float) -> None:
-    """The PCSS uniforms: ``pcss`` on where ``light_size > 0``, each cascade's ``K`` and
-    near depth (:func:`cascade_pcss_parameters`), padded to :data:`MAX_CASCADES`."""
-    set_uniform(prog, "pcss", int(light_size > 0))
-    n = int(np.asarray(fit.splits).shape[-1]) - 1
-    k, near = np.zeros((MAX_CASCADES, 2)), np.zeros(MAX_CASCADES)
-    if light_size > 0:
-        p = cascade_pcss_parameters(fit, light_size)
-        k[:n], near[:n] = np.asarray(p.texels_per_depth), np.asarray(p.near_depth)
-    uniform(prog, "pcss_k").write(k.astype(np.float32).tobytes())
-    uniform(prog, "pcss_near").write(near.astype(np.float32).tobytes())

@@ -20,20 +20,21 @@ import wgpu
 from numpy.typing import NDArray
 
 import shadowmath as sm
-from shadowmath import api_convention, column_major_bytes
+from shadowmath import column_major_bytes
 
-from ._context import image_size as _image_size
-from ._pass_atlas import DrawLists, SceneFit
-from ._pass_cascades import (
-    MAX_CASCADES,
+from ._cascade_pass import (
+    FLOAT_DEPTH_RESOLUTION as FLOAT_DEPTH_RESOLUTION,
+)
+from ._cascade_pass import (
     NORMAL_OFFSET,
-    CascadeOptions,
-    CascadeScene,
+    CascadePass,
     cascade_index,
     cascade_options,
-    cascade_pcss_parameters,
-    prepare_cascades,
+    describe_cascades,
+    fit_keywords,
 )
+from ._context import image_size as _image_size
+from ._map_draws import DrawLists
 from ._pass_wgpu import (
     adapter_description,
     depth_pipeline,
@@ -48,24 +49,16 @@ from ._pass_wgpu import (
     wgpu_device,
 )
 from ._resources import Body, Light
-
-#: The resolution ``r_min`` of a ``depth32float`` buffer near depth 1 (as
-#: :func:`shadowmath.slope_scaled_bias` with ``depth_bits=None``): ``depth_bias``'s unit.
-FLOAT_DEPTH_RESOLUTION = 2.0**-24
+from ._scene_fit import SceneFit
 
 
 class WgpuCascadeFrame(NamedTuple):
     """What :func:`render_cascades_wgpu` returns; images have row 0 at the *top*.
 
     Attributes:
-        shadow: ``(H, W)`` float32 shadow mask (1 shadowed, 0 lit; PCF and the blend
-            bands give fractions; 0 on the background).
-        cascade: ``(H, W)`` int32, the cascade serving each pixel's view depth (``-1``
-            on the background and beyond the last split).
-        position: ``(H, W, 3)`` float32 world position of the visible surface (NaN on
-            the background).
-        normal: ``(H, W, 3)`` float32 unit face normal (NaN on the background).
-        body: ``(H, W)`` int32, which body is visible (``-1`` the background).
+        shadow: ``(H, W)`` float32 shadow mask, as in :class:`CascadeFrame` (0 on the
+            background).
+        cascade, position, normal, body: as in :class:`CascadeFrame`.
         cascades: the :class:`shadowmath.Cascades` (``api="webgpu"``) drawn and sampled.
         shadow_maps: ``(layers, h, w)`` float32 depths, row 0 is WebGPU's ``t = 0``: one
             layer per cascade, or the whole atlas as one layer.
@@ -159,22 +152,16 @@ def render_cascades_wgpu(
     """
     options = cascade_options(layout=layout, pcf_radius=pcf_radius, depth_bias=depth_bias,
                               normal_offset=normal_offset, light_size=light_size)  # fmt: skip
-    fit_options = {
-        "scene_bounds": scene_bounds, "map_size": map_size, "count": count, "splits": splits,
-        "scheme": scheme, "lam": lam, "max_distance": max_distance, "overlap": overlap,
-        "stable": stable, "warp": warp, "orientation": orientation,
-    }  # fmt: skip
-    scene = prepare_cascades(
+    fit_options = fit_keywords(locals())
+    scene = describe_cascades(
         bodies, light, view, projection, options=options, fit_options=fit_options, api="webgpu",
         scene_fit=scene_fit,
     )  # fmt: skip
     size = _image_size("image_size", image_size)
     device = wgpu_device()
     buffers = vertex_buffers(device, scene.bodies)
-    maps, depths = _draw_maps(
-        device, scene, buffers, atlas=options.layout == "atlas", back_faces=options.light_size > 0
-    )
-    targets = _draw_camera(device, scene, options, buffers, maps, size=size)
+    maps, depths = _draw_maps(device, scene, buffers)
+    targets = _draw_camera(device, scene, buffers, maps, size=size)
     shadow, position, normal, body = read_record(device, targets, size)
     return WgpuCascadeFrame(
         shadow=shadow,
@@ -190,71 +177,36 @@ def render_cascades_wgpu(
 
 
 def _draw_maps(
-    device: Any,
-    scene: CascadeScene,
-    buffers: Sequence[tuple[Any, int]],
-    *,
-    atlas: bool,
-    back_faces: bool,
+    device: Any, scene: CascadePass, buffers: Sequence[tuple[Any, int]]
 ) -> tuple[Any, NDArray[np.float32]]:
-    """The depth of the bodies ``scene.draws[i]`` into each cascade ``i``'s map: a
-    ``depth32float`` texture array of one layer per cascade, or of one atlas layer with
-    each cascade in its viewport (only the faces turned from the sun with ``back_faces``,
-    as the 2D PCSS pass's map); the texture and its ``(layers, h, w)`` depths read back."""
-    fit = scene.fit
-    ports = np.asarray(fit.viewports, dtype=np.int64)
-    clip = np.asarray(fit.world_to_clip, dtype=np.float64)
-    (w, h), layers = fit.texture_size, fit.texture_layers
+    """Each :class:`MapDraw`'s bodies into its layer and viewport of a ``depth32float``
+    texture array (one layer per cascade, or one atlas layer; with PCSS only the faces
+    turned from the sun, as the 2D PCSS pass's map); the texture and its ``(layers, h,
+    w)`` depths read back."""
+    (w, h), layers = scene.fit.texture_size, scene.fit.texture_layers
     usage = wgpu.TextureUsage
     texture = device.create_texture(
         size=(w, h, layers), format="depth32float",
         usage=usage.RENDER_ATTACHMENT | usage.TEXTURE_BINDING | usage.COPY_SRC,
     )  # fmt: skip
     pipelines = {cull: depth_pipeline(device, cull_mode=cull) for cull in ("none", "back", "front")}
-    for i, port in enumerate(ports):
-        draws = [(clip[i] @ scene.bodies[b].to_world, *buffers[b]) for b in scene.draws[i].tolist()]
-        layer = 0 if atlas else i
-        target = texture.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
-        if not atlas or i == 0:
+    cleared = set()
+    for drawn in scene.maps:
+        draws = [(m, *buffers[b]) for b, m in zip(drawn.bodies, drawn.body_to_clip, strict=True)]
+        target = texture.create_view(
+            dimension="2d", base_array_layer=drawn.layer, array_layer_count=1
+        )
+        if drawn.layer not in cleared:
             draw_depth(device, pipelines["none"], target, [])  # clear the layer
-        x, y, tw, th = (int(c) for c in port)
-        if not back_faces:
-            draw_depth(device, pipelines["none"], target, draws, (x, y, tw, th))
-            continue
-        draw_faces_away(device, pipelines, target, draws, (x, y, tw, th))
+            cleared.add(drawn.layer)
+        if scene.options.light_size > 0:
+            draw_faces_away(device, pipelines, target, draws, drawn.viewport)
+        else:
+            draw_depth(device, pipelines["none"], target, draws, drawn.viewport)
     depths = np.stack(
         [read_wgpu_texture(device, texture, (w, h), 1, layer)[..., 0] for layer in range(layers)]
     )
     return texture, depths.astype(np.float32)
-
-
-def _frame_uniforms(scene: CascadeScene, options: CascadeOptions) -> bytes:
-    """``struct Frame`` of cascades.wgsl (1024 bytes): with PCSS, each cascade's ``K``
-    and near depth (:func:`cascade_pcss_parameters`)."""
-    fit = scene.fit
-    conv = api_convention(api="webgpu")
-    camera = conv.gl_clip_to_clip @ scene.projection @ scene.view
-    head = np.zeros(16, dtype=np.float32)
-    head[:4] = -scene.view[2]
-    head[4:8] = scene.sun.homogeneous
-    ints = np.array([len(fit.viewports), options.pcf_radius, options.layout == "atlas"], np.int32)
-    floats = np.array([options.normal_offset, *options.bias], dtype=np.float32)
-    floats[2] *= FLOAT_DEPTH_RESOLUTION  # constant_bias in depth units
-    pcss = np.array([options.light_size > 0], np.int32)
-    data = column_major_bytes(camera) + head[:8].tobytes() + ints.tobytes() + floats.tobytes()
-    data += pcss.tobytes()
-    data += bytes(128 - len(data))
-    splits = np.asarray(fit.splits, dtype=np.float32)
-    band = np.asarray(fit.band_end, dtype=np.float32)
-    n = len(fit.viewports)
-    k, near = np.zeros((n, 2)), np.zeros(n)
-    if options.light_size > 0:
-        p = cascade_pcss_parameters(fit, options.light_size)
-        k, near = np.asarray(p.texels_per_depth), np.asarray(p.near_depth)
-    for i, port in enumerate(np.asarray(fit.viewports, dtype=np.int32)):
-        tail = np.array([splits[i], splits[i + 1], band[i], 0.0, *k[i], near[i], 0.0], np.float32)
-        data += column_major_bytes(fit.world_to_texture[i]) + port.tobytes() + tail.tobytes()
-    return data + bytes(112 * (MAX_CASCADES - n))
 
 
 def _body_uniforms(body_to_world: NDArray[np.float64], body_id: int) -> bytes:
@@ -266,15 +218,15 @@ def _body_uniforms(body_to_world: NDArray[np.float64], body_id: int) -> bytes:
 
 def _draw_camera(
     device: Any,
-    scene: CascadeScene,
-    options: CascadeOptions,
+    scene: CascadePass,
     buffers: Sequence[tuple[Any, int]],
     maps: Any,
     *,
     size: tuple[int, int],
 ) -> list[Any]:
-    """Every body from the camera through cascades.wgsl (:func:`draw_camera`)."""
-    frame = uniform_buffer(device, _frame_uniforms(scene, options))
+    """Every body from the camera through cascades.wgsl (:func:`draw_camera`), the
+    description's uniform block (:data:`FRAME_DTYPE`) bound as ``frame``."""
+    frame = uniform_buffer(device, scene.frame.tobytes())
     maps_view = maps.create_view(dimension="2d-array")
     draws = []
     for i, (body, (vbo, n)) in enumerate(zip(scene.bodies, buffers, strict=True)):

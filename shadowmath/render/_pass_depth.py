@@ -53,6 +53,13 @@ def pcf_radius_option(pcf_radius: object) -> int:
     return int(pcf_radius)
 
 
+def nonnegative_option(name: str, value: float) -> float:
+    """A pass's finite ``>= 0`` option ``name`` (``normal_offset``, ``ambient``), checked."""
+    if not (np.isfinite(value) and value >= 0):
+        raise ValueError(f"{name}: must be finite and >= 0, got {value!r}")
+    return float(value)
+
+
 def depth_bias_option(bias: object, pcf_radius: int) -> tuple[float, float]:
     """A pass's ``depth_bias`` option, checked: finite ``(factor, units)``, or the default."""
     if bias is None:

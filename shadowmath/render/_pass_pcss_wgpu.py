@@ -9,27 +9,21 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from shadowmath import api_convention
-
 from ._context import check_matrix
 from ._context import image_size as _image_size
-from ._pass_depth import world_to_light_clip
 from ._pass_pcss import PcssPass, PcssUniforms, map_parameters, pcss_uniforms
 from ._pass_wgpu import (
     WgpuFrame,
-    adapter_description,
-    body_matrices,
+    camera_frame,
     depth_map_texture,
     depth_pipeline,
-    draw_camera,
     draw_depth,
-    read_record,
-    read_wgpu_texture,
+    light_map_draws,
     uniform_buffer,
     vertex_buffers,
     wgpu_device,
 )
-from ._resources import Body, Light, prepare_body, prepare_light
+from ._resources import Body, Light, prepare_bodies, prepare_light
 
 
 def back_face_map(
@@ -99,29 +93,23 @@ def render_pcss_wgpu(
     camera = check_matrix("world_to_clip", world_to_clip)
     size, texels = _image_size("image_size", image_size), _image_size("map_size", map_size)
     options = PcssPass(light_size, depth_bias)
-    recv = [prepare_body(f"receivers[{i}]", b) for i, b in enumerate(receivers)]
-    block = [prepare_body(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
+    recv, block = prepare_bodies("receivers", receivers), prepare_bodies("blockers", blockers)
     lit = prepare_light("light", light)
     (setup,) = options.fit(recv, block, lit, texels)
     uniforms = pcss_uniforms(map_parameters(setup, lit, options.light_size, texels))
     bodies, device = recv + block, wgpu_device()
-    conv = api_convention(api="webgpu")
-    light_clip = world_to_light_clip(setup)
     buffers = vertex_buffers(device, bodies)
-    light_to_clip = conv.gl_clip_to_clip @ light_clip
-    draws = [(light_to_clip @ b.to_world, v, n) for b, (v, n) in zip(bodies, buffers, strict=True)]
-    depth_tex = back_face_map(device, texels, options.bias, draws)
-    view, world_to_texture = depth_tex.create_view(), conv.gl_clip_to_texture @ light_clip
+    drawn = light_map_draws(setup, camera, bodies, buffers)
+    depth_tex = back_face_map(device, texels, options.bias, drawn.map)
+    view = depth_tex.create_view()
     camera_draws = []
-    for i, (b, (vbo, count)) in enumerate(zip(bodies, buffers, strict=True)):
-        m = body_matrices(conv.gl_clip_to_clip @ camera, b.to_world, world_to_texture @ b.to_world)
-        data = pcss_body_uniforms(m, lit.homogeneous, i, uniforms)
+    for i, ((vbo, count), matrices) in enumerate(zip(buffers, drawn.matrices, strict=True)):
+        data = pcss_body_uniforms(matrices, lit.homogeneous, i, uniforms)
         entries = [
             {"binding": 0, "resource": {"buffer": uniform_buffer(device, data)}},
             {"binding": 1, "resource": view},
         ]
         camera_draws.append((entries, vbo, count))
-    targets = draw_camera(device, "pcss_scene.wgsl", size, camera_draws)
-    mask, position, normal, body = read_record(device, targets, size)
-    depth_map = read_wgpu_texture(device, depth_tex, texels, 1)[..., 0].astype(np.float32)
-    return WgpuFrame(mask, position, normal, body, setup, depth_map, adapter_description())
+    return camera_frame(
+        device, "pcss_scene.wgsl", camera_draws, size=size, depth_map=depth_tex, setup=setup
+    )

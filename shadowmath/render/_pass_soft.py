@@ -38,7 +38,7 @@ from ._resources import (
     PreparedLight,
     ShadowPass,
     float_texture,
-    prepare_body,
+    prepare_bodies,
     prepare_light,
 )
 
@@ -255,7 +255,7 @@ def radiance_texture(
         para.append(arr)
     prepared = prepare_light("light", light)
     points = light_samples("light", prepared, count, seed)
-    bodies = [prepare_body(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
+    bodies = prepare_bodies("blockers", blockers)
     gl = resolve_context(ctx)
     meshes = [GpuMesh(gl, b.vertices, b.triangles) for b in bodies]
     try:

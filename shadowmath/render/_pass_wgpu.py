@@ -22,12 +22,15 @@ from shadowmath import ShadowSetup, api_convention, column_major_bytes
 from ._context import check_matrix, shader_source
 from ._context import image_size as _image_size
 from ._pass_depth import DepthPass, fit_depth, world_to_light_clip
-from ._resources import Body, Light, Prepared, prepare_body, prepare_light, vertex_data
+from ._resources import Body, Light, Prepared, prepare_bodies, prepare_light, vertex_data
 
 #: Debian packages that provide a Vulkan driver without a GPU (Mesa's lavapipe/llvmpipe).
 VULKAN_DEBIAN_PACKAGES = ("mesa-vulkan-drivers",)
 
 _devices: list[Any] = []
+
+#: One body of a camera pass: its bind group 0 entries, its vertex buffer and vertex count.
+CameraDraw = tuple[list[Any], Any, int]
 
 
 class WgpuUnavailableError(RuntimeError):
@@ -131,22 +134,70 @@ def body_matrices(
 
 
 def _scene_uniforms(
-    world_to_clip: NDArray[np.float64],
-    body_to_world: NDArray[np.float64],
-    body_to_texture: NDArray[np.float64],
-    light: NDArray[np.float64],
-    *,
-    body_id: int,
-    pcf_radius: int,
+    matrices: bytes, light: NDArray[np.float64], *, body_id: int, pcf_radius: int
 ) -> bytes:
-    """``struct Body`` of depth_scene.wgsl: four mat4x4 (column-major), vec3 + f32, i32."""
-    mats = body_matrices(world_to_clip, body_to_world, body_to_texture)
+    """``struct Body`` of depth_scene.wgsl: the four mat4x4 ``matrices``
+    (:func:`body_matrices`), vec3 + f32, i32."""
     tail = np.zeros(8, dtype=np.float32)
     tail[:3] = light
     tail[3] = body_id
     tail_bytes = bytearray(tail.tobytes())
     tail_bytes[16:20] = np.int32(pcf_radius).tobytes()
-    return mats + bytes(tail_bytes)
+    return matrices + bytes(tail_bytes)
+
+
+class LightMapDraws(NamedTuple):
+    """A one-light camera pass's draws in WebGPU's conventions (:func:`light_map_draws`).
+
+    Attributes:
+        map: each body's ``(C @ world_to_light_clip @ to_world, vertex buffer, count)``
+            (``C = gl_clip_to_clip``), to draw the light's map.
+        matrices: each body's four ``mat4x4`` of the camera pass (:func:`body_matrices`:
+            the camera ``C @ world_to_clip``, ``to_world``, its normal matrix and
+            ``gl_clip_to_texture @ world_to_light_clip @ to_world``).
+    """
+
+    map: list[tuple[NDArray[np.float64], Any, int]]
+    matrices: list[bytes]
+
+
+def light_map_draws(
+    setup: ShadowSetup,
+    camera: NDArray[np.float64],
+    bodies: Sequence[Prepared],
+    buffers: Sequence[tuple[Any, int]],
+) -> LightMapDraws:
+    """The light's map and the camera pass of ``bodies`` (their :func:`vertex_buffers`)
+    with the OpenGL ``setup`` and camera ``world_to_clip``, converted by
+    ``api_convention(api="webgpu")``."""
+    conv = api_convention(api="webgpu")
+    light_clip = world_to_light_clip(setup)
+    light_to_clip = conv.gl_clip_to_clip @ light_clip
+    world_to_texture = conv.gl_clip_to_texture @ light_clip
+    camera_clip = conv.gl_clip_to_clip @ camera
+    draws = [(light_to_clip @ b.to_world, v, n) for b, (v, n) in zip(bodies, buffers, strict=True)]
+    matrices = [
+        body_matrices(camera_clip, b.to_world, world_to_texture @ b.to_world) for b in bodies
+    ]
+    return LightMapDraws(draws, matrices)
+
+
+def camera_frame(
+    device: Any,
+    shader: str,
+    draws: Sequence[CameraDraw],
+    *,
+    size: tuple[int, int],
+    depth_map: Any,
+    setup: ShadowSetup,
+) -> WgpuFrame:
+    """:func:`draw_camera` of ``shader``, read back with the light's ``depth_map`` texture
+    as a :class:`WgpuFrame`."""
+    targets = draw_camera(device, shader, size, draws)
+    mask, position, normal, body = read_record(device, targets, size)
+    texels = (depth_map.width, depth_map.height)
+    depth = read_wgpu_texture(device, depth_map, texels, 1)[..., 0].astype(np.float32)
+    return WgpuFrame(mask, position, normal, body, setup, depth, adapter_description())
 
 
 #: The vertex buffers' layout (:func:`vertex_data`): position at 0, face normal at 1.
@@ -254,7 +305,7 @@ CAMERA_TARGETS = ("r32float", "rgba32float", "rgba32float")
 
 
 def draw_camera(
-    device: Any, shader: str, size: tuple[int, int], draws: Sequence[tuple[list[Any], Any, int]]
+    device: Any, shader: str, size: tuple[int, int], draws: Sequence[CameraDraw]
 ) -> list[Any]:
     """Each ``(bind group 0 entries, vertex buffer, count)`` through ``shader``'s ``vs_main``
     and ``fs_main`` with a depth test, into cleared :data:`CAMERA_TARGETS` of ``size``
@@ -397,56 +448,28 @@ def render_depth_wgpu(
     options = DepthPass(pcf_radius, depth_bias)  # checks both
     factor, units = options.bias
     k = options.pcf_radius
-    recv = [prepare_body(f"receivers[{i}]", b) for i, b in enumerate(receivers)]
-    block = [prepare_body(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
+    recv, block = prepare_bodies("receivers", receivers), prepare_bodies("blockers", blockers)
     lit = prepare_light("light", light)
     if lit.directional:
         raise ValueError("light.direction: render_depth_wgpu takes a point light only")
     if setup is None:
         setup = fit_depth(recv, block, lit.position, map_texels, k)
-    bodies = recv + block
-    device = wgpu_device()
-    conv = api_convention(api="webgpu")
-    light_clip = world_to_light_clip(setup)
-    light_to_clip = conv.gl_clip_to_clip @ light_clip
-    world_to_texture = conv.gl_clip_to_texture @ light_clip
-    camera_clip = conv.gl_clip_to_clip @ camera
-
+    bodies, device = recv + block, wgpu_device()
     buffers = vertex_buffers(device, bodies)
-    vbos = [vbo for vbo, _ in buffers]
-    counts = [count for _, count in buffers]
-
-    # Pass 1: the depth map.
-    draws = [
-        (light_to_clip @ b.to_world, vbo, n) for b, (vbo, n) in zip(bodies, buffers, strict=True)
-    ]
-    depth_tex = _depth_map(device, map_texels, (factor, units), draws)
-
+    drawn = light_map_draws(setup, camera, bodies, buffers)
+    depth_tex = _depth_map(device, map_texels, (factor, units), drawn.map)  # pass 1: the map
     # Pass 2: the bodies from the camera, compared with the map.
     sampler = _compare_sampler(device)
     depth_view = depth_tex.create_view()
     draws = []
-    for i, (b, vbo, count) in enumerate(zip(bodies, vbos, counts, strict=True)):
-        data = _scene_uniforms(
-            camera_clip, b.to_world, world_to_texture @ b.to_world, lit.position,
-            body_id=i, pcf_radius=k,
-        )  # fmt: skip
+    for i, ((vbo, count), matrices) in enumerate(zip(buffers, drawn.matrices, strict=True)):
+        data = _scene_uniforms(matrices, lit.position, body_id=i, pcf_radius=k)
         entries = [
             {"binding": 0, "resource": {"buffer": uniform_buffer(device, data)}},
             {"binding": 1, "resource": depth_view},
             {"binding": 2, "resource": sampler},
         ]
         draws.append((entries, vbo, count))
-    targets = draw_camera(device, "depth_scene.wgsl", size, draws)
-
-    mask, position, normal, body = read_record(device, targets, size)
-    depth_map = read_wgpu_texture(device, depth_tex, map_texels, 1)[..., 0]
-    return WgpuFrame(
-        shadow=mask,
-        position=position,
-        normal=normal,
-        body=body,
-        setup=setup,
-        depth_map=depth_map.astype(np.float32),
-        adapter=adapter_description(),
+    return camera_frame(
+        device, "depth_scene.wgsl", draws, size=size, depth_map=depth_tex, setup=setup
     )

@@ -122,6 +122,11 @@ def prepare_body(name: str, body: Body) -> Prepared:
     return Prepared(v, t, to_world, color, plane)
 
 
+def prepare_bodies(name: str, bodies: Sequence[Body]) -> list[Prepared]:
+    """Each body checked (:func:`prepare_body`), named ``name[i]`` in errors."""
+    return [prepare_body(f"{name}[{i}]", b) for i, b in enumerate(bodies)]
+
+
 def prepare_light(name: str, light: Light) -> PreparedLight:
     c = np.asarray(light.color, dtype=np.float64)
     if c.shape != (3,) or not np.all(np.isfinite(c)):

@@ -29,7 +29,7 @@ from ._resources import (
     Light,
     PassOptions,
     ShadowPass,
-    prepare_body,
+    prepare_bodies,
     prepare_light,
     read_texture,
 )
@@ -251,8 +251,7 @@ def render_scene(
     camera = check_matrix("world_to_clip", world_to_clip)
     size = _image_size("image_size", image_size)
     map_texels = _image_size("map_size", map_size)
-    recv = [prepare_body(f"receivers[{i}]", b) for i, b in enumerate(receivers)]
-    block = [prepare_body(f"blockers[{i}]", b) for i, b in enumerate(blockers)]
+    recv, block = prepare_bodies("receivers", receivers), prepare_bodies("blockers", blockers)
     shadow_pass.check(recv)
     light_data = [prepare_light(f"lights[{i}]", light) for i, light in enumerate(lights)]
     for i, light in enumerate(light_data):

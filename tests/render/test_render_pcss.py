@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 import shadowmath as sm
-import shadowmath.render._pass_cascades as pass_cascades
+import shadowmath.render._cascade_pass as cascade_pass
 from shadowmath.meshes import box, grid
 from shadowmath.render import (
     Body,
@@ -190,6 +190,6 @@ def test_the_penumbra_does_not_jump_at_a_cascade_split(gl, monkeypatch):
     cascades' K (measured 0.132 to 0.188, by 1.43)."""
     before, after = penumbra_widths(*wall_scene(gl))
     assert before > 0.1 and abs(np.log(after / before)) < np.log(1.15), (before, after)
-    monkeypatch.setattr(pass_cascades, "cascade_pcss_parameters", babylon_parameters)
+    monkeypatch.setattr(cascade_pass, "cascade_pcss_parameters", babylon_parameters)
     jump_before, jump_after = penumbra_widths(*wall_scene(gl))
     assert abs(np.log(jump_after / jump_before)) > np.log(1.25), (jump_before, jump_after)

@@ -60,13 +60,13 @@ def test_the_cascades_penumbra_does_not_jump_at_a_split(wgpu_device, monkeypatch
     """``render_cascades_wgpu(light_size=)``: tests/render/test_render_pcss.py's wall
     under a 2° sun, its penumbra's width on either side of the first split within 15%,
     Babylon.js's constant ratio a jump of over 25%."""
-    import shadowmath.render._pass_cascades_wgpu as pass_cascades_wgpu
+    import shadowmath.render._cascade_pass as cascade_pass
     from shadowmath.render.webgpu import render_cascades_wgpu
 
     from .test_render_pcss import babylon_parameters, penumbra_widths, wall_scene
 
     before, after = penumbra_widths(*wall_scene(None, render_cascades_wgpu))
     assert before > 0.1 and abs(np.log(after / before)) < np.log(1.15), (before, after)
-    monkeypatch.setattr(pass_cascades_wgpu, "cascade_pcss_parameters", babylon_parameters)
+    monkeypatch.setattr(cascade_pass, "cascade_pcss_parameters", babylon_parameters)
     jump_before, jump_after = penumbra_widths(*wall_scene(None, render_cascades_wgpu))
     assert abs(np.log(jump_after / jump_before)) > np.log(1.25), (jump_before, jump_after)

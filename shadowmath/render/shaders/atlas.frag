@@ -19,9 +19,11 @@
 #include "pcss.glsl"
 
 uniform sampler2D atlas;     // the depth atlas, window depths (1.0 where nothing was drawn)
-uniform sampler2D tiles;     // (world_to_texture's 4 rows, (x, y, n, 0), PCSS row) per tile
-uniform sampler2D lights;    // (light, colour, (spot axis, cos), (cube, 0, 0, 0)) per light
-uniform sampler2D faces;     // R: the tile of each (face, light), -1 none
+// The tiles' and lights' tables of the pass's description (shadowmath/render/_atlas_pass.py,
+// TILE_ROWS and LIGHT_ROWS; atlas.wgsl reads the same floats), one row a texel:
+uniform sampler2D tiles;     // (world_to_texture's 4 columns, (x, y, n, 0), PCSS row) per tile
+uniform sampler2D lights;    // (light, colour, (spot axis, cos), (cube, 0, 0, 0), the tiles
+                             // of faces 0..3, of faces 4, 5 (-1 none)) per light
 uniform sampler2D surface;   // the lit pass's position record (w = body id + 1)
 uniform float body_id;
 uniform int light_count;
@@ -58,10 +60,11 @@ float shadow_of(int l, vec3 p) {
     vec4 light = texelFetch(lights, ivec2(0, l), 0);
     bool cube = texelFetch(lights, ivec2(3, l), 0).x > 0.5;
     int face = cube ? cube_face(p - light.xyz) : 0;
-    int t = int(texelFetch(faces, ivec2(face, l), 0).r);
+    int t = int(texelFetch(lights, ivec2(4 + face / 4, l), 0)[face % 4]);
     if (t < 0) return 0.0;
-    mat4 rows;  // world_to_texture's rows
-    for (int row = 0; row < 4; ++row) rows[row] = texelFetch(tiles, ivec2(row, t), 0);
+    mat4 M;  // world_to_texture
+    for (int column = 0; column < 4; ++column) M[column] = texelFetch(tiles, ivec2(column, t), 0);
+    mat4 rows = transpose(M);  // rows[u]: row u of world_to_texture
     vec4 c = vec4(p, 1.0) * rows;  // = world_to_texture @ (p, 1)
     if (c.w <= 0.0) return 0.0;
     // The normal-offset bias: look p up moved along its face normal by normal_offset

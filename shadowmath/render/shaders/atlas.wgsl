@@ -27,17 +27,21 @@ struct Frame {
     normal_offset: f32,          // in texels of the light's map at the point
 };
 
+// The tiles' and lights' tables of the pass's description (shadowmath/render/_atlas_pass.py,
+// TILE_ROWS and LIGHT_ROWS; atlas.frag reads the same floats as data textures).
 struct Tile {
     world_to_texture: mat4x4<f32>,
-    rect: vec4<i32>,             // (x, y, n, 0): the tile's texels, x, y from the first row
+    rect: vec4<f32>,             // (x, y, n, 0): the tile's texels, x, y from the first row
     pcss: vec4<f32>,             // (K_s, K_t, d_near, 1) with PCSS, 0 without
 };
 
 struct Light {
     light: vec4<f32>,            // (x, y, z, 1) a position, (x, y, z, 0) toward a sun
+    color: vec4<f32>,            // (r, g, b, 0), the picture's (atlas.frag)
     spot: vec4<f32>,             // (unit axis, cos angle); w = -2: not a spot
-    faces: vec4<i32>,            // the tiles of faces 0..3 (-1 none); face 0 of a 2D map
-    faces_cube: vec4<i32>,       // the tiles of faces 4, 5; z = 1: a cube light
+    kind: vec4<f32>,             // x = 1: a cube light
+    faces: vec4<f32>,            // the tiles of faces 0..3 (-1 none); face 0 of a 2D map
+    faces_cube: vec4<f32>,       // the tiles of faces 4, 5
 };
 
 struct Body {
@@ -54,6 +58,7 @@ struct Body {
 @group(0) @binding(4) var<uniform> body: Body;
 
 #include "surface.wgsl"
+#include "camera_vertex.wgsl"
 #include "pcss.wgsl"
 
 var<private> pcss_rect: vec4<i32>;  // the tile pcss_depth reads: (x, y, n, 0) texels
@@ -61,18 +66,6 @@ var<private> pcss_rect: vec4<i32>;  // the tile pcss_depth reads: (x, y, n, 0) t
 fn pcss_depth(uv: vec2<f32>) -> f32 {
     let texel = vec2<i32>(floor(uv * vec2<f32>(textureDimensions(atlas))));
     return textureLoad(atlas, clamp(texel, pcss_rect.xy, pcss_rect.xy + pcss_rect.zz - 1), 0);
-}
-
-struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) @interpolate(flat) face_normal: vec3<f32>,
-};
-
-@vertex
-fn vs_main(@location(0) position: vec3<f32>, @location(1) face_normal: vec3<f32>) -> VertexOut {
-    let v = place(position, face_normal);
-    return VertexOut(frame.world_to_clip * v.world, v.world.xyz / v.world.w, v.face_normal);
 }
 
 fn cube_face(d: vec3<f32>) -> i32 {
@@ -83,10 +76,10 @@ fn cube_face(d: vec3<f32>) -> i32 {
 }
 
 fn tile_of(light: Light, p: vec3<f32>) -> i32 {
-    if (light.faces_cube.z == 0) { return light.faces.x; }
+    if (light.kind.x < 0.5) { return i32(light.faces.x); }
     let face = cube_face(p - light.light.xyz);
-    if (face < 4) { return light.faces[face]; }
-    return light.faces_cube[face - 4];
+    if (face < 4) { return i32(light.faces[face]); }
+    return i32(light.faces_cube[face - 4]);
 }
 
 // How much of light l's map says p (face normal n) is shadowed (0 lit .. 1 shadowed).
@@ -111,7 +104,7 @@ fn shadow_of(l: i32, p: vec3<f32>, n_face: vec3<f32>, pixel: vec2<f32>) -> f32 {
     c = M * vec4<f32>(p + offset * n, 1.0);
     if (c.w <= 0.0) { return 0.0; }
     let str = c.xyz / c.w;
-    let rect = tiles[t].rect;
+    let rect = vec4<i32>(tiles[t].rect);
     let texel = vec2<i32>(floor(str.xy * size));
     if (str.z < 0.0 || str.z > 1.0 || any(texel < rect.xy) || any(texel >= rect.xy + rect.zz)) {
         return 0.0;

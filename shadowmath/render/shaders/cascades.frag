@@ -1,15 +1,16 @@
 #version 330
 // Cascaded shadow maps of a sun, the camera pass: the shadow at each visible point.
 //
-// The uniforms are sm.fit_cascades' outputs, as they are (OpenGL conventions):
-//   splits[0..n]          view depths; cascade i serves [splits[i], splits[i + 1])
-//   band_end[0..n-1]      cascade i was fitted out to band_end[i] > splits[i + 1]: in
-//                         [splits[i + 1], band_end[i]] both i and i + 1 are sampled and
-//                         mixed, i's weight falling linearly from 1 to 0
-//   world_to_texture[i]   world point to (s, t, r, 1): s, t in the texture (the whole
-//                         atlas with layout="atlas"), r the depth stored in the map
-//   viewports[i]          cascade i's tile (x, y, w, h) in texels (layout="layers":
-//                         (0, 0, W, H), the whole layer i)
+// The uniform block Frame is the cascades pass's description (shadowmath/render/_cascade_pass.py,
+// FRAME_DTYPE; cascades.wgsl reads the same bytes), sm.fit_cascades' outputs as they are
+// (OpenGL conventions):
+//   cascades[i].world_to_texture  world point to (s, t, r, 1): s, t in the texture (the
+//                                 whole atlas with layout="atlas"), r the depth stored
+//   cascades[i].viewport          viewports[i], the tile (x, y, w, h) in texels
+//                                 (layout="layers": (0, 0, W, H), the whole layer i)
+//   cascades[i].near, .far        splits[i], splits[i + 1]: cascade i serves [near, far)
+//   cascades[i].band_end          band_end[i] > far: in [far, band_end] both i and i + 1
+//                                 are sampled and mixed, i's weight falling linearly from 1 to 0
 // and view_depth, the camera's view depth as a row: d = dot(view_depth, (p, 1)), that is
 // -view[2] for an OpenGL camera looking down -z.
 //
@@ -26,35 +27,44 @@
 // depth range, or beyond the last split: lit.
 //
 // PCSS (pcss = 1, the maps holding the faces turned from the sun): in cascade i the
-// blocker search and filter of pcss.glsl with pcss_k[i] and pcss_near[i]
+// blocker search and filter of pcss.glsl with cascades[i].k and cascades[i].d_near
 // (sm.pcss_parameters of the cascades: one world penumbra in every cascade), every tap
 // clamped to the cascade's tile, the constant bias only.
 //
 // Renderer-specific: this pass draws every body again over the lit pass's record
 // (`surface`: world position, w = body id + 1) and keeps the fragment that is visible;
 // mode 0 writes the shadow (1 shadowed, 0 lit), mode 1 the cascade's debug colour.
-const int MAX_CASCADES = 8;
-uniform sampler2DArray maps;  // R32F depths, 1.0 where nothing was drawn; layer i, or 0
-uniform int atlas;            // 1: every cascade is a tile of layer 0
-uniform int count;            // n, the number of cascades
-uniform float splits[MAX_CASCADES + 1];
-uniform float band_end[MAX_CASCADES];
-uniform mat4 world_to_texture[MAX_CASCADES];
-uniform ivec4 viewports[MAX_CASCADES];
-uniform vec4 view_depth;
-uniform vec4 light;           // (x, y, z, 0): toward the sun
-uniform int pcf_radius;       // k
-uniform float normal_offset;  // scale of sm.normal_offset (1: the derived minimum)
-uniform float slope_factor;   // of sm.slope_scaled_bias (2c: the derived minimum)
-uniform float constant_bias;  // its constant term, in depth units (constant * r_min)
+#include "constants.glsl"
 
+struct Cascade {
+    mat4 world_to_texture;
+    ivec4 viewport;
+    float near;
+    float far;
+    float band_end;
+    vec2 k;                   // PCSS: texels per unit of stored depth
+    float d_near;             // PCSS: the near plane's stored depth
+};
+
+layout(std140) uniform Frame {
+    mat4 world_to_clip;       // the camera (read by cascades.wgsl; surface.vert has its own)
+    vec4 view_depth;
+    vec4 light;               // (x, y, z, 0): toward the sun
+    int count;                // n, the number of cascades
+    int pcf_radius;           // k
+    int atlas;                // 1: every cascade is a tile of layer 0
+    float normal_offset;      // scale of sm.normal_offset (1: the derived minimum)
+    float slope_factor;       // of sm.slope_scaled_bias (2c: the derived minimum)
+    float constant_bias;      // its constant term, in depth units (constant * r_min)
+    int pcss;                 // 1: percentage-closer soft shadows
+    Cascade cascades[MAX_CASCADES];
+} frame;
+
+uniform sampler2DArray maps;  // R32F depths, 1.0 where nothing was drawn; layer i, or 0
 uniform sampler2D surface;
 uniform float body_id;
 uniform int mode;
 uniform vec3 colors[MAX_CASCADES];
-uniform int pcss;                    // 1: percentage-closer soft shadows
-uniform vec2 pcss_k[MAX_CASCADES];   // texels per unit of stored depth, per cascade
-uniform float pcss_near[MAX_CASCADES];
 
 in vec3 v_world;
 flat in vec3 v_face_normal;
@@ -76,27 +86,30 @@ float pcss_depth(vec2 uv) {
 // PCSS in cascade i at p: 0 lit .. 1 shadowed (outside the tile or its depth range: lit).
 float pcss_shadow_in(int i, vec3 p) {
     vec2 size = vec2(textureSize(maps, 0).xy);
-    vec4 h = world_to_texture[i] * vec4(p, 1.0);
+    vec4 h = frame.cascades[i].world_to_texture * vec4(p, 1.0);
     vec3 str = h.xyz / h.w;
-    pcss_tile = viewports[i];
-    pcss_layer = atlas == 1 ? 0 : i;
+    pcss_tile = frame.cascades[i].viewport;
+    pcss_layer = frame.atlas == 1 ? 0 : i;
     ivec2 texel = ivec2(floor(str.xy * size));
     if (str.z > 1.0 || any(lessThan(texel, pcss_tile.xy))
         || any(greaterThanEqual(texel, pcss_tile.xy + pcss_tile.zw))) {
         return 0.0;
     }
     float phi = pixel_angle(gl_FragCoord.xy);
-    return 1.0 - pcss_lit(str, size, pcss_k[i], pcss_near[i], constant_bias, phi);
+    Cascade c = frame.cascades[i];
+    return 1.0 - pcss_lit(str, size, c.k, c.d_near, frame.constant_bias, phi);
 }
 
 // The cascade serving view depth d (-1: none), and the weight of cascade i - 1 in its band.
 int pick(float d, out float previous) {
     previous = 0.0;
-    for (int i = 0; i < count; ++i) {
-        bool last = i == count - 1;
-        if (d >= splits[i] && (d < splits[i + 1] || (last && d <= splits[i + 1]))) {
-            if (i > 0 && d <= band_end[i - 1] && band_end[i - 1] > splits[i]) {
-                previous = (band_end[i - 1] - d) / (band_end[i - 1] - splits[i]);
+    for (int i = 0; i < frame.count; ++i) {
+        bool last = i == frame.count - 1;
+        Cascade c = frame.cascades[i];
+        if (d >= c.near && (d < c.far || (last && d <= c.far))) {
+            float end = i > 0 ? frame.cascades[i - 1].band_end : 0.0;
+            if (i > 0 && d <= end && end > c.near) {
+                previous = (end - d) / (end - c.near);
             }
             return i;
         }
@@ -116,46 +129,47 @@ mat3 texture_gradients(mat4 M, vec3 p) {
 
 // The shadow of point p (unit normal n, facing the sun) in cascade i: 0 lit .. 1 shadowed.
 float shadow_in(int i, vec3 p, vec3 n) {
-    if (pcss == 1) return pcss_shadow_in(i, p);
+    if (frame.pcss == 1) return pcss_shadow_in(i, p);
     vec2 size = vec2(textureSize(maps, 0).xy);
-    mat3 g = texture_gradients(world_to_texture[i], p);
+    mat3 g = texture_gradients(frame.cascades[i].world_to_texture, p);
     vec3 D = cross(g[0], g[1]);
     float rise_s = abs(dot(g[2], cross(g[1], n))) / size.x;  // depth per texel along s
     float rise_t = abs(dot(g[2], cross(n, g[0]))) / size.y;
-    float c = float(pcf_radius) + 0.5;
-    float offset = normal_offset * c * (rise_s + rise_t) / abs(dot(g[2], D));
-    float bias = constant_bias + slope_factor * max(rise_s, rise_t) / abs(dot(D, n));
+    int k = frame.pcf_radius;
+    float c = float(k) + 0.5;
+    float offset = frame.normal_offset * c * (rise_s + rise_t) / abs(dot(g[2], D));
+    float bias = frame.constant_bias + frame.slope_factor * max(rise_s, rise_t) / abs(dot(D, n));
 
-    vec4 h = world_to_texture[i] * vec4(p + offset * n, 1.0);
+    vec4 h = frame.cascades[i].world_to_texture * vec4(p + offset * n, 1.0);
     vec3 str = h.xyz / h.w;
-    ivec4 tile = viewports[i];
+    ivec4 tile = frame.cascades[i].viewport;
     ivec2 texel = ivec2(floor(str.xy * size));
     if (str.z > 1.0 || any(lessThan(texel, tile.xy))
         || any(greaterThanEqual(texel, tile.xy + tile.zw))) {
         return 0.0;
     }
-    int layer = atlas == 1 ? 0 : i;
+    int layer = frame.atlas == 1 ? 0 : i;
     float lit = 0.0;
-    for (int y = -pcf_radius; y <= pcf_radius; ++y) {
-        for (int x = -pcf_radius; x <= pcf_radius; ++x) {
+    for (int y = -k; y <= k; ++y) {
+        for (int x = -k; x <= k; ++x) {
             ivec2 tap = clamp(texel + ivec2(x, y), tile.xy, tile.xy + tile.zw - 1);
             lit += str.z - bias <= texelFetch(maps, ivec3(tap, layer), 0).r ? 1.0 : 0.0;
         }
     }
-    return 1.0 - lit / float((2 * pcf_radius + 1) * (2 * pcf_radius + 1));
+    return 1.0 - lit / float((2 * k + 1) * (2 * k + 1));
 }
 
 void main() {
     if (texelFetch(surface, ivec2(gl_FragCoord.xy), 0).w != body_id + 1.0) discard;
     float previous;
-    int i = pick(dot(view_depth, vec4(v_world, 1.0)), previous);
+    int i = pick(dot(frame.view_depth, vec4(v_world, 1.0)), previous);
     if (mode == 1) {
         vec3 tint = i < 0 ? vec3(1.0) : colors[i];
         result = vec4(previous > 0.0 ? mix(tint, colors[i - 1], previous) : tint, 1.0);
         return;
     }
     vec3 n = normalize(v_face_normal);
-    if (i < 0 || dot(n, light.xyz) <= 0.0) {  // turned from the sun: unlit anyway
+    if (i < 0 || dot(n, frame.light.xyz) <= 0.0) {  // turned from the sun: unlit anyway
         result = vec4(0.0);
         return;
     }

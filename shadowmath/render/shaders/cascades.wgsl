@@ -31,7 +31,7 @@
 //
 // Renderer-specific: the outputs are the shadow (1 shadowed, 0 lit) and a record of the
 // visible surface (world position with body id + 1, face normal) for the tests.
-const MAX_CASCADES = 8;
+#include "constants.wgsl"
 
 struct Cascade {
     world_to_texture: mat4x4<f32>,
@@ -67,22 +67,8 @@ struct Body {
 @group(0) @binding(1) var maps: texture_depth_2d_array;  // layer i, or 0 (the atlas)
 @group(0) @binding(2) var<uniform> body: Body;
 
-struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) @interpolate(flat) face_normal: vec3<f32>,
-};
-
-@vertex
-fn vs_main(@location(0) position: vec3<f32>, @location(1) face_normal: vec3<f32>) -> VertexOut {
-    var out: VertexOut;
-    let world = body.body_to_world * vec4<f32>(position, 1.0);
-    out.world = world.xyz / world.w;
-    out.face_normal = (body.normal_to_world * vec4<f32>(face_normal, 0.0)).xyz;
-    out.clip = frame.world_to_clip * world;
-    return out;
-}
-
+#include "surface.wgsl"
+#include "camera_vertex.wgsl"
 #include "pcss.wgsl"
 
 // The tile and layer pcss_depth reads (set before each pcss_lit).
@@ -178,28 +164,19 @@ fn shadow_in(i: i32, p: vec3<f32>, n: vec3<f32>, phi: f32) -> f32 {
     return 1.0 - lit / f32((2 * k + 1) * (2 * k + 1));
 }
 
-struct FragmentOut {
-    @location(0) shadow: f32,
-    @location(1) position: vec4<f32>,
-    @location(2) normal: vec4<f32>,
-};
-
 @fragment
 fn fs_main(in: VertexOut) -> FragmentOut {
-    var out: FragmentOut;
+    var out = record(in.world, in.face_normal);
     let n = normalize(in.face_normal);
-    out.position = vec4<f32>(in.world, body.body_id + 1.0);
-    out.normal = vec4<f32>(n, 0.0);
-    out.shadow = 0.0;
     let picked = pick(dot(frame.view_depth, vec4<f32>(in.world, 1.0)));
     let i = picked.cascade;
     if (i < 0 || dot(n, frame.light.xyz) <= 0.0) {  // turned from the sun: unlit anyway
         return out;
     }
     let phi = pixel_angle(in.clip.xy);
-    out.shadow = shadow_in(i, in.world, n, phi);
+    out.mask = shadow_in(i, in.world, n, phi);
     if (picked.previous > 0.0) {
-        out.shadow = mix(out.shadow, shadow_in(i - 1, in.world, n, phi), picked.previous);
+        out.mask = mix(out.mask, shadow_in(i - 1, in.world, n, phi), picked.previous);
     }
     return out;
 }

@@ -7,15 +7,15 @@
 // kernels are Vogel disks (golden-angle spirals) rotated per pixel by phi. The including
 // shader defines pcss_depth(uv): the stored depth at texture coordinates uv (1 where
 // nothing was drawn), which may clamp to its tile.
-const float GOLDEN_ANGLE = 2.39996322972865332;
-const int PCSS_SEARCH_TAPS = 32;
-const int PCSS_FILTER_TAPS = 64;
+// GOLDEN_ANGLE, PCSS_SEARCH_TAPS, PCSS_FILTER_TAPS and the noise's constants: from Python
+// (shadowmath/render/_shader_constants.py), as pcss.wgsl's.
+#include "constants.glsl"
 
 float pcss_depth(vec2 uv);
 
 // Jimenez's interleaved gradient noise: a per-pixel angle in [0, 2 pi).
 float pixel_angle(vec2 pixel) {
-    return 6.28318530718 * fract(52.9829189 * fract(dot(pixel, vec2(0.06711056, 0.00583715))));
+    return TWO_PI * fract(NOISE_SCALE * fract(dot(pixel, vec2(NOISE_X, NOISE_Y))));
 }
 
 // Tap i of count on the unit disk: radius sqrt((i + 1/2) / count), angle i golden angles.

@@ -6,13 +6,13 @@
 //   penumbra (PCF radius)   k max(d_R - d_B, 0)        texels (radius)
 // The including shader defines pcss_depth(uv): the stored depth at texture coordinates
 // uv (1 where nothing was drawn).
-const GOLDEN_ANGLE: f32 = 2.39996322972865332;
-const PCSS_SEARCH_TAPS: i32 = 32;
-const PCSS_FILTER_TAPS: i32 = 64;
+// GOLDEN_ANGLE, PCSS_SEARCH_TAPS, PCSS_FILTER_TAPS and the noise's constants: from Python
+// (shadowmath/render/_shader_constants.py), as pcss.glsl's.
+#include "constants.wgsl"
 
 // Jimenez's interleaved gradient noise: a per-pixel angle in [0, 2 pi).
 fn pixel_angle(pixel: vec2<f32>) -> f32 {
-    return 6.28318530718 * fract(52.9829189 * fract(dot(pixel, vec2<f32>(0.06711056, 0.00583715))));
+    return TWO_PI * fract(NOISE_SCALE * fract(dot(pixel, vec2<f32>(NOISE_X, NOISE_Y))));
 }
 
 // Tap i of count on the unit disk: radius sqrt((i + 1/2) / count), angle i golden angles.
