@@ -72,8 +72,9 @@ __all__ = [
 _HERE = Path(__file__).parent
 #: The ES module that applies the data to three.js lights (``applyShadow``).
 MODULE_PATH: Final = _HERE / "shadowmath.js"
-#: three.js itself, one minified ES module (``three.module.min.js``), bundled for offline use.
-THREE_PATH: Final = _HERE / "vendor" / "three.module.min.js"
+#: three.js r187 with its OrbitControls and TransformControls, one minified ES module
+#: (773 KB), bundled for offline use (``vendor/README.md`` says how it was built).
+THREE_PATH: Final = _HERE / "vendor" / "three.bundle.min.js"
 #: three.js's MIT licence notice, shipped with it.
 LICENSE_PATH: Final = _HERE / "vendor" / "LICENSE"
 #: The three.js release bundled and tested (npm ``three``).
