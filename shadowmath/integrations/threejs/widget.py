@@ -1,0 +1,155 @@
+"""A Jupyter widget (anywidget) that draws a scene with three.js and the package's fits.
+
+Meshes, one light and a camera; drag the light (TransformControls) or orbit the camera
+(OrbitControls): each change of the light comes back to Python, which refits the shadow
+(:func:`shadowmath.fit_shadow` or :func:`shadowmath.cube_depth_range`) and sends the
+three.js data (:mod:`shadowmath.integrations.threejs`) to the page, where ``shadowmath.js``
+applies it. three.js is bundled with the package and sent with the widget's state, so the
+widget works offline and in a notebook exported to static HTML with its widget state.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+import shadowmath as sm
+from shadowmath.integrations.threejs import (
+    MODULE_PATH,
+    THREE_PATH,
+    JsonValue,
+    point_shadow_data,
+    shadow_data,
+)
+
+try:
+    import anywidget
+    import traitlets
+except ImportError as err:  # pragma: no cover - the extra is part of `dev`
+    raise ImportError(
+        "shadowmath.integrations.threejs.widget needs anywidget: pip install 'shadowmath[widget]'"
+    ) from err
+
+__all__ = ["ShadowWidget"]
+
+_ESM = (MODULE_PATH.parent / "widget.js").read_text(encoding="utf-8")
+
+
+def _mesh_json(mesh: Any, color: str) -> dict[str, JsonValue]:
+    if isinstance(mesh, sm.Mesh):
+        vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    else:
+        vertices, faces = (np.asarray(a) for a in mesh)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+        raise ValueError("meshes: each entry is an sm.Mesh or (vertices (N, 3), faces (M, 3))")
+    return {
+        "positions": [float(v) for v in vertices.reshape(-1)],
+        "indices": [int(i) for i in faces.reshape(-1)],
+        "color": color,
+    }
+
+
+class ShadowWidget(anywidget.AnyWidget):
+    """A three.js view of meshes lit by one light whose shadow the package fits.
+
+    Arguments:
+        meshes: a list of :class:`~shadowmath.Mesh` or ``(vertices (N, 3), faces (M, 3))``
+            pairs in world coordinates; every mesh casts and receives shadows.
+        light: ``{"kind": "directional" | "spot" | "point", "position": [x, y, z],
+            "target": [x, y, z], "angle": radians (spot)}``; a sun shines from
+            ``position`` toward ``target``.
+        camera: ``{"position": [...], "target": [...]}`` of the viewer.
+        map_size: the shadow map's texels per side.
+
+    Traits synced with the page: ``light`` (written back when the light is dragged),
+    ``camera``, ``shadow`` (the fitted data, refitted on each change of ``light`` or
+    ``meshes``), ``fit_error`` (why a fit failed, else ""), ``show_frustum`` (the shadow
+    camera's box), ``show_map`` (a picture of the shadow map) and ``fitted`` (False: three.js's
+    default shadow camera, to compare).
+
+    Example:
+        >>> import numpy as np
+        >>> box = sm.Mesh(np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (1, 2)],
+        ...                        float), np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7]]))
+        >>> w = ShadowWidget([box], light={"kind": "directional", "position": [2, 1, 5],
+        ...                               "target": [0, 0, 0]})
+        >>> w.shadow["type"], w.fit_error
+        ('orthographic', '')
+    """
+
+    _esm = traitlets.Unicode(_ESM).tag(sync=True)
+    three_source = traitlets.Unicode().tag(sync=True)
+    module_source = traitlets.Unicode().tag(sync=True)
+    meshes: traitlets.List[dict[str, Any]] = traitlets.List().tag(sync=True)
+    light = traitlets.Dict().tag(sync=True)
+    camera = traitlets.Dict().tag(sync=True)
+    shadow = traitlets.Dict().tag(sync=True)
+    fit_error = traitlets.Unicode("").tag(sync=True)
+    map_size = traitlets.Int(1024).tag(sync=True)
+    show_frustum = traitlets.Bool(True).tag(sync=True)
+    show_map = traitlets.Bool(False).tag(sync=True)
+    fitted = traitlets.Bool(True).tag(sync=True)
+    height = traitlets.Int(400).tag(sync=True)
+
+    def __init__(
+        self,
+        meshes: list[Any],
+        *,
+        light: dict[str, Any],
+        camera: dict[str, Any] | None = None,
+        map_size: int = 1024,
+        **kwargs: Any,
+    ) -> None:
+        colors = ["#d8d8d8", "#e07a5f", "#3d85c6", "#81b29a", "#f2cc8f"]
+        data = [_mesh_json(m, colors[i % len(colors)]) for i, m in enumerate(meshes)]
+        view = camera or {"position": [6.0, -8.0, 6.0], "target": [0.0, 0.0, 0.0]}
+        super().__init__(
+            meshes=data,
+            light=dict(light),
+            camera=view,
+            map_size=map_size,
+            three_source=THREE_PATH.read_text(encoding="utf-8"),
+            module_source=MODULE_PATH.read_text(encoding="utf-8"),
+            **kwargs,
+        )
+        self.refit()
+
+    @traitlets.observe("light", "meshes", "map_size")
+    def _changed(self, change: Any) -> None:
+        self.refit()
+
+    def refit(self) -> None:
+        """Fit the light's shadow to the meshes and send the three.js data to the page."""
+        try:
+            self.shadow = fit_light(self.light, self.meshes, self.map_size)
+            self.fit_error = ""
+        except ValueError as err:
+            self.shadow, self.fit_error = {}, str(err)
+
+
+def fit_light(
+    light: dict[str, Any], meshes: list[dict[str, Any]], map_size: int
+) -> dict[str, JsonValue]:
+    """The three.js data of ``light``'s fit to ``meshes`` (the widget's JSON forms)."""
+    parts = [
+        (sm.Mesh(np.reshape(m["positions"], (-1, 3)), np.reshape(m["indices"], (-1, 3))), np.eye(4))
+        for m in meshes
+    ]
+    scene = sm.gather_meshes(parts)
+    position = np.asarray(light["position"], dtype=np.float64)
+    target = np.asarray(light.get("target", [0.0, 0.0, 0.0]), dtype=np.float64)
+    kind = light.get("kind")
+    if kind == "point":
+        depth = sm.cube_depth_range(position, scene, receivers=scene)
+        return point_shadow_data(position, depth, map_size=map_size)
+    if kind == "directional":
+        fit = sm.fit_shadow(
+            sm.DirectionalLight(position - target), scene, map_size, receivers=scene
+        )
+    elif kind == "spot":
+        spot = sm.SpotLight(position, target - position, float(light["angle"]))
+        fit = sm.fit_shadow(spot, scene, map_size, receivers=scene)
+    else:
+        raise ValueError(f"light: kind must be 'directional', 'spot' or 'point', got {kind!r}")
+    return shadow_data(fit)
