@@ -30,7 +30,7 @@ from shadowmath.integrations import threejs
 
 from .conftest import unavailable
 from .scenes import edge_band
-from .threejs_browser import ARGS, PAGE, browser_path, routes, serve
+from .threejs_browser import ARGS, browser_path, routes, serve
 
 SIZE = 128  # pixels square
 VIEW = (-6.0, 6.0, -6.0, 6.0)  # the ground's square, and what the camera sees
@@ -114,8 +114,8 @@ def compare(red: np.ndarray, t: Truth, where: np.ndarray | None = None) -> Count
 
 
 @pytest.fixture(scope="session")
-def page() -> Iterator[Any]:
-    """One headless Chromium for the session, on a page served from 127.0.0.1."""
+def chromium() -> Iterator[Any]:
+    """One headless Chromium for the session (Debian's, driven by Playwright)."""
     path = browser_path()
     try:
         from playwright.sync_api import sync_playwright
@@ -126,14 +126,21 @@ def page() -> Iterator[Any]:
             "the three.js tests need Chromium: apt-get install -y chromium "
             "(Debian's package; Playwright drives it, no `playwright install`)"
         )
-    server = serve(routes())
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path=path, args=ARGS)
-        tab = browser.new_page()
-        tab.goto(f"http://127.0.0.1:{server.server_port}/")
-        tab.wait_for_function("window.ready === true", timeout=20_000)
-        yield tab
+        yield browser
         browser.close()
+
+
+@pytest.fixture(scope="session")
+def page(chromium: Any) -> Iterator[Any]:
+    """The test page, served from 127.0.0.1."""
+    server = serve(routes())
+    tab = chromium.new_page()
+    tab.goto(f"http://127.0.0.1:{server.server_port}/")
+    tab.wait_for_function("window.ready === true", timeout=20_000)
+    yield tab
+    tab.close()
     server.shutdown()
     server.server_close()
 
@@ -257,23 +264,18 @@ def test_three_js_draws_each_fitted_cascade(page):
         assert (count.lost, count.acne) == (0, 0)
 
 
-def test_the_widget_draws_the_fitted_shadow_camera(tmp_path):
-    """The widget's ESM (``widget.js``), given the state the Python widget syncs, imports
-    three.js and ``shadowmath.js`` from that state (no network), draws the scene, and its
+def test_the_widget_draws_the_fitted_shadow_camera(chromium, tmp_path):
+    """The widget's standalone page (``ShadowWidget.to_html``: its ESM and state inline, as a
+    static HTML export shows it) imports three.js and ``shadowmath.js`` from that state (no
+    network: the page is all the server has), draws the scene, and its
     light's shadow camera is the fitted one (window and depth range of the data), not
     three.js's default ``(-5, 5, 5, -5, 0.5, 500)``. Saves a screenshot (to
     ``$SHADOWMATH_WIDGET_SCREENSHOT`` when set: the README's picture)."""
-    import json
     import os
     import shutil
 
     pytest.importorskip("anywidget", reason="the widget extra: pip install 'shadowmath[widget]'")
     from shadowmath.integrations.threejs.widget import ShadowWidget
-
-    path = browser_path()
-    if path is None:
-        unavailable("the three.js tests need Chromium: apt-get install -y chromium")
-    from playwright.sync_api import sync_playwright
 
     floor = box([-4, -4, -0.05], [4, 4, 0])
     sun = {"kind": "directional", "position": [3.0, -2.0, 6.0], "target": [0.0, 0.0, 0.0]}
@@ -283,30 +285,19 @@ def test_the_widget_draws_the_fitted_shadow_camera(tmp_path):
         map_size=1024,
         height=360,
     )
-    state = {k: v for k, v in w.get_state().items() if not k.startswith("_")}
-    widget_js = (threejs.MODULE_PATH.parent / "widget.js").read_bytes()
-    page_html = (PAGE.parent / "widget.html").read_bytes()
-    server = serve(
-        {
-            "/": (page_html, "text/html"),
-            "/widget.js": (widget_js, "text/javascript"),
-            "/state.json": (json.dumps(state).encode(), "application/json"),
-        }
-    )
+    server = serve({"/": (w.to_html().encode(), "text/html")})
     try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=path, args=ARGS)
-            tab = browser.new_page(viewport={"width": 640, "height": 400})
-            tab.goto(f"http://127.0.0.1:{server.server_port}/")
-            tab.wait_for_function("window.ready === true", timeout=30_000)
-            tab.wait_for_timeout(500)
-            camera = tab.evaluate(
-                "(() => { const c = window.__shadowmathWidget.light.shadow.camera;"
-                " return [c.left, c.right, c.top, c.bottom, c.near, c.far]; })()"
-            )
-            shot = tmp_path / "widget.png"
-            tab.screenshot(path=str(shot))
-            browser.close()
+        tab = chromium.new_page(viewport={"width": 640, "height": 400})
+        tab.goto(f"http://127.0.0.1:{server.server_port}/")
+        tab.wait_for_function("window.ready === true", timeout=30_000)
+        tab.wait_for_timeout(500)
+        camera = tab.evaluate(
+            "(() => { const c = window.__shadowmathWidget.light.shadow.camera;"
+            " return [c.left, c.right, c.top, c.bottom, c.near, c.far]; })()"
+        )
+        shot = tmp_path / "widget.png"
+        tab.screenshot(path=str(shot))
+        tab.close()
     finally:
         server.shutdown()
         server.server_close()

@@ -10,6 +10,8 @@ widget works offline and in a notebook exported to static HTML with its widget s
 
 from __future__ import annotations
 
+import html
+import json
 from typing import Any
 
 import numpy as np
@@ -34,6 +36,37 @@ except ImportError as err:  # pragma: no cover - the extra is part of `dev`
 __all__ = ["ShadowWidget"]
 
 _ESM = (MODULE_PATH.parent / "widget.js").read_text(encoding="utf-8")
+
+# A page that runs the widget's ESM without Jupyter: a stand-in for anywidget's model holding
+# the synced state (changes stay in the page: no Python to refit).
+_PAGE = """<!doctype html>
+<html><head><meta charset="utf-8"><title>shadowmath ShadowWidget</title></head>
+<body style="margin:0"><div id="shadowmath-widget"></div>
+<script type="module">
+const state = __STATE__;
+const esm = __ESM__;
+const listeners = {};
+const model = {
+  get: (name) => state[name],
+  set: (name, value) => {
+    state[name] = value;
+    (listeners["change:" + name] || []).forEach((f) => f());
+  },
+  on: (event, f) => { (listeners[event] = listeners[event] || []).push(f); },
+  save_changes: () => {},
+};
+window.model = model;
+const url = URL.createObjectURL(new Blob([esm], { type: "text/javascript" }));
+const widget = (await import(url)).default;
+await widget.render({ model, el: document.getElementById("shadowmath-widget") });
+window.ready = true;
+</script></body></html>
+"""
+
+
+def _script_json(value: object) -> str:
+    """JSON that is safe inside a <script> element."""
+    return json.dumps(value).replace("</", "<\\/")
 
 
 def _mesh_json(mesh: Any, color: str) -> dict[str, JsonValue]:
@@ -118,6 +151,32 @@ class ShadowWidget(anywidget.AnyWidget):
     @traitlets.observe("light", "meshes", "map_size")
     def _changed(self, change: Any) -> None:
         self.refit()
+
+    def to_html(self) -> str:
+        """A standalone HTML page of the widget as it is now (three.js, ``shadowmath.js``,
+        the widget's ESM and its state inline): it draws offline, without Jupyter; the light
+        and camera can be moved, without refitting (no Python behind it).
+
+        Returns:
+            The page's HTML (about 1.6 MB: three.js travels twice, as page and state).
+        """
+        state = {k: v for k, v in self.get_state().items() if not k.startswith("_")}
+        page = _PAGE.replace("__STATE__", _script_json(state))
+        return page.replace("__ESM__", _script_json(_ESM))
+
+    def _repr_mimebundle_(self, **kwargs: Any) -> Any:
+        """The live widget, and a standalone copy (``to_html`` in an iframe) for a
+        notebook exported to HTML without its widget state."""
+        bundle = super()._repr_mimebundle_(**kwargs)
+        frame = (
+            f'<iframe srcdoc="{html.escape(self.to_html(), quote=True)}" '
+            f'style="width:100%;height:{self.height + 40}px;border:0"></iframe>'
+        )
+        if isinstance(bundle, tuple):
+            bundle[0]["text/html"] = frame
+        elif isinstance(bundle, dict):
+            bundle["text/html"] = frame
+        return bundle
 
     def refit(self) -> None:
         """Fit the light's shadow to the meshes and send the three.js data to the page."""
