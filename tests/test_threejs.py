@@ -270,3 +270,31 @@ def test_bias_is_three_js_sign():
 def test_bad_input_names_the_argument(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_atlas_tiles_sample_as_three_js_viewports():
+    """``LightShadow._updateMatrix`` with a viewport (``scaleX = viewport.z / frameExtents.x``,
+    ``offsetX = viewport.x / frameExtents.x``, in units of the tile, as ``WebGLShadowMap``
+    sizes them) of tile ``t``, applied to the tile's clip matrix, is the atlas's
+    ``world_to_texture`` for OpenGL: three.js's viewport convention and the atlas's agree
+    (a tile flipped, or placed from the top, fails)."""
+    lights = [sm.PointLight([0.0, -3.0, 4.0]), sm.DirectionalLight([0.3, -0.2, 1.0])]
+    lights.append(sm.SpotLight([2.0, -1.0, 5.0], [-0.3, 0.3, -1.0], 0.6))
+    atlas = sm.allocate_atlas([1.0, 0.5, 0.2], atlas_size=1024)
+    fit = sm.fit_atlas(lights, BOX, atlas, receivers=FLOOR)
+    tiles = threejs.atlas_tile_data(fit)
+    assert [t["light"] for t in tiles] == [0, 1, 2]
+    for t, tile in enumerate(tiles):
+        x, y, w, h = tile["viewport"]
+        size = tile["atlasSize"]
+        scale_x, scale_y, offset_x, offset_y = w / size[0], h / size[1], x / size[0], y / size[1]
+        b = np.array(
+            [
+                [0.5 * scale_x, 0, 0, 0.5 * scale_x + offset_x],
+                [0, 0.5 * scale_y, 0, 0.5 * scale_y + offset_y],
+                [0, 0, 0.5, 0.5],
+                [0, 0, 0, 1.0],
+            ]
+        )
+        assert close(matrix(tile["worldToClip"]), fit.world_to_clip[t])
+        assert close(b @ matrix(tile["worldToClip"]), fit.world_to_texture[t])

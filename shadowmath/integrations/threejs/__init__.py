@@ -49,6 +49,7 @@ from jaxtyping import Real
 from numpy.typing import ArrayLike, NDArray
 
 from shadowmath import (
+    AtlasFit,
     Cascades,
     CubeDepthRange,
     ShadowCamera,
@@ -64,6 +65,7 @@ __all__ = [
     "THREE_PATH",
     "THREE_VERSION",
     "JsonValue",
+    "atlas_tile_data",
     "cascade_shadow_data",
     "point_shadow_data",
     "shadow_data",
@@ -329,3 +331,56 @@ def point_shadow_data(
         "projectionMatrix": _elements(projection),
         "worldToClip": [list(_elements(projection @ v)) for v in faces],
     }
+
+
+def atlas_tile_data(fit: AtlasFit) -> list[dict[str, JsonValue]]:
+    r"""Each tile of an atlas (:func:`shadowmath.fit_atlas`) as three.js matrices.
+
+    three.js gives every light its own map, so an atlas shared by many lights is for a
+    renderer's own passes (a ``ShaderMaterial`` that samples one depth texture): draw tile
+    ``t`` with ``worldToClip`` inside ``viewport`` (texels, from the bottom left, as
+    ``WebGLRenderer.setViewport`` with ``setScissorTest``) and sample it with
+    ``worldToTexture``. three.js's own viewport convention gives the same sampling matrix:
+    ``LightShadow._updateMatrix`` with ``viewport = (x, y, w, h) / tile`` and
+    ``frameExtents = atlas / tile`` scales :math:`x, y` by ``w / atlas`` and moves them by
+    ``x / atlas`` (the tests check it against ``worldToTexture``).
+
+    Arguments:
+        fit: the :class:`~shadowmath.AtlasFit`, fitted with ``api="opengl"`` (three.js's
+            ``WebGLRenderer``: clip depth :math:`[-1, 1]`, texture rows from the bottom).
+
+    Returns:
+        One dict per tile: ``light``, ``face`` (0 for a 2D map, 0..5 for a cube face),
+        ``viewport`` ``[x, y, w, h]`` in texels, ``atlasSize`` ``[W, H]``, ``near``, ``far``,
+        ``worldToClip`` and ``worldToTexture`` (16 floats each, column-major).
+
+    Raises:
+        ValueError: not an ``AtlasFit``.
+
+    Example:
+        >>> import numpy as np, shadowmath as sm
+        >>> box = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (0, 2)], float)
+        >>> lights = [sm.PointLight([0.0, 0.0, 6.0]), sm.DirectionalLight([1.0, 0.0, 2.0])]
+        >>> atlas = sm.allocate_atlas([1.0, 1.0], atlas_size=512)
+        >>> tiles = atlas_tile_data(sm.fit_atlas(lights, box, atlas))
+        >>> [(t["light"], t["face"], t["viewport"][2], t["atlasSize"]) for t in tiles]
+        [(0, 0, 256, [512, 512]), (1, 0, 256, [512, 512])]
+    """
+    if not isinstance(fit, AtlasFit):
+        raise ValueError(f"fit: expected an AtlasFit from fit_atlas, got {type(fit).__name__}")
+    clip, texture = np.asarray(fit.world_to_clip), np.asarray(fit.world_to_texture)
+    viewports = np.asarray(fit.viewports)
+    size = [int(fit.texture_size[0]), int(fit.texture_size[1])]
+    return [
+        {
+            "light": int(np.asarray(fit.tile_id)[t]),
+            "face": int(np.asarray(fit.tile_face)[t]),
+            "viewport": [int(v) for v in viewports[t]],
+            "atlasSize": list(size),
+            "near": float(np.asarray(fit.near)[t]),
+            "far": float(np.asarray(fit.far)[t]),
+            "worldToClip": _elements(clip[t]),
+            "worldToTexture": _elements(texture[t]),
+        }
+        for t in range(clip.shape[0])
+    ]
