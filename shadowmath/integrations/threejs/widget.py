@@ -164,18 +164,15 @@ class ShadowWidget(anywidget.AnyWidget):
         page = _PAGE.replace("__STATE__", _script_json(state))
         return page.replace("__ESM__", _script_json(_ESM))
 
-    def _repr_mimebundle_(self, **kwargs: Any) -> Any:
+    def _repr_mimebundle_(self, **kwargs: Any) -> dict[str, Any]:
         """The live widget, and a standalone copy (``to_html`` in an iframe) for a
         notebook exported to HTML without its widget state."""
-        bundle = super()._repr_mimebundle_(**kwargs)
+        bundle = dict(super()._repr_mimebundle_(**kwargs) or {})
         frame = (
             f'<iframe srcdoc="{html.escape(self.to_html(), quote=True)}" '
             f'style="width:100%;height:{self.height + 40}px;border:0"></iframe>'
         )
-        if isinstance(bundle, tuple):
-            bundle[0]["text/html"] = frame
-        elif isinstance(bundle, dict):
-            bundle["text/html"] = frame
+        bundle["text/html"] = frame
         return bundle
 
     def refit(self) -> None:
