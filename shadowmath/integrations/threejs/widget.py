@@ -164,15 +164,17 @@ class ShadowWidget(anywidget.AnyWidget):
         page = _PAGE.replace("__STATE__", _script_json(state))
         return page.replace("__ESM__", _script_json(_ESM))
 
-    def _repr_mimebundle_(self, **kwargs: Any) -> dict[str, Any]:
+    def _repr_mimebundle_(self, **kwargs: Any) -> tuple[dict[Any, Any], dict[Any, Any]] | None:
         """The live widget, and a standalone copy (``to_html`` in an iframe) for a
         notebook exported to HTML without its widget state."""
-        bundle = dict(super()._repr_mimebundle_(**kwargs) or {})
+        bundle = super()._repr_mimebundle_(**kwargs)
+        if bundle is None:
+            return None
         frame = (
             f'<iframe srcdoc="{html.escape(self.to_html(), quote=True)}" '
             f'style="width:100%;height:{self.height + 40}px;border:0"></iframe>'
         )
-        bundle["text/html"] = frame
+        bundle[0]["text/html"] = frame
         return bundle
 
     def refit(self) -> None:
