@@ -282,8 +282,10 @@ def test_the_widget_draws_the_fitted_shadow_camera(chromium, tmp_path):
     w = ShadowWidget(
         [sm.Mesh(*floor), sm.Mesh(*SUN_BOXES[1]), sm.Mesh(*box([-1.5, -1, 0.6], [-0.5, 0, 1.4]))],
         light=sun,
+        camera={"position": [7.0, -9.0, 7.0], "target": [0.0, 0.0, 0.5]},
         map_size=1024,
         height=360,
+        show_map=True,
     )
     server = serve({"/": (w.to_html().encode(), "text/html")})
     try:
