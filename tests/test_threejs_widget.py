@@ -9,8 +9,8 @@ import shadowmath as sm
 
 pytest.importorskip("anywidget", reason="the widget extra: pip install 'shadowmath[widget]'")
 
-from shadowmath.integrations.threejs import point_shadow_data, shadow_data  # noqa: E402
-from shadowmath.integrations.threejs.widget import ShadowWidget  # noqa: E402
+from shadowmath.integrations.threejs import point_shadow_data, shadow_data
+from shadowmath.integrations.threejs.widget import ShadowWidget
 
 CUBE = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (1.0, 2.0)])
 FACES = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1]])
