@@ -298,3 +298,17 @@ def test_atlas_tiles_sample_as_three_js_viewports():
         )
         assert close(matrix(tile["worldToClip"]), fit.world_to_clip[t])
         assert close(b @ matrix(tile["worldToClip"]), fit.world_to_texture[t])
+
+
+def test_the_pages_data_example_runs():
+    """docs/threejs.md's first code block, run as it is: the three kinds of data."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "threejs.md").read_text(encoding="utf-8")
+    fence = "`" * 3
+    block = text.split(fence + "python\n", 1)[1].split(fence, 1)[0]
+    scope: dict[str, object] = {}
+    exec(block, scope)
+    assert scope["data"]["type"] == "orthographic"
+    assert scope["spot_data"]["type"] == "perspective"
+    assert scope["lamp_data"]["type"] == "cube"
