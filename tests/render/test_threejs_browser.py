@@ -191,7 +191,8 @@ CASES = {"sun": sun_case, "spot": spot_case, "point": point_case}
 @pytest.mark.parametrize("name", CASES)
 def test_three_js_draws_the_fitted_shadow(page, name):
     """0 pixels off the band: three.js's shadow through the fitted data is the ray
-    caster's; the light's own settings are what the page set, after two frames."""
+    caster's; the light's own settings are what the page set, after two frames, and
+    ``removeShadow`` restores the shadow's."""
     light, data, t = CASES[name]()
     boxes = {"sun": SUN_BOXES, "spot": SPOT_BOXES, "point": POINT_BOXES}[name]
     result = draw(page, light, boxes, data)
@@ -204,6 +205,11 @@ def test_three_js_draws_the_fitted_shadow(page, name):
         assert result["state"]["angle"] == pytest.approx(light["angle"], rel=1e-7)
     if name == "point":
         assert result["state"]["cameraFar"] == pytest.approx(data["far"], rel=1e-7)
+    # removeShadow gives the light back to three.js: its camera as constructed, the page's
+    # map size, no override left.
+    default_far = 500
+    expected = {"near": 0.5, "far": default_far, "mapSize": MAP, "bias": 0, "ownUpdate": False}
+    assert result["state"]["restored"] == expected
 
 
 @pytest.mark.parametrize("name", CASES)

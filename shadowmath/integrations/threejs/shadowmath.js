@@ -21,6 +21,15 @@
 // to light.distance each frame (WebGLShadowMap.js).
 
 const KEY = '__shadowmath';
+const FIELDS = ['near', 'far', 'left', 'right', 'top', 'bottom', 'fov', 'aspect'];
+
+function saved(light) {
+	// What applyShadow changes, as the application left it: removeShadow restores it.
+	const shadow = light.shadow;
+	const camera = {};
+	for (const f of FIELDS) if (f in shadow.camera) camera[f] = shadow.camera[f];
+	return { camera, mapSize: shadow.mapSize.toArray(), bias: shadow.bias };
+}
 
 function setMapSize(shadow, size) {
 	if (shadow.mapSize.x === size[0] && shadow.mapSize.y === size[1]) return;
@@ -74,7 +83,8 @@ function applyFrustum(light, data) {
 		throw new Error(`shadowmath: a ${data.type} fit for a light whose shadow camera is not ${data.type}`);
 	}
 	if (!shadow[KEY]) {
-		shadow[KEY] = { updateMatrices: Object.prototype.hasOwnProperty.call(shadow, 'updateMatrices') ? shadow.updateMatrices : null };
+		const own = Object.prototype.hasOwnProperty.call(shadow, 'updateMatrices');
+		shadow[KEY] = { saved: saved(light), updateMatrices: own ? shadow.updateMatrices : null };
 		shadow.updateMatrices = fittedUpdateMatrices;
 	}
 	shadow[KEY].data = data;
@@ -88,7 +98,7 @@ function applyCube(light, data) {
 	const camera = shadow.camera;
 	if (!light.isPointLight) throw new Error('shadowmath: cube data is for a PointLight');
 	if (!shadow[KEY]) {
-		shadow[KEY] = { far: null };
+		shadow[KEY] = { saved: saved(light) };
 		// three.js sets camera.far = light.distance || camera.far before each frame: keep ours.
 		Object.defineProperty(camera, 'far', {
 			configurable: true,
@@ -109,10 +119,10 @@ function applyCube(light, data) {
  */
 export function applyShadow(light, data) {
 	if (!light || !light.shadow) throw new Error('shadowmath: light has no shadow');
-	setMapSize(light.shadow, data.mapSize);
-	light.shadow.bias = data.bias;
 	if (data.type === 'cube') applyCube(light, data);
 	else applyFrustum(light, data);
+	setMapSize(light.shadow, data.mapSize);
+	light.shadow.bias = data.bias;
 	light.shadow.needsUpdate = true;
 }
 
@@ -126,7 +136,10 @@ export function applyCascades(lights, data) {
 	data.cascades.forEach((cascade, i) => applyShadow(lights[i], cascade));
 }
 
-/** Give a light back to three.js's own shadow camera. */
+/**
+ * Give a light back to three.js's own shadow camera: its updateMatrices, and the camera
+ * fields, mapSize and bias the application had set before the first applyShadow.
+ */
 export function removeShadow(light) {
 	const shadow = light.shadow;
 	const state = shadow && shadow[KEY];
@@ -135,10 +148,11 @@ export function removeShadow(light) {
 		if (state.updateMatrices) shadow.updateMatrices = state.updateMatrices;
 		else delete shadow.updateMatrices;
 	} else {
-		const far = state.data.far;
-		delete shadow.camera.far;
-		shadow.camera.far = far;
+		delete shadow.camera.far; // the getter of applyCube
 	}
+	Object.assign(shadow.camera, state.saved.camera);
+	setMapSize(shadow, state.saved.mapSize);
+	shadow.bias = state.saved.bias;
 	delete shadow[KEY];
 	shadow.camera.updateProjectionMatrix();
 	shadow.needsUpdate = true;
