@@ -9,6 +9,7 @@ sample with, and compare them with the package's fit (``api="opengl"``: three.js
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -312,3 +313,16 @@ def test_the_pages_data_example_runs():
     assert scope["data"]["type"] == "orthographic"
     assert scope["spot_data"]["type"] == "perspective"
     assert scope["lamp_data"]["type"] == "cube"
+
+
+def test_three_js_is_bundled_with_its_licence():
+    """The package ships three.js (one ES module exporting the renderer and both controls)
+    and its MIT notice."""
+    source = threejs.THREE_PATH.read_text(encoding="utf-8")
+    exports = source[source.rindex("export{") :]
+    names = set(re.findall(r"(?:\bas |[{,])(\w+)(?=[,}])", exports))
+    assert {"WebGLRenderer", "OrbitControls", "TransformControls", "CameraHelper"} <= names
+    assert "NotAThreeName" not in names
+    licence = threejs.LICENSE_PATH.read_text(encoding="utf-8")
+    assert licence.startswith("The MIT License") and "three.js authors" in licence
+    assert threejs.MODULE_PATH.is_file()

@@ -319,3 +319,36 @@ def test_the_widget_draws_the_fitted_shadow_camera(chromium, tmp_path):
     assert pixels.std() > 10  # a drawn scene, not a blank canvas
     if os.environ.get("SHADOWMATH_WIDGET_SCREENSHOT"):
         shutil.copy(shot, os.environ["SHADOWMATH_WIDGET_SCREENSHOT"])
+
+
+@pytest.mark.parametrize("system", ["webgl", "webgpu"])
+@pytest.mark.parametrize("name", ["sun", "spot"])
+def test_three_js_own_matrices_are_the_fits(page, name, system):
+    """three.js's own code (``LightShadow.updateMatrices`` as the module replaces it, and
+    ``_updateMatrix``), in the page, turns the data into the fit's matrices: world-to-clip is
+    the fit's OpenGL ``blocker_to_clip`` (WebGL) or the same with depth ``(z + w) / 2``
+    (WebGPU), and ``shadow.matrix`` the fit's ``world_to_texture`` in both (JavaScript's
+    numbers are float64, as the data: 1e-9 relative). A module that left three.js's own
+    ``updateMatrices`` in place, or built the projection in WebGL's depth range for the
+    WebGPU renderer, fails."""
+    light, data, _ = CASES[name]()
+    fit = {
+        "sun": lambda: sm.fit_shadow(
+            sm.DirectionalLight(SUN), mesh(SUN_BOXES), MAP, receivers=GROUND
+        ),
+        "spot": lambda: sm.fit_shadow(
+            sm.SpotLight(SPOT[0], -SPOT[0], SPOT[1]), mesh(SPOT_BOXES), MAP, receivers=GROUND
+        ),
+    }[name]()
+    got = page.evaluate(
+        "spec => matrices(spec)", {"light": light, "shadow": data, "system": system}
+    )
+    clip = np.asarray(got["clip"]).reshape(4, 4).T
+    shadow = np.asarray(got["shadow"]).reshape(4, 4).T
+    expected = np.asarray(fit.blocker_to_clip)
+    if system == "webgpu":
+        expected = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0.5, 0.5], [0, 0, 0, 1]]) @ expected
+    scale = np.abs(expected).max()
+    assert np.abs(clip - expected).max() <= 1e-9 * scale
+    texture = np.asarray(fit.world_to_texture)
+    assert np.abs(shadow - texture).max() <= 1e-9 * np.abs(texture).max()

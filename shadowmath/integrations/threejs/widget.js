@@ -59,6 +59,10 @@ async function render({ model, el }) {
 	const orbit = new THREE.OrbitControls(camera, renderer.domElement);
 	orbit.target.fromArray(view.target);
 	orbit.update();
+	orbit.addEventListener('end', () => { // the viewer's camera, back to Python
+		model.set('camera', { position: camera.position.toArray(), target: orbit.target.toArray() });
+		model.save_changes();
+	});
 
 	let meshes = [];
 	let light = null;
