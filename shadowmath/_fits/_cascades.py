@@ -226,7 +226,11 @@ def fit_cascades(
             practical scheme with ``lam`` if given, else a rule from the pose sweep
             (``docs/cascades.md``): ``lam = 0.75`` over the camera's range
             (``depth_range="camera"``), the log scheme (``lam = 1``) over a visible or
-            measured range, whose near end is where the scene starts.
+            measured range, whose near end is where the scene starts; with
+            ``stable=True`` over the camera's range, three.js's ``lam = 0.5`` with each
+            cascade ending, band included, at its practical split (``band_end[i]`` is
+            that split, ``splits[i + 1]`` lies ``overlap`` of the cascade before it), so
+            that no stable cascade is larger than three.js's.
         max_distance: ``(*batch,)`` the shadow distance: the last split (at most
             the camera's far plane).
         overlap: the blend band, a fraction of each cascade's length in ``[0, 1)``.
