@@ -20,6 +20,7 @@ maps' usable resolution the same (a border of 2 texels, three.js's inset for PCF
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -171,3 +172,55 @@ def test_the_stable_default_bands_end_at_the_practical_splits() -> None:
         lam = kwargs.get("lam", 0.75)
         np.testing.assert_allclose(c.splits, sm.cascade_splits(0.3, 400.0, 4, lam=lam),
                                    rtol=1e-12)  # fmt: skip
+
+
+# --- widen_cascades on stable cascades: refused, with the border that holds the search -------
+
+
+def slice_corners(view: np.ndarray, proj: np.ndarray, a: float, b: float) -> np.ndarray:
+    """World corners of the camera's slice between view depths ``a`` and ``b``."""
+    inverse, to_world = np.linalg.inv(proj), np.linalg.inv(view)
+    out = []
+    for d in (a, b):
+        for x, y in ((1, 1), (1, -1), (-1, -1), (-1, 1)):
+            h = inverse @ [x, y, -1.0, 1.0]
+            p = h[:3] / h[3] * (d / -(h[2] / h[3]))
+            out.append((to_world @ np.r_[p, 1.0])[:3])
+    return np.array(out)
+
+
+@pytest.mark.parametrize("degrees", [0.27, 1.0, 3.0])
+def test_widening_stable_cascades_is_refused_with_a_border_that_holds_the_search(
+    degrees: float,
+) -> None:
+    """The message names ``border_texels=B``; refitted with it, each stable map reaches the
+    blocker search's ``w = tan(theta) (f - n)`` past every corner of its slice (its whole
+    map, border included: the search may read it), and its half-extent holds ``h + w``
+    (``h``: the square's half-width, the sphere's radius plus the half texel its snapped
+    centre may have moved); with ``B - 1`` some cascade's does not."""
+    proj = perspective(math.radians(60.0), 16 / 9, 0.1, 300.0)
+    view = look_at(np.array([2.0, 6.0, 1.0]), np.array([30.0, 0.0, -50.0]))
+    box = np.array([[-200.0, 0.0, -200.0], [200.0, 15.0, 200.0]])
+    sun, theta = np.array([0.4, 1.0, -0.3]), math.radians(degrees)
+    c = sm.fit_cascades(sun, view, proj, box, W, max_distance=120.0, stable=True, pcf_radius=1)
+    with pytest.raises(ValueError, match="stable cascades cannot be widened") as info:
+        sm.widen_cascades(c, angular_radius=theta)
+    found = re.search(r"border_texels=(\d+)", str(info.value))
+    assert found is not None, str(info.value)
+    border = int(found.group(1))
+    radius = c.frustum.half_width * (1 - 1 / (c.frustum.margin_x * W))  # the slices' spheres
+    for b, holds in ((border, True), (border - 1, False)):
+        r = sm.fit_cascades(sun, view, proj, box, W, max_distance=120.0, stable=True,
+                            border_texels=b)  # fmt: skip
+        # the same spheres, whatever the border:
+        np.testing.assert_allclose(r.frustum.half_width * (1 - 1 / (r.frustum.margin_x * W)),
+                                   radius, rtol=1e-12)  # fmt: skip
+        w = math.tan(theta) * (r.frustum.far - r.frustum.near)
+        extent = r.frustum.half_width / r.frustum.margin_x  # the whole map's half-width
+        assert bool(np.all(extent >= r.frustum.half_width + w)) == holds
+        if holds:
+            for i in range(4):
+                p = slice_corners(view, proj, r.splits[i], r.band_end[i])
+                st = (np.c_[p, np.ones(8)] @ r.world_to_texture[i].T)[:, :2] * W
+                reach = w[i] / r.texel_size[i]
+                assert np.all(st - reach >= -1e-6) and np.all(st + reach <= W + 1e-6)
