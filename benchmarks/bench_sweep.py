@@ -546,7 +546,7 @@ def sweep(cfg: Config, section: Section, variants: Mapping[str, Options]) -> str
         "them: " + ", ".join(f"{n} {c}" for n, c in uncovered.items()) + ".",
         "",
         "**(a) Per comparison** (shadowmath's default: `scheme=\"auto\"` over the camera's "
-        "range, λ = 0.75):",
+        "range, λ = 0.75; stable: λ = 0.5, each band ending at its split):",
         "",
         *summary(results, section),
         "",
