@@ -263,6 +263,7 @@ class Fit(NamedTuple):
     texel: F64
     to_unit: F64
     texture: F64 | None = None  # (n, 4, 4) a warped map's world_to_texture (LiSPSM)
+    bands: F64 | None = None  # (n - 1, 2) the depths over which cascade i blends into i + 1
 
 
 def light_axes(sun: F64) -> F64:
@@ -367,7 +368,9 @@ def threejs_cascades(
 
 def threejs_fit(scene: Scene, projection: F64) -> Fit:
     t = threejs_cascades(scene.sun, scene.view, projection, scene.distance)
-    return Fit(t.splits, np.stack([t.texel, t.texel], axis=1), t.to_unit)
+    s = t.splits  # cascade i fades into i + 1 over the last 10 % of [s_i, s_{i+1}]
+    bands = np.stack([s[1:-1] - 0.1 * (s[1:-1] - s[:-2]), s[1:-1]], axis=1)
+    return Fit(s, np.stack([t.texel, t.texel], axis=1), t.to_unit, bands=bands)
 
 
 def slice_corners(projection: F64, near: F64, far: F64) -> F64:
@@ -453,7 +456,9 @@ def shadowmath_fit(
         m = np.asarray(margin)[:, None]
         to_unit[:, k] = tex[:, k] / m
         to_unit[:, k, 3] -= (1 - m[:, 0]) / (2 * m[:, 0])
-    return Fit(np.asarray(c.splits), np.asarray(c.texel_size), to_unit)
+    splits, band_end = np.asarray(c.splits), np.asarray(c.band_end)
+    bands = np.stack([splits[1:-1], band_end[:-1]], axis=1)
+    return Fit(splits, np.asarray(c.texel_size), to_unit, bands=bands)
 
 
 BEVY_SPLITS = "shadowmath, bevy's splits"
@@ -503,6 +508,24 @@ def ratios(fit: Fit, hits: Hits, sun: F64) -> Ratios:
     tol = 1e-9
     inside = np.all((uvw >= -tol) & (uvw <= 1 + tol), axis=1)
     return Ratios(texel_area / hits.pixel_area, int(np.count_nonzero(~inside)))
+
+
+def blended_ratios(fit: Fit, hits: Hits, sun: F64) -> Ratios:
+    """:func:`ratios` with each blend band's pixels given the texel area the blend reads,
+    ``w A_i + (1 - w) A_{i+1}`` (``w``: cascade ``i``'s weight, 1 to 0 across the band),
+    whichever side of the split the scheme puts its band (three.js before it, shadowmath
+    after it): the same for both."""
+    r = ratios(fit, hits, sun)
+    if fit.bands is None:
+        return r
+    area = fit.texel[:, 0] * fit.texel[:, 1]
+    out = r.ratio.copy()
+    for i, (a, b) in enumerate(fit.bands):
+        inside = (hits.depth >= a) & (hits.depth < b)
+        w = (b - hits.depth[inside]) / (b - a)
+        blend = w * area[i] + (1 - w) * area[i + 1]
+        out[inside] = blend / (hits.normal[inside] @ sun) / hits.pixel_area[inside]
+    return Ratios(out, r.uncovered)
 
 
 def warped_ratios(M: F64, hits: Hits) -> Ratios:

@@ -23,6 +23,10 @@ from :data:`ELEVATIONS` (10°, 40°, 70°) chosen by a Latin square over pitch a
 spheres of Godot and Unreal; ``warp="lispsm"`` and ``orientation="fitted"`` (each map turned
 to its body's least-area rectangle) against the default. ``gain`` = their statistic /
 shadowmath's (``> 1``: shadowmath finer), at the median and the 90th percentile (p90).
+A pixel in a blend band counts the cascade its shader picks, which puts three.js's band
+(before its split) in the finer cascade and shadowmath's (after it) in the coarser: the row
+``stable / three.js, blended`` gives both schemes' band pixels the texel area the blend reads
+(:func:`bench_cascades.blended_ratios`), the same rule whichever side the band lies.
 
 The engines (three.js and bevy: :mod:`bench_cascades`), written here from their sources with
 their default settings, the shadow distance the scene's:
@@ -89,6 +93,7 @@ from bench_cascades import (
     Scene,
     Stats,
     bevy_fit,
+    blended_ratios,
     camera_near_far,
     cast,
     light_axes,
@@ -312,7 +317,8 @@ def measured_with_state(**split_options: Any) -> Callable[[Hits], dict[str, Any]
 
 VARIANTS: dict[str, Options] = {
     "λ=0.9": {"lam": 0.9},
-    "default: auto, camera's range (λ=0.75)": {},
+    "default: auto, camera's range (λ=0.75; stable: λ=0.5, bands inside)": {},
+    "λ=0.75": {"lam": 0.75},
     "λ=0.6": {"lam": 0.6},
     "λ=0.5": {"lam": 0.5},
     "log": {"scheme": "log"},
@@ -329,9 +335,13 @@ VARIANTS: dict[str, Options] = {
 }
 """Candidate defaults: ``fit_cascades``'s keyword arguments, or a function of the pose's
 receiver pixels returning them (a new option is one line here). ``scheme="auto"`` (the
-default) is λ = 0.75 over the camera's range and the log scheme over a visible or measured
-range: the rows without ``lam`` or ``scheme`` are its."""
-DEFAULT = "default: auto, camera's range (λ=0.75)"
+default) is λ = 0.75 over the camera's range (with ``stable=True`` three.js's λ = 0.5, each
+cascade's blend band inside its split) and the log scheme over a visible or measured range:
+the rows without ``lam`` or ``scheme`` are its."""
+DEFAULT = "default: auto, camera's range (λ=0.75; stable: λ=0.5, bands inside)"
+BLENDED = " blended"
+"""The suffix of a fit's statistics with every blend band's pixels given the texel area the
+blend reads (:func:`bench_cascades.blended_ratios`)."""
 LISPSM = "LiSPSM"
 FITTED = "fitted orientation"
 ENGINES: dict[str, Callable[[Scene, F64], Fit]] = {
@@ -357,6 +367,7 @@ COMPARISONS = (
     Comparison("default / three.js", DEFAULT, "three.js"),
     Comparison("default / bevy", DEFAULT, "bevy"),
     Comparison("stable / three.js", f"{DEFAULT} stable", "three.js"),
+    Comparison("stable / three.js, blended", f"{DEFAULT} stable{BLENDED}", f"three.js{BLENDED}"),
     Comparison("stable / Godot", f"{DEFAULT} stable", "Godot"),
     Comparison("stable / Unreal", f"{DEFAULT} stable", "Unreal"),
     Comparison("LiSPSM / no warp", LISPSM, DEFAULT),
@@ -387,7 +398,10 @@ def measure_pose(
     fits[FITTED] = shadowmath_fit(
         scene, projection, stable=False, splits=None, options={**plain, "orientation": "fitted"}
     )
-    return {name: stats(ratios(fit, hits, scene.sun)) for name, fit in fits.items()}
+    per = {name: stats(ratios(fit, hits, scene.sun)) for name, fit in fits.items()}
+    for name in ("three.js", f"{DEFAULT} stable"):
+        per[name + BLENDED] = stats(blended_ratios(fits[name], hits, scene.sun))
+    return per
 
 
 def gain(theirs: Stats, ours: Stats, stat: str) -> float:
@@ -517,7 +531,8 @@ def sweep(cfg: Config, section: Section, variants: Mapping[str, Options]) -> str
     image = TINY_IMAGE if cfg.tiny else IMAGE
     projection = perspective(FOV_Y, ASPECT, NEAR, FAR)
     results, skipped = measure_all(image, variants)
-    uncovered = {name: sum(per[name].uncovered for _, per in results) for name in results[0][1]}
+    names = [name for name in results[0][1] if not name.endswith(BLENDED)]
+    uncovered = {name: sum(per[name].uncovered for _, per in results) for name in names}
     for name, count in uncovered.items():
         section.figures[f"uncovered.{name}"] = float(count)
     left_out = f", {len(skipped)} without a sunlit receiver left out: {', '.join(skipped)}"
@@ -531,7 +546,7 @@ def sweep(cfg: Config, section: Section, variants: Mapping[str, Options]) -> str
         "them: " + ", ".join(f"{n} {c}" for n, c in uncovered.items()) + ".",
         "",
         "**(a) Per comparison** (shadowmath's default: `scheme=\"auto\"` over the camera's "
-        "range, λ = 0.75):",
+        "range, λ = 0.75; stable: λ = 0.5, each band ending at its split):",
         "",
         *summary(results, section),
         "",

@@ -471,7 +471,7 @@ def test_the_options_record_reads_back_each_option_by_name() -> None:
 
     rows = tuple(tuple(float(16 * m + k) for k in range(16)) for m in range(3))
     o = CascadeOptions(True, False, True, False, 0.9, 0.8, 512.0, 256.0, 2.0**-52, 2.0**-26,
-                       3, 0.01, 2, 2, *rows, 2, True)  # fmt: skip
+                       3, 0.01, 2, 2, *rows, 2, True, True)  # fmt: skip
     record = options_record(o)[0]
     for name, value in o._asdict().items():
         got = record[name]

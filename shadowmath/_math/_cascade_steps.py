@@ -104,6 +104,7 @@ class CascadeOptions(NamedTuple):
     map_texture: tuple[float, ...]  # its texture rows (16)
     depth_range: int  # 0: the camera's, 1: the visible range, 2: measured (sc[3], sc[4])
     has_state: bool  # the last range and sizes in use (sc[5], sc[6]; W): the ladder
+    inside: bool  # each cascade's band ends at its practical split (stable "auto")
 
 
 _KINDS = {"bool": np.bool_, "float": np.float64, "int": np.int64}
@@ -229,12 +230,23 @@ def cascade_range(near: Any, far: Any, sc: Any, G: Any, o: Any) -> Any:
 
 def cascade_split(G: Any, k: Any, rng: Any, o: Any) -> Any:
     """Split ``k`` (an int, or the cascades' indices in the array mode): given, or the
-    scheme's over ``rng = (near, end, lam)`` with exact ends."""
+    scheme's over ``rng = (near, end, lam, overlap)`` with exact ends.
+
+    With ``o.inside`` each cascade ends, band included, at the scheme's split ``p_k``:
+    ``s_k + v (s_k - s_{k-1}) = p_k`` (``v`` the overlap), that is, with ``q = v / (1 + v)``,
+    ``s_k = q^k n + (1 - q) sum_{j=1}^{k} q^{k-j} p_j``."""
     if o.has_splits:
         return take_last(G, k)
-    near, end, lam = rng
+    near, end, lam, ov = rng
     n = o.cascades
-    return where(k == 0, near, where(k == n, end, split_depth(near, end, lam, k / n)))
+    s = split_depth(near, end, lam, k / n)
+    if o.inside:
+        q = ov / (1.0 + ov)
+        s = q**k * near
+        for i in range(1, n):
+            p = split_depth(near, end, lam, i / n)
+            s = s + where(k >= i, (1.0 - q) * q ** greater(k - i, 0) * p, 0.0 * p)
+    return where(k == 0, near, where(k == n, end, s))
 
 
 def box_pass(VP: Any, box: Any, a_sign: Any, bl: Any, bg: Any) -> None:
@@ -447,7 +459,7 @@ def cascade_loop(inputs: Any, opts: Any, out: Any, splits: Any, status: Any) -> 
              box, (U[0], U[1], U[2])), scalars[i % len(scalars)], (G, sizes[i % len(sizes)]), o,
         )  # fmt: skip
         status[i] = e[4]
-        rng = (e[0][1], e[0][2], e[0][3])
+        rng = (e[0][1], e[0][2], e[0][3], e[0][4])
         for k in range(o.cascades + 1):
             splits[i][k] = cascade_split(G, k, rng, o)
         for j in range(o.cascades):

@@ -53,7 +53,7 @@ from shadowmath.lights import DirectionalLight
 
 from ._lispsm import check_warp, warp_cascades
 from ._orientation import check_orientation, fitted_cascade
-from ._splits import CascadeScheme, check_count, scheme_lam
+from ._splits import CascadeScheme, check_count, scheme_lam, stable_bands_inside
 
 __all__ = ["CascadeState", "Cascades", "fit_cascades"]
 
@@ -226,7 +226,11 @@ def fit_cascades(
             practical scheme with ``lam`` if given, else a rule from the pose sweep
             (``docs/cascades.md``): ``lam = 0.75`` over the camera's range
             (``depth_range="camera"``), the log scheme (``lam = 1``) over a visible or
-            measured range, whose near end is where the scene starts.
+            measured range, whose near end is where the scene starts; with
+            ``stable=True`` over the camera's range, three.js's ``lam = 0.5`` with each
+            cascade ending, band included, at its practical split (``band_end[i]`` is
+            that split, ``splits[i + 1]`` lies ``overlap`` of the cascade before it), so
+            that no stable cascade is larger than three.js's.
         max_distance: ``(*batch,)`` the shadow distance: the last split (at most
             the camera's far plane).
         overlap: the blend band, a fraction of each cascade's length in ``[0, 1)``.
@@ -312,7 +316,10 @@ def fit_cascades(
         raise ValueError(f"layout: expected 'layers' or 'atlas', got {layout!r}")
     range_code, measured = _range_option(depth_range, splits is not None, state)
     direction = light.direction if isinstance(light, DirectionalLight) else light
-    lam_v = scheme_lam(scheme, lam, fitted_range=range_code != 0)
+    lam_v = scheme_lam(scheme, lam, fitted_range=range_code != 0, stable=spec.stable)
+    inside = splits is None and stable_bands_inside(
+        scheme, lam, fitted_range=range_code != 0, stable=spec.stable
+    )
     n_given = None if splits is not None else check_count(count)
     # Python numbers stay Python numbers (the common case): no array conversion per frame.
     plain = all(type(v) in (float, int) for v in (lam_v, overlap)) and (
@@ -338,7 +345,9 @@ def fit_cascades(
     W = _range_checks(checks, M, (Qn, Qf, W), (shape, n))
     C = _clip_from_gl(cam_api, camera_reversed_z)
     given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None)
-    o, record = _options(spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row))
+    o, record = _options(
+        spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row), inside=inside
+    )
     call = _Call(ctx, spec, layout, shape, o)
     extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
     arrays = (L, V, P, box, U, S, dmax, lm, ov, extra, W)
@@ -579,7 +588,7 @@ def _arrays(
     j = np.arange(o.cascades + 1, dtype=ctx.dtype)  # the cascades' indices, in the work dtype
     with np.errstate(all="ignore"):  # invalid entries: their status bits say so
         e = F.cascade_entry(inputs, sc, (S, W), o)
-        splits = F.cascade_split(S, j, e[0][1:4], o)
+        splits = F.cascade_split(S, j, e[0][1:5], o)
         sl = F.cascade_slice(e, inputs[3], splits, j[:-1], o)
         row: list[Any] = [0.0] * ROW
         warp, fitted = hooks
@@ -686,6 +695,7 @@ def _options(
     *,
     eps: float,
     C: tuple[float, ...],
+    inside: bool = False,
 ) -> tuple[CascadeOptions, Any]:
     """The call's options by name, and as the compiled loop's record (cached: the same
     few recur every frame)."""
@@ -694,7 +704,7 @@ def _options(
     has_up, has_splits, has_dmax, range_code, has_state = given
     o = CascadeOptions(
         has_up=has_up, stable=spec.stable, has_splits=has_splits, has_dmax=has_dmax,
-        depth_range=range_code, has_state=has_state,
+        depth_range=range_code, has_state=has_state, inside=inside,
         mx=float(spec.margins[0]), my=float(spec.margins[1]), width=float(spec.size[0]),
         height=float(spec.size[1]), eps=eps, tol=math.sqrt(eps), cascades=n,
         slack=NEAR_FAR_SLACK, cols=cols, rows=rows, camera_clip=C, map_clip=tuple(C_api),

@@ -36,6 +36,9 @@ PRACTICAL_LAM = 0.75
 #: ``scheme="auto"``'s blend over the camera's depth range and over a fitted one (visible
 #: or measured): the best of the pose sweep's candidates over each (``docs/cascades.md``).
 AUTO_LAM_CAMERA, AUTO_LAM_FITTED = PRACTICAL_LAM, 1.0
+#: ``scheme="auto"``'s blend for stable cascades over the camera's range: three.js's, with
+#: each cascade's blend band inside its split (:func:`stable_bands_inside`).
+AUTO_LAM_STABLE = 0.5
 
 
 def cascade_splits(
@@ -103,10 +106,11 @@ def check_scheme(scheme: object, *, auto: bool = False) -> float | None:
     return SCHEMES.get(scheme)
 
 
-def scheme_lam(scheme: object, lam: Any, *, fitted_range: bool) -> Any:
+def scheme_lam(scheme: object, lam: Any, *, fitted_range: bool, stable: bool = False) -> Any:
     """:func:`~shadowmath.fit_cascades`'s blend: the one ``scheme`` fixes, else ``lam``,
     else ``"auto"``'s rule (:data:`AUTO_LAM_FITTED` over a visible or measured range,
-    :data:`AUTO_LAM_CAMERA` over the camera's) or the practical scheme's default.
+    :data:`AUTO_LAM_CAMERA` over the camera's, :data:`AUTO_LAM_STABLE` there for stable
+    cascades) or the practical scheme's default.
 
     Example:
         >>> scheme_lam("auto", None, fitted_range=True), scheme_lam("auto", 0.5, fitted_range=True)
@@ -118,8 +122,24 @@ def scheme_lam(scheme: object, lam: Any, *, fitted_range: bool) -> Any:
     if lam is not None:
         return lam
     if scheme == "auto":
-        return AUTO_LAM_FITTED if fitted_range else AUTO_LAM_CAMERA
+        if fitted_range:
+            return AUTO_LAM_FITTED
+        return AUTO_LAM_STABLE if stable else AUTO_LAM_CAMERA
     return PRACTICAL_LAM
+
+
+def stable_bands_inside(scheme: object, lam: Any, *, fitted_range: bool, stable: bool) -> bool:
+    """Whether ``"auto"``'s rule for stable cascades over the camera's range applies: the
+    practical splits with :data:`AUTO_LAM_STABLE`, each cascade ending, band included, at
+    its practical split (so that its sphere is no larger than three.js's: ``docs/cascades.md``).
+
+    Example:
+        >>> stable_bands_inside("auto", None, fitted_range=False, stable=True)
+        True
+        >>> stable_bands_inside("auto", 0.5, fitted_range=False, stable=True)
+        False
+    """
+    return scheme == "auto" and lam is None and stable and not fitted_range
 
 
 def check_range(checks: Checks, n: Array, f: Array, lm: Array, fixed: float | None) -> None:

@@ -79,7 +79,10 @@ def widen_cascades(cascades: Cascades, *, angular_radius: Real[ArrayLike, "*#bat
     texel sizes ``/ k``; depths, splits and tiles unchanged (the depth range already starts
     at the scene's corner nearest the light). Draw and sample the result as the original.
     Refused for stable cascades (their fixed, snapped squares would shimmer: NaN under JAX
-    transformations) and warped ones.
+    transformations; the message gives the ``border_texels`` to refit them with, whose
+    border holds the search at a fixed size: with ``r`` the sphere's radius and ``W`` the
+    map's width, ``b >= w (W - 1) / (2 (r + w))`` texels, since the texel is
+    ``2 r / (W - 2 b - 1)``) and warped ones.
 
     Arguments:
         cascades: :func:`fit_cascades`' result, not ``stable``, no ``warp``.
@@ -111,6 +114,8 @@ def widen_cascades(cascades: Cascades, *, angular_radius: Real[ArrayLike, "*#bat
         half_width=cascades.state.half_width,
     )
     xp, checks = ctx.xp, Checks(ctx)
+    if not ctx.lazy and bool(xp.any(xp.isfinite(stable))):
+        raise ValueError(_stable_refusal(cascades, theta))
     checks.require(
         ~xp.isfinite(stable),
         "cascades: stable cascades cannot be widened (their squares keep a fixed size on a "
@@ -135,4 +140,28 @@ def widen_cascades(cascades: Cascades, *, angular_radius: Real[ArrayLike, "*#bat
         world_to_texture=checks.poison(wide_tex, 2),
         frustum=box._replace(half_width=checks.poison(hx, 0), half_height=checks.poison(hy, 0)),
         texel_size=checks.poison(texel, 1),
+    )
+
+
+def _stable_refusal(cascades: Cascades, theta: object) -> str:
+    """The refusal of stable cascades, with the border that holds their blocker search: the
+    map's half-extent ``h + b t`` must reach ``r + w`` (``h = r / (1 - 1 / (m W))``, the
+    texel ``t = 2 h / (m W) = 2 r / (W - 2 b - 1)``), so ``b >= w (W - 1) / (2 (r + w))``."""
+    box = cascades.frustum
+    width = np.asarray(cascades.viewports, dtype=np.float64)[:, 2]
+    m = np.asarray(box.margin_x, dtype=np.float64)
+    r = np.asarray(box.half_width, dtype=np.float64) * (1 - 1 / (m * width))
+    w = np.tan(np.asarray(theta, dtype=np.float64))[..., None] * np.asarray(
+        box.far - box.near, dtype=np.float64
+    )
+    need = w * (width - 1) / (2 * (r + w))
+    finite = need[np.isfinite(need)]
+    border = math.ceil(float(finite.max())) if finite.size else 1
+    reach = float(np.max(w)) if np.all(np.isfinite(w)) else math.nan
+    return (
+        "cascades: stable cascades cannot be widened: their squares keep one size on a texel "
+        "grid fixed in the world, so that their shadows do not shimmer, and widening would "
+        f"change both. Refit them with border_texels={max(border, 1)} or more: the border then "
+        f"holds every caster of the blocker search (up to {reach:.3g} world units here) at a "
+        "fixed size. Or fit them with stable=False, and widen those."
     )
