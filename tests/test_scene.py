@@ -273,6 +273,24 @@ def test_sun_fit_equals_the_fit_of_every_summary(seed: int) -> None:
     assert result.draws[0].tolist() == list(range(1, len(objects)))
 
 
+@pytest.mark.parametrize("direction", [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+def test_a_sun_along_an_axis_fits_boxes_whose_faces_it_sees_edge_on(direction: list[float]) -> None:
+    """A sun straight along an axis over axis-aligned boxes (half their faces edge-on to
+    it): fitted as every caster's summary, like any other sun."""
+    scene = sm.ShadowScene()
+    cube = scene.add_geometry(meshes.box((1.0, 1.0, 1.0)))
+    placed = np.stack([np.eye(4)] * 2)
+    placed[:, :3, 3] = [[0.3, -0.2, 1.5], [-1.0, 0.5, 0.7]]
+    scene.add_objects(cube, placed)
+    sun = sm.DirectionalLight(np.array(direction))
+    result = scene.fit([sun], 512)[0]
+    assert result.skipped == "" and result.fit is not None
+    every = sm.fit_shadow(
+        sun, sm.Triangles(scene._world), 512, receivers=sm.Triangles(scene._world)
+    )
+    assert np.allclose(result.fit.world_to_texture, every.world_to_texture, atol=1e-9)
+
+
 def test_cascade_draws_leave_out_only_what_cannot_shadow_the_slice() -> None:
     """Objects left out of a cascade's draw list project wholly outside its map's window or
     beyond its far plane (so they shadow nothing it covers)."""
