@@ -268,6 +268,7 @@ def test_sun_fit_equals_the_fit_of_every_summary(seed: int) -> None:
     for a, b in zip(result.fit.frustum, every.frustum, strict=True):
         assert float(a) == pytest.approx(float(b), rel=1e-9, abs=1e-9)
     assert np.allclose(result.fit.world_to_texture, every.world_to_texture, atol=1e-9)
+    assert int(result.fit.casters_used) == int(every.casters_used) == int(casts.sum())
     for mesh, M in objects[1:]:
         assert np.all(_inside_map(result.fit, _world(mesh, M).reshape(-1, 3)))
     assert result.draws[0].tolist() == list(range(1, len(objects)))
