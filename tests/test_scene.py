@@ -292,6 +292,41 @@ def test_a_sun_along_an_axis_fits_boxes_whose_faces_it_sees_edge_on(direction: l
     assert np.allclose(result.fit.world_to_texture, every.world_to_texture, atol=1e-9)
 
 
+def test_a_ramp_under_the_caster_is_held_when_a_deeper_receiver_lies_aside() -> None:
+    """An overhead sun, one box above a ramp (a 4 x 4 tile tilted 45 degrees, its high side
+    above the box's base) and a deeper plate far to the side (outside the map): the
+    plate reaches deepest, so it alone is the first receiver candidate, but only points
+    inside the map's sides count; the ramp, which straddles the first fit's far plane,
+    must be refitted in: every point of it the map covers lies in its depth range."""
+    scene = sm.ShadowScene()
+    cube = scene.add_geometry(meshes.box((1.0, 1.0, 1.0)))
+    tile = scene.add_geometry(meshes.grid((4.0, 4.0)))
+    scene.add_objects(cube, _place((0.0, 0.0, 1.7)))  # z from 1.2 to 2.2
+    c = s = np.sqrt(0.5)
+    ramp = _place((0.0, 0.0, 0.0))
+    ramp[:3, :3] = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]  # z = -x, from -1.41 to 1.41
+    scene.add_objects(tile, ramp, casts=False)
+    scene.add_objects(tile, _place((-40.0, 0.0, -3.0)), casts=False)
+    sun = sm.DirectionalLight(np.array([0.1, 0.05, 1.0]))
+    result = scene.fit([sun], 256)[0]
+    assert result.fit is not None
+    u = np.linspace(-2.0, 2.0, 81)
+    flat = np.stack(np.meshgrid(u, u, [0.0], indexing="ij"), axis=-1).reshape(-1, 3)
+    points = flat @ ramp[:3, :3].T
+    h = np.c_[points, np.ones(len(points))] @ np.asarray(result.fit.world_to_texture).T
+    covered = np.all((h[:, :2] >= 0) & (h[:, :2] <= h[:, 3:]), axis=1)
+    assert covered.sum() > 10 and np.all(_inside_map(result.fit, points[covered]))
+    every = sm.fit_shadow(sun, sm.Triangles(scene._world[scene._casts[scene._owner]]), 256,
+                          receivers=sm.Triangles(scene._world))  # fmt: skip
+    assert np.allclose(result.fit.world_to_texture, every.world_to_texture, atol=1e-9)
+
+
+def _place(t: tuple[float, float, float]) -> np.ndarray:
+    M = np.eye(4)
+    M[:3, 3] = t
+    return M
+
+
 def test_cascade_draws_leave_out_only_what_cannot_shadow_the_slice() -> None:
     """Objects left out of a cascade's draw list project wholly outside its map's window or
     beyond its far plane (so they shadow nothing it covers)."""
