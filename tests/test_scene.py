@@ -203,6 +203,24 @@ def test_cube_range_from_candidates_equals_every_object() -> None:
     assert 0.7 < float(scene_fit.near) < 0.79
 
 
+def test_the_nearest_caster_of_a_cube_map_may_end_farthest() -> None:
+    """A plank from 0.8 to 8.8 units above a point light (its sphere ends far beyond a small
+    ball at 2.3) and a ball 20 units away holding the far end: the near plane is the
+    plank's nearest point, though its sphere ends last among the near ones."""
+    scene = sm.ShadowScene()
+    plank = scene.add_geometry(meshes.box((0.4, 0.4, 8.0)))
+    ball = scene.add_geometry(meshes.sphere(0.3, segments=8, rings=4))
+    scene.add_objects(plank, _place((0.0, 0.0, 4.8)))
+    scene.add_objects(ball, np.stack([_place((-2.3, 0.0, 0.0)), _place((0.0, 20.0, 0.0))]))
+    light = sm.PointLight(np.zeros(3))
+    scene_fit = scene.fit([light], 512)[0].fit
+    every = sm.cube_depth_range(light.position, sm.Triangles(scene._world), map_size=512,
+                                border_texels=1)  # fmt: skip
+    assert isinstance(scene_fit, sm.CubeDepthRange)
+    assert 0.7 < float(scene_fit.near) == float(every.near) < 0.8  # the plank's end: D = 0.8
+    assert float(scene_fit.far) == float(every.far)
+
+
 # -- whole scenes ---------------------------------------------------------------------
 def _random_scene(rng: np.random.Generator, n: int = 10) -> tuple[sm.ShadowScene, list]:
     """A scene of ``n`` placed geometries over a floor; returns it and (mesh, M) per object."""

@@ -2,7 +2,9 @@
 
 Each entry of :data:`ALL` (the fits' :data:`MUTATIONS`, then :data:`MODULES`: cascades,
 atlas, shadow cameras, cube depth, bias, PCF, spot caster selection, soft shadows,
-gather and the pygfx integration) changes one piece of exact source text into a
+gather and the pygfx integration, then :data:`NEWEST`: the scene and its culling, the
+spot light's clipping loop, the atlas redraw, ``pcss_parameters``' recorded map size,
+the placement check and the float32 warning) changes one piece of exact source text into a
 plausible mistake (a sign, a factor, a rounding mode, a bound, a swapped axis). For
 each, the runner copies the repository's ``shadowmath/``, ``tests/``, ``docs/`` (whose
 examples tests run), ``conftest.py`` and ``pyproject.toml`` into a temporary folder,
@@ -913,11 +915,11 @@ NEWEST: tuple[Mutation, ...] = (
         SCENE,
     ),
     Mutation(
-        "scene-sun-far-corners",
-        SCENE_F,
-        "ok = np.all(ok & (z >= float(box.near)) & (z <= float(box.far)), axis=1)",
-        "ok = np.all(ok & (z >= float(box.near)), axis=1)",
-        "ShadowScene sun: a summary's corners past the far plane judged inside",
+        "cull-box-receiver-far-end",
+        CULL_F,
+        "before_far = hi[:, 2] <= float(box.far)",
+        "before_far = lo[:, 2] <= float(box.far)",
+        "inside_box: a receiver straddling the far plane judged inside (not refitted)",
         SCENE,
     ),
     Mutation(
