@@ -594,11 +594,14 @@ class ShadowScene:
         spec: ShadowMapSpec, up: np.ndarray | None,
     ) -> ShadowSetup:  # fmt: skip
         """A sun's fit from the objects that may bound its box (:func:`._cull.sun_candidates`
-        in the fit's own frame, whose rotation a fit of one caster gives), checked against
-        every other object (:func:`._cull.inside_box`, then their corners) and refitted
-        with those that stick out until none does: the fit of every caster's summary."""
-        one = self._world[self._offsets[np.argmax(casts)]][None]  # any caster's triangle
-        frame = np.asarray(fit_shadow(light, Triangles(one), spec, up=up).world_to_light)
+        in the fit's own frame, whose rotation any fit gives: here one of a tetrahedron in
+        a caster's sphere, never seen edge-on), checked against every other object
+        (:func:`._cull.inside_box`, then their corners) and refitted with those that
+        stick out until none does: the fit of every caster's summary."""
+        k = int(np.argmax(casts))  # any caster: its sphere's tetrahedron, never seen edge-on
+        r = self._radius[k] if self._radius[k] > 0 else 1.0
+        one = self._center[k] + r * _TETRAHEDRON
+        frame = np.asarray(fit_shadow(light, one, spec, up=up).world_to_light)
         lo, hi = _cull.light_intervals(frame, self._center, self._radius, self._bounds)
         cand_c, cand_r = _cull.sun_candidates(lo, hi, casts, receives)
         while True:
@@ -650,6 +653,10 @@ class ShadowScene:
             return LightShadows(light, None, none, str(err))
         faces = _cube_clip(np, position, fit, spec)
         return LightShadows(light, fit, self._drawn(faces, seen), "")
+
+
+#: A regular tetrahedron's corners: its shadow along any direction has an area.
+_TETRAHEDRON = np.array([[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]])
 
 
 def _cube_clip(xp: Any, position: Any, fit: CubeDepthRange, spec: ShadowMapSpec) -> Any:

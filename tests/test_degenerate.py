@@ -248,6 +248,23 @@ def test_float32_far_from_the_origin_warns_past_a_quarter_texel(path: str) -> No
 
 
 @pytest.mark.parametrize("path", PATHS)
+def test_a_float32_light_far_from_its_casters_counts_in_the_rounding(path: str) -> None:
+    """A point light's position is rounded as the casters are, and the fit differences
+    them: a light 2x the threshold from the origin warns with its casters at the origin;
+    a sun (a direction, no position) along the same line does not."""
+    eps, E, n = float(np.finfo(np.float32).eps), 2.0, 256
+    threshold = (E / n) / 4 / eps
+    light = np.array([0.0, 0.0, -2 * threshold], dtype=np.float32)
+    verts = (BOX - [0.0, 0.0, 5.0]).astype(np.float32)  # 2 units across, |p| <= 1.8
+    with PATHS[path]():
+        assert eps * np.abs(verts).max() < E / n / 4 < eps * np.abs(light).max()
+        got = _precision_warnings(light, verts, n)
+        assert len(got) == 1 and "pass float64 arrays, or recentre" in got[0], got
+        sun = sm.DirectionalLight(np.array([0.0, 0.0, -1.0], dtype=np.float32))
+        assert not _precision_warnings(sun, verts, n)
+
+
+@pytest.mark.parametrize("path", PATHS)
 def test_a_refusal_at_1e7_names_the_precision(path: str) -> None:
     """At 1e7 in float32 the rounding step (about 1.2) is over a 32nd of the casters' 2
     units: the fit's rounding checks refuse it, and the message names the precision and

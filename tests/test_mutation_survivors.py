@@ -198,3 +198,65 @@ def test_the_empty_fit_sits_at_the_farthest_casters_depth() -> None:
     assert int(s.casters_used) == 0
     near, far = float(s.frustum.near), float(s.frustum.far)
     assert near < 6.0 < far and far - near < 0.05 * 6.0
+
+
+# --- the doors: PCSS radii in a batch, spot casters counted, refusals by name -----------------
+
+
+def _spot_fit() -> sm.ShadowSetup:
+    spot = sm.SpotLight(np.zeros(3), np.array([0.0, 0.0, 1.0]), np.array(0.6))
+    casters = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4.0, 6.0)])
+    return sm.fit_shadow(spot, casters, 256)
+
+
+def test_a_batch_of_light_radii_takes_a_point_light_of_radius_zero() -> None:
+    # R = 0 is a point light: no penumbra (K = R s / |b| = 0), in a batch of radii as alone.
+    fit = _spot_fit()
+    radii = np.array([0.0, 0.25, 0.5])
+    batch = sm.pcss_parameters(fit, light_radius=radii)
+    assert np.all(np.asarray(batch.texels_per_depth)[0] == 0)
+    for i, r in enumerate(radii):
+        one = sm.pcss_parameters(fit, light_radius=float(r))
+        np.testing.assert_allclose(
+            np.asarray(batch.texels_per_depth)[i], one.texels_per_depth, rtol=1e-12, atol=0
+        )
+    # K is linear in R: the penumbra of twice the disk is twice as wide.
+    np.testing.assert_allclose(
+        np.asarray(batch.texels_per_depth)[2], 2 * np.asarray(batch.texels_per_depth)[1], rtol=1e-12
+    )
+    with pytest.raises(ValueError, match=r"^light_radius: expected finite values >= 0"):
+        sm.pcss_parameters(fit, light_radius=np.array([0.5, -0.25]))
+
+
+def test_casters_used_counts_each_lights_points_in_its_cone() -> None:
+    # Three spots at different places, each with its own 5 points near its axis: all
+    # inside the cone, so each fit uses 5 (not the batch size 3, nor 3 coordinates).
+    rng = np.random.default_rng(5)
+    positions = np.array([[0.0, 0.0, 0.0], [4.0, 1.0, 0.0], [-3.0, 2.0, 1.0]])
+    spots = sm.SpotLight(positions, np.tile([0.0, 0.0, 1.0], (3, 1)), np.full(3, 0.5))
+    points = positions[:, None, :] + np.concatenate(
+        [rng.uniform(-0.3, 0.3, (3, 5, 2)), rng.uniform(5, 8, (3, 5, 1))], axis=-1
+    )
+    assert sm.fit_shadow(spots, points, 128).casters_used.tolist() == [5, 5, 5]
+    one = sm.SpotLight(positions[1], np.array([0.0, 0.0, 1.0]), np.array(0.5))
+    assert int(sm.fit_shadow(one, points[1], 128).casters_used) == 5
+
+
+def test_method_optimized_refuses_a_spot_light_by_name() -> None:
+    spot = sm.SpotLight(np.zeros(3), np.array([0.0, 0.0, 1.0]), np.array(0.6))
+    casters = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4.0, 6.0)])
+    with pytest.raises(ValueError, match=r"^method: 'optimized' fits point lights"):
+        sm.fit_shadow(spot, casters, 64, method="optimized")
+
+
+@pytest.mark.parametrize("shape", [(3,), (2, 3), (6, 1)])
+def test_a_shadow_fitter_refuses_another_batch_shape(shape: tuple[int, ...]) -> None:
+    # Prepared for a batch of six lights: three, or six arranged otherwise, are not its fit
+    # (its buffers and views have the prepared shape).
+    box = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4.0, 6.0)])
+    fitter = sm.ShadowFitter(sm.PointLight(np.zeros((6, 3))), box, 64)
+    assert fitter.fit(sm.PointLight(np.full((6, 3), 0.1)), box).world_to_texture.shape == (
+        6, 4, 4,
+    )  # fmt: skip
+    with pytest.raises(ValueError, match=r"^ShadowFitter\.fit: the arguments are not"):
+        fitter.fit(sm.PointLight(np.zeros((*shape, 3))), box)

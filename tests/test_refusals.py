@@ -331,3 +331,36 @@ def test_the_reference_renderer_refuses_a_transposed_camera_too() -> None:
         r.render_cascades([ground], sun, VIEW, PERSPECTIVE.T)
     with pytest.raises(ValueError, match=r"projection: its last row is neither"):
         r.render_atlas([ground], [lamp], VIEW, PERSPECTIVE.T)
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e6])
+@pytest.mark.parametrize("path", ["compiled", "array"])
+def test_a_placement_is_affine_to_rounding_of_its_own_size(scale: float, path: str) -> None:
+    """blocker_to_world's last row is (0, 0, 0, 1) to rounding relative to the matrix's
+    largest entry, whatever its units: a residue of 2 eps max|B| (a product's or an
+    inverse's rounding) is taken, and places the blocker in the map as the exact row
+    does; w = 1 + 1/4 (a projective scale) is refused at every scale."""
+    from shadowmath._backends import _kernels
+
+    context = _kernels.array_path if path == "array" else _kernels.disabled
+    eps = float(np.finfo(np.float64).eps)
+    B = np.diag([scale, scale, scale, 1.0])
+    B[:3, 3] = [3.0 * scale, -scale, 2.0 * scale]
+    verts = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4.0, 6.0)])
+    light = np.array([3.3, -0.8, 2.0]) * scale  # off the box's axis: no helper-axis tie
+    rounded = B.copy()
+    rounded[3, 3] += 2 * eps * np.abs(B).max()
+    with context():
+        exact = sm.fit_shadow(light, verts, 64, blocker_to_world=B)
+        taken = sm.fit_shadow(light, verts, 64, blocker_to_world=rounded)
+        for setup in (exact, taken):  # every vertex inside the map's margins
+            clip = np.c_[verts, np.ones(8)] @ np.asarray(setup.blocker_to_clip).T
+            ndc = clip[:, :3] / clip[:, 3:]
+            m = float(setup.frustum.margin_x)
+            assert np.all(np.abs(ndc[:, :2]) <= m * (1 + 1e-6)) and np.all(np.abs(ndc[:, 2]) < 1)
+        projective = B.copy()
+        projective[3, 3] = 1.25
+        with pytest.raises(
+            ValueError, match=r"^blocker_to_world: .*last row is not \(0, 0, 0, 1\)"
+        ):
+            sm.fit_shadow(light, verts, 64, blocker_to_world=projective)

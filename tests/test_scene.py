@@ -203,6 +203,24 @@ def test_cube_range_from_candidates_equals_every_object() -> None:
     assert 0.7 < float(scene_fit.near) < 0.79
 
 
+def test_the_nearest_caster_of_a_cube_map_may_end_farthest() -> None:
+    """A plank from 0.8 to 8.8 units above a point light (its sphere ends far beyond a small
+    ball at 2.3) and a ball 20 units away holding the far end: the near plane is the
+    plank's nearest point, though its sphere ends last among the near ones."""
+    scene = sm.ShadowScene()
+    plank = scene.add_geometry(meshes.box((0.4, 0.4, 8.0)))
+    ball = scene.add_geometry(meshes.sphere(0.3, segments=8, rings=4))
+    scene.add_objects(plank, _place((0.0, 0.0, 4.8)))
+    scene.add_objects(ball, np.stack([_place((-2.3, 0.0, 0.0)), _place((0.0, 20.0, 0.0))]))
+    light = sm.PointLight(np.zeros(3))
+    scene_fit = scene.fit([light], 512)[0].fit
+    every = sm.cube_depth_range(light.position, sm.Triangles(scene._world), map_size=512,
+                                border_texels=1)  # fmt: skip
+    assert isinstance(scene_fit, sm.CubeDepthRange)
+    assert 0.7 < float(scene_fit.near) == float(every.near) < 0.8  # the plank's end: D = 0.8
+    assert float(scene_fit.far) == float(every.far)
+
+
 # -- whole scenes ---------------------------------------------------------------------
 def _random_scene(rng: np.random.Generator, n: int = 10) -> tuple[sm.ShadowScene, list]:
     """A scene of ``n`` placed geometries over a floor; returns it and (mesh, M) per object."""
@@ -268,9 +286,63 @@ def test_sun_fit_equals_the_fit_of_every_summary(seed: int) -> None:
     for a, b in zip(result.fit.frustum, every.frustum, strict=True):
         assert float(a) == pytest.approx(float(b), rel=1e-9, abs=1e-9)
     assert np.allclose(result.fit.world_to_texture, every.world_to_texture, atol=1e-9)
+    assert int(result.fit.casters_used) == int(every.casters_used) == int(casts.sum())
     for mesh, M in objects[1:]:
         assert np.all(_inside_map(result.fit, _world(mesh, M).reshape(-1, 3)))
     assert result.draws[0].tolist() == list(range(1, len(objects)))
+
+
+@pytest.mark.parametrize("direction", [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+def test_a_sun_along_an_axis_fits_boxes_whose_faces_it_sees_edge_on(direction: list[float]) -> None:
+    """A sun straight along an axis over axis-aligned boxes (half their faces edge-on to
+    it): fitted as every caster's summary, like any other sun."""
+    scene = sm.ShadowScene()
+    cube = scene.add_geometry(meshes.box((1.0, 1.0, 1.0)))
+    placed = np.stack([np.eye(4)] * 2)
+    placed[:, :3, 3] = [[0.3, -0.2, 1.5], [-1.0, 0.5, 0.7]]
+    scene.add_objects(cube, placed)
+    sun = sm.DirectionalLight(np.array(direction))
+    result = scene.fit([sun], 512)[0]
+    assert result.skipped == "" and result.fit is not None
+    every = sm.fit_shadow(
+        sun, sm.Triangles(scene._world), 512, receivers=sm.Triangles(scene._world)
+    )
+    assert np.allclose(result.fit.world_to_texture, every.world_to_texture, atol=1e-9)
+
+
+def test_a_ramp_under_the_caster_is_held_when_a_deeper_receiver_lies_aside() -> None:
+    """An overhead sun, one box above a ramp (a 4 x 4 tile tilted 45 degrees, its high side
+    above the box's base) and a deeper plate far to the side (outside the map): the
+    plate reaches deepest, so it alone is the first receiver candidate, but only points
+    inside the map's sides count; the ramp, which straddles the first fit's far plane,
+    must be refitted in: every point of it the map covers lies in its depth range."""
+    scene = sm.ShadowScene()
+    cube = scene.add_geometry(meshes.box((1.0, 1.0, 1.0)))
+    tile = scene.add_geometry(meshes.grid((4.0, 4.0)))
+    scene.add_objects(cube, _place((0.0, 0.0, 1.7)))  # z from 1.2 to 2.2
+    c = s = np.sqrt(0.5)
+    ramp = _place((0.0, 0.0, 0.0))
+    ramp[:3, :3] = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]  # z = -x, from -1.41 to 1.41
+    scene.add_objects(tile, ramp, casts=False)
+    scene.add_objects(tile, _place((-40.0, 0.0, -3.0)), casts=False)
+    sun = sm.DirectionalLight(np.array([0.1, 0.05, 1.0]))
+    result = scene.fit([sun], 256)[0]
+    assert result.fit is not None
+    u = np.linspace(-2.0, 2.0, 81)
+    flat = np.stack(np.meshgrid(u, u, [0.0], indexing="ij"), axis=-1).reshape(-1, 3)
+    points = flat @ ramp[:3, :3].T
+    h = np.c_[points, np.ones(len(points))] @ np.asarray(result.fit.world_to_texture).T
+    covered = np.all((h[:, :2] >= 0) & (h[:, :2] <= h[:, 3:]), axis=1)
+    assert covered.sum() > 10 and np.all(_inside_map(result.fit, points[covered]))
+    every = sm.fit_shadow(sun, sm.Triangles(scene._world[scene._casts[scene._owner]]), 256,
+                          receivers=sm.Triangles(scene._world))  # fmt: skip
+    assert np.allclose(result.fit.world_to_texture, every.world_to_texture, atol=1e-9)
+
+
+def _place(t: tuple[float, float, float]) -> np.ndarray:
+    M = np.eye(4)
+    M[:3, 3] = t
+    return M
 
 
 def test_cascade_draws_leave_out_only_what_cannot_shadow_the_slice() -> None:

@@ -2,7 +2,9 @@
 
 Each entry of :data:`ALL` (the fits' :data:`MUTATIONS`, then :data:`MODULES`: cascades,
 atlas, shadow cameras, cube depth, bias, PCF, spot caster selection, soft shadows,
-gather and the pygfx integration) changes one piece of exact source text into a
+gather and the pygfx integration, then :data:`NEWEST`: the scene and its culling, the
+spot light's clipping loop, the atlas redraw, ``pcss_parameters``' recorded map size,
+the placement check and the float32 warning) changes one piece of exact source text into a
 plausible mistake (a sign, a factor, a rounding mode, a bound, a swapped axis). For
 each, the runner copies the repository's ``shadowmath/``, ``tests/``, ``docs/`` (whose
 examples tests run), ``conftest.py`` and ``pyproject.toml`` into a temporary folder,
@@ -825,8 +827,300 @@ MODULES: tuple[Mutation, ...] = (
 )
 
 
-#: The whole table: the fits' mutations, then every other module's.
-ALL: tuple[Mutation, ...] = MUTATIONS + MODULES
+# --- the survivors of issue 35 and the newest modules: the scene (scene.py, _scene/), the
+# spot light's clipping loop, the atlas redraw, pcss_parameters' recorded map size, the
+# placement check and the float32-precision warning.
+
+PYGFX_RULES = ("tests/render/test_pygfx_fit_rules.py",)
+SCENE_F = "shadowmath/scene.py"
+SCENE = ("tests/test_scene.py",)
+CULL_F = "shadowmath/_scene/_cull.py"
+SUMMARY_F = "shadowmath/_scene/_summary.py"
+SPOT_LOOP_F = "shadowmath/_math/_spot_loop.py"
+SPOT_LOOP = ("tests/test_spot_clip_paths.py",)
+REDRAW_F = "shadowmath/_fits/_atlas_redraw.py"
+REDRAW = ("tests/test_scene.py", "tests/test_atlas_identity.py")
+PCSS_MAPS_F = "shadowmath/_fits/_pcss_maps.py"
+PCSS = ("tests/test_pcss.py",)
+DOOR_F = "shadowmath/_fits/_door.py"
+PRECISION = ("tests/test_degenerate.py", "tests/test_input_kinds.py")
+PLACEMENT = ("tests/test_refusals.py", "tests/test_errors.py")
+
+# Equivalent mutants left out (tried on 2026-11-29, no result can change): in a sun's
+# scene fit a caster that is not a candidate lies inside the candidates' box on every
+# axis (a candidate lies wholly beyond it both ways), so a caster's corners are never
+# past the box's far or near plane ("a summary's corners past far judged inside",
+# "inside_box: a caster before near judged inside"), and casters left out of the
+# candidates are refitted in by the loop ("sun_candidates one way only": slower, same fit).
+NEWEST: tuple[Mutation, ...] = (
+    # the ten survivors of issue 35 (the three older ones are cascade-pad-min,
+    # splits-far-equals-near and atlas-hysteresis-upper above)
+    Mutation(
+        "pcss-array-radius-zero",
+        "shadowmath/_fits/_pcss.py",
+        "checks.require(xp.isfinite(R) & (R >= 0), BAD_RADIUS)",
+        "checks.require(xp.isfinite(R) & (R > 0), BAD_RADIUS)",
+        "pcss_parameters on arrays: a light radius of 0 (a point light) refused",
+        SURVIVORS,
+    ),
+    Mutation(
+        "spot-casters-used-axis",
+        "shadowmath/_fits/_spot_select.py",
+        "np.full(shape, casters.shape[-2], dtype=np.int64)",
+        "np.full(shape, casters.shape[0], dtype=np.int64)",
+        "spot selection: casters_used of points all kept counted along the batch axis",
+        SURVIVORS,
+    ),
+    Mutation(
+        "optimized-spot-by-name",
+        DOOR_F,
+        "options = key.directional or key.spot or key.has_receivers",
+        "options = key.directional or key.has_receivers",
+        "fit_shadow(SpotLight, method='optimized') not refused by name",
+        SURVIVORS,
+    ),
+    Mutation(
+        "fitter-shape-unchecked",
+        "shadowmath/_fits/_prepared.py",
+        "if door.key != self._door.key or door.shape != self._door.shape or (",
+        "if door.key != self._door.key or (",
+        "ShadowFitter.fit: another batch shape taken for the prepared one",
+        SURVIVORS,
+    ),
+    Mutation(
+        "pygfx-receivers-dropped",
+        PYGFX_F,
+        "receives=receive)  # fmt: skip",
+        "receives=False)  # fmt: skip",
+        "fit_scene_shadows: the receivers left out of the fits (the floor clipped)",
+        PYGFX_RULES,
+    ),
+    Mutation(
+        "pygfx-self-aimed-up",
+        PYGFX_F,
+        "\n        aim = np.array([0.0, 0.0, -1.0])",
+        "\n        aim = np.array([0.0, 1.0, 0.0])",
+        "fit_scene_shadows: a light aimed at its own position fitted up +y, not down -z",
+        PYGFX_RULES,
+    ),
+    Mutation(
+        "pygfx-box-border",
+        PYGFX_F,
+        'PYGFX_SHADOW_MAP_SIZE, pcf_radius=pcf_radius, pcf_filter="bilinear", api="webgpu"',
+        'PYGFX_SHADOW_MAP_SIZE, pcf_radius=pcf_radius, pcf_filter="box", api="webgpu"',
+        "fit_scene_shadows: the box filter's border (2 texels) for pygfx's bilinear taps (3)",
+        PYGFX_RULES,
+    ),
+    # the scene: ShadowScene's sun loop and triangles, the culling, the summaries
+    Mutation(
+        "scene-sun-no-refit",
+        SCENE_F,
+        "if not (out_c.any() or out_r.any()):",
+        "if True:",
+        "ShadowScene sun: objects sticking out of the candidates' box not refitted",
+        SCENE,
+    ),
+    Mutation(
+        "cull-box-receiver-far-end",
+        CULL_F,
+        "before_far = hi[:, 2] <= float(box.far)",
+        "before_far = lo[:, 2] <= float(box.far)",
+        "inside_box: a receiver straddling the far plane judged inside (not refitted)",
+        SCENE,
+    ),
+    Mutation(
+        "scene-sun-used-objects",
+        SCENE_F,
+        "used = np.asarray(np.count_nonzero(casts[self._owner]))",
+        "used = np.asarray(np.count_nonzero(casts))",
+        "ShadowScene sun: casters_used counts objects, not their summaries' triangles",
+        SCENE,
+    ),
+    Mutation(
+        "scene-around-light-summary",
+        SCENE_F,
+        "around = objects & (np.linalg.norm(self._center - light, axis=1) <= self._radius)",
+        "around = objects & (np.linalg.norm(self._center - light, axis=1) < 0.0)",
+        "ShadowScene spot: an object around the light fitted by its summary (holding the light)",
+        (*SCENE, "tests/render/test_pygfx_scene.py"),
+    ),
+    Mutation(
+        "cull-world-radius-unscaled",
+        CULL_F,
+        "return c, radius * stretch * (1 + 1e-12)",
+        "return c, radius * (1 + 1e-12)",
+        "world_spheres: the radius not stretched by the placement's largest singular value",
+        SCENE,
+    ),
+    Mutation(
+        "cull-spot-spread-half",
+        CULL_F,
+        "spread = angle + xp.arcsin(xp.clip(radius / safe, 0.0, 1.0))",
+        "spread = angle + 0.5 * xp.arcsin(xp.clip(radius / safe, 0.0, 1.0))",
+        "spot_visible: the sphere's angular radius halved (spheres reaching in dropped)",
+        SCENE,
+    ),
+    Mutation(
+        "cull-spot-around-apex",
+        CULL_F,
+        "inside = dist <= radius",
+        "inside = dist <= 0.5 * radius",
+        "spot_visible: a sphere holding the apex judged by its angle (dropped behind the cone)",
+        SCENE,
+    ),
+    Mutation(
+        "cull-clip-half-radius",
+        CULL_F,
+        "return xp.all(value >= -radius, axis=-2)",
+        "return xp.all(value >= -0.5 * radius, axis=-2)",
+        "the clip rule: a sphere kept only when reaching in by half its radius",
+        SCENE,
+    ),
+    Mutation(
+        "cull-cube-near-far-end",
+        CULL_F,
+        "near = casts & (lo <= np.min(hi[casts], initial=np.inf))",
+        "near = casts & (hi <= np.min(hi[casts], initial=np.inf))",
+        "cube_range_candidates: near candidates by their far end (the nearest caster missed)",
+        SCENE,
+    ),
+    Mutation(
+        "cull-cube-far-receivers",
+        CULL_F,
+        "    either = casts | receives\n",
+        "    either = casts\n",
+        "cube_range_candidates: receivers left out of the far candidates",
+        SCENE,
+    ),
+    Mutation(
+        "cull-interval-box-upper",
+        CULL_F,
+        "np.minimum(p + radius[:, None], q + half)",
+        "np.minimum(p + radius[:, None], q)",
+        "light_intervals: the upper end cut at the box's centre (objects judged inside)",
+        SCENE,
+    ),
+    Mutation(
+        "cull-interval-signed-rotation",
+        CULL_F,
+        "half = mid @ R.T + t, 0.5 * (bounds[:, 1] - bounds[:, 0]) @ np.abs(R).T",
+        "half = mid @ R.T + t, 0.5 * (bounds[:, 1] - bounds[:, 0]) @ R.T",
+        "light_intervals: a box's half-extents rotated with signs (not |R|): too small",
+        SCENE,
+    ),
+    Mutation(
+        "summary-sphere-mean",
+        SUMMARY_F,
+        "radius = float(np.max(np.linalg.norm(points - center, axis=1)))",
+        "radius = float(np.mean(np.linalg.norm(points - center, axis=1)))",
+        "a summary's sphere of the mean distance (not holding every point)",
+        SCENE,
+    ),
+    Mutation(
+        "summary-corners-strict",
+        SUMMARY_F,
+        "feasible = np.all(x @ DIRECTIONS.T <= h + 4 * eps, axis=1)",
+        "feasible = np.all(x @ DIRECTIONS.T <= h - 4 * eps, axis=1)",
+        "a summary's corners on its planes refused (the hull loses corners)",
+        SCENE,
+    ),
+    # the spot light's clipping loop (run in Python by its tests without Numba)
+    Mutation(
+        "spot-loop-edge-end",
+        SPOT_LOOP_F,
+        "return s, den != 0 and s >= 0 and s <= 1",
+        "return s, den != 0 and s >= 0",
+        "spot_clip_loop: an edge's crossing past its end counted",
+        SPOT_LOOP,
+    ),
+    Mutation(
+        "spot-loop-dropped-two-corners",
+        SPOT_LOOP_F,
+        "if g0[k] < -2.0 * tau and g1[k] < -2.0 * tau and g2[k] < -2.0 * tau:",
+        "if g0[k] < -2.0 * tau and g1[k] < -2.0 * tau:",
+        "spot_clip_loop: a triangle dropped with two corners outside a side",
+        SPOT_LOOP,
+    ),
+    Mutation(
+        "spot-loop-lateral-sign",
+        SPOT_LOOP_F,
+        "ok = n0 * det >= 0 and n1 * det >= 0 and n2 * det >= 0 and det != 0",
+        "ok = n0 * det >= 0 and n1 * det >= 0 and det != 0",
+        "spot_clip_loop: a lateral edge's point outside the triangle kept",
+        SPOT_LOOP,
+    ),
+    # the atlas redraw
+    Mutation(
+        "redraw-clip-ignored",
+        REDRAW_F,
+        "keep = had & same_port & same_clip",
+        "keep = had & same_port",
+        "atlas_redraw: a tile whose matrix changed kept",
+        REDRAW,
+    ),
+    Mutation(
+        "redraw-moved-ignored",
+        REDRAW_F,
+        "if set(drawn.tolist()) != set(was.tolist()) or changed[drawn].any():",
+        "if set(drawn.tolist()) != set(was.tolist()):",
+        "atlas_redraw: a tile one of whose objects moved kept",
+        REDRAW,
+    ),
+    # pcss_parameters' recorded map size
+    Mutation(
+        "pcss-recorded-size-unchecked",
+        PCSS_MAPS_F,
+        "if given != tuple(recorded):",
+        "if False:",
+        "pcss_parameters: a map_size other than the fit's recorded one taken",
+        PCSS,
+    ),
+    Mutation(
+        "pcss-recorded-size-swapped",
+        PCSS_MAPS_F,
+        "    return recorded[0], recorded[1]\n",
+        "    return recorded[1], recorded[0]\n",
+        "pcss_parameters: the recorded width and height swapped",
+        PCSS,
+    ),
+    # the placement check and the precision warning
+    Mutation(
+        "placement-w-unchecked",
+        "shadowmath/_math/_fit_formulas.py",
+        "maximum(fabs(b[14]), fabs(b[15] - 1.0)))",
+        "maximum(fabs(b[14]), fabs(b[14])))",
+        "placement_affine: a bottom row (0, 0, 0, w != 1) accepted",
+        PLACEMENT,
+    ),
+    Mutation(
+        "placement-absolute-tolerance",
+        "shadowmath/_math/_fit_formulas.py",
+        "return off <= 4.0 * eps * big",
+        "return off <= 4.0 * eps",
+        "placement_affine: the tolerance absolute, not relative to the matrix's scale",
+        PLACEMENT,
+    ),
+    Mutation(
+        "precision-one-texel",
+        DOOR_F,
+        "if p is not None and p.step > p.texel / TEXEL_FRACTION:",
+        "if p is not None and p.step > p.texel:",
+        "float32 warning: only past a whole texel, not a quarter",
+        PRECISION,
+    ),
+    Mutation(
+        "precision-light-ignored",
+        DOOR_F,
+        "big = max(big, abs(lx), abs(ly), abs(lz))",
+        "big = max(big, 0.0 * lx)",
+        "float32 warning: a light far from the origin not counted in the coordinates' size",
+        PRECISION,
+    ),
+)
+
+
+#: The whole table: the fits' mutations, every other module's, then the newest modules'.
+ALL: tuple[Mutation, ...] = MUTATIONS + MODULES + NEWEST
 
 
 class RunnerError(Exception):
