@@ -838,11 +838,11 @@ CULL_F = "shadowmath/_scene/_cull.py"
 SUMMARY_F = "shadowmath/_scene/_summary.py"
 SPOT_LOOP_F = "shadowmath/_math/_spot_loop.py"
 SPOT_LOOP = ("tests/test_spot_clip_paths.py",)
-REDRAW_F = "shadowmath/_fits/_atlas_redraw.py"
+REDRAW_F = "shadowmath/_fits/atlas/_redraw.py"
 REDRAW = ("tests/test_scene.py", "tests/test_atlas_identity.py")
-PCSS_MAPS_F = "shadowmath/_fits/_pcss_maps.py"
+PCSS_MAPS_F = "shadowmath/_fits/pcss/_maps.py"
 PCSS = ("tests/test_pcss.py",)
-DOOR_F = "shadowmath/_fits/_door.py"
+DOOR_F = "shadowmath/_fits/shadow/_door.py"
 PRECISION = ("tests/test_degenerate.py", "tests/test_input_kinds.py")
 PLACEMENT = ("tests/test_refusals.py", "tests/test_errors.py")
 
@@ -857,7 +857,7 @@ NEWEST: tuple[Mutation, ...] = (
     # splits-far-equals-near and atlas-hysteresis-upper above)
     Mutation(
         "pcss-array-radius-zero",
-        "shadowmath/_fits/_pcss.py",
+        "shadowmath/_fits/pcss/_parameters.py",
         "checks.require(xp.isfinite(R) & (R >= 0), BAD_RADIUS)",
         "checks.require(xp.isfinite(R) & (R > 0), BAD_RADIUS)",
         "pcss_parameters on arrays: a light radius of 0 (a point light) refused",
@@ -865,7 +865,7 @@ NEWEST: tuple[Mutation, ...] = (
     ),
     Mutation(
         "spot-casters-used-axis",
-        "shadowmath/_fits/_spot_select.py",
+        "shadowmath/_fits/shadow/_spot_select.py",
         "np.full(shape, casters.shape[-2], dtype=np.int64)",
         "np.full(shape, casters.shape[0], dtype=np.int64)",
         "spot selection: casters_used of points all kept counted along the batch axis",
@@ -881,7 +881,7 @@ NEWEST: tuple[Mutation, ...] = (
     ),
     Mutation(
         "fitter-shape-unchecked",
-        "shadowmath/_fits/_prepared.py",
+        "shadowmath/_fits/shadow/_prepared.py",
         "if door.key != self._door.key or door.shape != self._door.shape or (",
         "if door.key != self._door.key or (",
         "ShadowFitter.fit: another batch shape taken for the prepared one",
