@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from shadowmath._math._cascade_steps import ROW_AT
 from shadowmath._math._enclosing_rectangle import min_area_rectangle
 
 __all__ = ["check_orientation", "fitted_cascade"]
@@ -46,11 +47,13 @@ def check_orientation(orientation: object, stable: bool, warp: object) -> bool:
 def fitted_cascade(xp: Any, F: Any, steps: tuple[Any, Any, Any, Any], row: list[Any]) -> None:
     """The array mode's cascade fit (in place of ``cascade_fit``) with each map turned to
     its body's minimum-area rectangle. ``steps = (e, sl, j, o)``: the entry, the slices,
-    the cascades' indices and the options; ``row``: the cascades' rows (``ROW``)."""
+    the cascades' indices and the options; ``row``: the cascades' rows (parts at
+    ``ROW_AT``)."""
     e, sl, j, o = steps
-    s0, s1, _, lc, gs = sl
-    _, (_, _, bl, bg), a, _, _ = e
-    body = F.cascade_body(lc, gs, (bl, bg), (s0, s1))
+    a = e.camera.axes
+    body = F.cascade_body(
+        sl.light_corners, sl.box_values, (e.box_light, e.box_camera), (sl.s0, sl.s1)
+    )
     b = F.body_bounds(body)
     ends, ok, corners, _ = body
     seen = xp.any(ok, axis=-1, keepdims=True)  # else the slice's own corners, as body_bounds
@@ -62,6 +65,6 @@ def fitted_cascade(xp: Any, F: Any, steps: tuple[Any, Any, Any, Any], row: list[
     turned = (c * a[0] + s * a[3], c * a[1] + s * a[4], c * a[2] + s * a[5],
               c * a[3] - s * a[0], c * a[4] - s * a[1], c * a[5] - s * a[2],
               a[6], a[7], a[8])  # fmt: skip
-    box = F.cascade_box((r.lo_u, r.hi_u, r.lo_v, r.hi_v, b[4], b[5]))
-    F.store_cascade(turned, box, b[4], (j, o), row)
-    row[56], row[59] = s1, math.nan
+    box = F.cascade_box((r.lo_u, r.hi_u, r.lo_v, r.hi_v, b.z_lo, b.z_hi))
+    F.store_cascade(turned, box, b.z_lo, (j, o), row)
+    row[ROW_AT.band_end], row[ROW_AT.half_width] = sl.s1, math.nan

@@ -14,15 +14,13 @@ slice, 12 of the box) clipped to the other solid with :func:`._cascade_formulas.
 take the slice's corners in light coordinates (``lc``, 8 x 3) and the box's half-space
 values at them (``gs``, 8 x 6), the box's corners in light coordinates and their camera
 side values and view depth (``boxp = (bl, bg)``, 8 x 3 and 8 x 5) and the slice's depths
-``d = (s0, s1)``; both return ``(lo_x, hi_x, lo_y, hi_y, z_lo, z_hi, zb_lo, zb_hi)``: the
-bounds (the slice's own where the intersection is empty; ``z_lo`` lowered to the box's
-nearest corner) and the box's ``z`` range.
+``d = (s0, s1)``; both return :class:`LightBounds`.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -35,6 +33,21 @@ _E0 = (0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3)
 _E1 = (1, 3, 5, 7, 2, 3, 6, 7, 4, 5, 6, 7)
 _EDGE_0 = np.array(_E0)
 _EDGE_1 = np.array(_E1)
+
+
+class LightBounds(NamedTuple):
+    """A cascade's light-space bounds: the intersection's (the slice's own where it is
+    empty; ``z_lo`` lowered to the box's nearest corner) and the scene box's ``z`` range."""
+
+    lo_x: Any
+    hi_x: Any
+    lo_y: Any
+    hi_y: Any
+    z_lo: Any
+    z_hi: Any
+    box_z_lo: Any
+    box_z_hi: Any
+
 
 #: Names bound per mode by specialize(): ``name: (loop form, array form)``.
 FORMS = {"cascade_bounds": ("_bounds_loop", "_bounds_array")}
@@ -88,7 +101,7 @@ def _bounds_loop(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
     zb = zt = bl[2]
     for k in range(8):
         zb, zt = min(zb, bl[3 * k + 2]), max(zt, bl[3 * k + 2])
-    return lx, hx_, ly, hy_, min(min(zb, lz), hz), hz, zb, zt
+    return LightBounds(lx, hx_, ly, hy_, min(min(zb, lz), hz), hz, zb, zt)
 
 
 def _outcodes(gs: Any, bg: Any, d: Any) -> Any:
@@ -170,8 +183,8 @@ def _bounds_array(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
 
 
 def body_bounds(body: Any) -> Any:
-    """:func:`cascade_body`'s vertices reduced over the last axis: the bounds of the array
-    form (the slice's own where the intersection is empty)."""
+    """:func:`cascade_body`'s vertices reduced over the last axis: the array form's
+    :class:`LightBounds`."""
     xp = array_api
     ends, ok2, sl, bc = body
     seen = xp.any(ok2, axis=-1)
@@ -182,7 +195,7 @@ def body_bounds(body: Any) -> Any:
             for v, f in zip(ends, sl, strict=True)]  # fmt: skip
     zb_lo, zb_hi = xp.min(bc[2], axis=-1), xp.max(bc[2], axis=-1)
     z_lo = xp.minimum(xp.minimum(zb_lo, low[2]), high[2])
-    return low[0], high[0], low[1], high[1], z_lo, high[2], zb_lo, zb_hi
+    return LightBounds(low[0], high[0], low[1], high[1], z_lo, high[2], zb_lo, zb_hi)
 
 
 FUNCTIONS = (
