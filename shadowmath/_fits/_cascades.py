@@ -347,12 +347,12 @@ def fit_cascades(
     _scalar_checks(checks, (lm, ov, dmax, S))
     W = _range_checks(checks, M, (Qn, Qf, W), (shape, n))
     C = _clip_from_gl(cam_api, camera_reversed_z)
-    given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None)
+    given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None, fitted)
     o, record = _options(spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row))
     call = _Call(ctx, spec, layout, shape, o)
     extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
     arrays = (L, V, P, box, U, S, dmax, lm, ov, extra, W)
-    if ctx.xp is np and warp is None and not fitted:
+    if ctx.xp is np and warp is None:
         python = not _kernels.available()
         if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
             try:
@@ -360,7 +360,7 @@ def fit_cascades(
             except (ZeroDivisionError, OverflowError):
                 pass  # Python floats raise where Numba's give inf: invalid input, which the
                 # array mode below reports with its message
-    return _arrays(call, checks, arrays, (warp, fitted))
+    return _arrays(call, checks, arrays, warp)
 
 
 def _range_option(
@@ -566,12 +566,11 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
     return _result(call, out.reshape(*shape, n, ROW), splits.reshape(*shape, n + 1))
 
 
-def _arrays(
-    call: _Call, checks: Checks, arrays: tuple[Any, ...], hooks: tuple[str | None, bool]
-) -> Cascades:
+def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | None) -> Cascades:
     """The array mode: the same steps once on whole arrays (NumPy or JAX), per-entry
     values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``);
-    ``hooks``: the warp and whether the maps are turned (``orientation="fitted"``)."""
+    ``warp``: the warp's name (or None); ``o.fitted``: the maps turned
+    (``orientation="fitted"``)."""
     ctx, o = call.ctx, call.o
     xp, F = ctx.xp, formulas(ctx.xp)
     L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
@@ -592,8 +591,7 @@ def _arrays(
         splits = F.cascade_split(S, j, (e.lo, e.hi, e.lam), o)
         sl = F.cascade_slice(e, inputs.box, splits, j[:-1], o)
         row: list[Any] = [0.0] * ROW
-        warp, fitted = hooks
-        if fitted:
+        if o.fitted:
             fitted_cascade(xp, F, (e, sl, j[:-1], o), row)
         else:
             F.cascade_fit(e, sl, j[:-1], o, row)
@@ -704,7 +702,7 @@ def _options(
     spec: ShadowMapSpec,
     layout: str,
     n: int,
-    given: tuple[bool, bool, bool, int, bool],
+    given: tuple[bool, bool, bool, int, bool, bool],
     *,
     eps: float,
     C: tuple[float, ...],
@@ -713,10 +711,10 @@ def _options(
     few recur every frame)."""
     cols, rows = _grid(n, layout)
     C_api, TC_api = api_rows(spec.api, spec.reversed_z)
-    has_up, has_splits, has_dmax, range_code, has_state = given
+    has_up, has_splits, has_dmax, range_code, has_state, fitted = given
     o = CascadeOptions(
         has_up=has_up, stable=spec.stable, has_splits=has_splits, has_dmax=has_dmax,
-        depth_range=range_code, has_state=has_state,
+        depth_range=range_code, has_state=has_state, fitted=fitted,
         mx=float(spec.margins[0]), my=float(spec.margins[1]), width=float(spec.size[0]),
         height=float(spec.size[1]), eps=eps, tol=math.sqrt(eps), cascades=n,
         slack=NEAR_FAR_SLACK, cols=cols, rows=rows, camera_clip=C, map_clip=tuple(C_api),

@@ -17,10 +17,8 @@ raises except :func:`check_orientation`, on the options.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-from shadowmath._math._cascade_steps import ROW_AT
 from shadowmath._math._enclosing_rectangle import min_area_rectangle
 
 __all__ = ["check_orientation", "fitted_cascade"]
@@ -61,10 +59,4 @@ def fitted_cascade(xp: Any, F: Any, steps: tuple[Any, Any, Any, Any], row: list[
     y = xp.concat([ends[1], xp.broadcast_to(corners[1], (*ok.shape[:-1], 8))], axis=-1)
     use = xp.concat([ok, xp.broadcast_to(~seen, (*ok.shape[:-1], 8))], axis=-1)
     r = min_area_rectangle(xp, x, y, use)
-    c, s = r.c, r.s
-    turned = (c * a[0] + s * a[3], c * a[1] + s * a[4], c * a[2] + s * a[5],
-              c * a[3] - s * a[0], c * a[4] - s * a[1], c * a[5] - s * a[2],
-              a[6], a[7], a[8])  # fmt: skip
-    box = F.cascade_box((r.lo_u, r.hi_u, r.lo_v, r.hi_v, b.z_lo, b.z_hi))
-    F.store_cascade(turned, box, b.z_lo, (j, o), row)
-    row[ROW_AT.band_end], row[ROW_AT.half_width] = sl.s1, math.nan
+    F.store_turned(a, r, b, (sl, j, o), row)

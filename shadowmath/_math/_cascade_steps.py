@@ -46,9 +46,12 @@ from shadowmath._boundary._status import (
 )
 
 # Shared formulas and primitives, rebound by specialize().
+from ._cascade_bounds import BODY_VERTICES, body_loop, points_bounds
 from ._cascade_formulas import (  # noqa: F401
     EDGES,
     affine,
+    alloc,
+    array_api,
     box_values,
     camera_values,
     cascade_box,
@@ -60,17 +63,13 @@ from ._cascade_formulas import (  # noqa: F401
     slice_sphere,
     slice_values,
     split_depth,
+    take_last,
 )
 from ._fit_formulas import fit_axes, fit_rows, placement_ok, safe_box, stable_sides, to_light
 from ._formulas import fabs, flag, isfinite, sqrt, where
+from ._rectangle_loop import rectangle_loop
 from ._rows import _mul16, inverse4, row16, tile_rows
 
-#: Primitives of the mode, bound by specialize(): a float buffer of ``n`` entries, a check's
-#: bit (``flag(ok, bit)``), entry ``k`` of a per-entry row (``take_last(G, k)``) and, in the
-#: array mode, the array namespace.
-alloc: Any = None
-take_last: Any = None
-array_api: Any = None
 #: The bounds pass of the mode (:data:`FORMS`).
 cascade_bounds: Any = None
 
@@ -194,6 +193,7 @@ class CascadeOptions(NamedTuple):
     map_texture: tuple[float, ...]  # its texture rows (16)
     depth_range: int  # 0: the camera's, 1: the visible range, 2: measured (CascadeScalars)
     has_state: bool  # the last range and sizes in use (CascadeScalars.previous_*, W): the ladder
+    fitted: bool = False  # orientation="fitted": each map turned to its least-area rectangle
 
 
 _KINDS = {"bool": np.bool_, "float": np.float64, "int": np.int64}
@@ -449,6 +449,33 @@ def cascade_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
     row[ROW_AT.band_end] = sl.s1
 
 
+def fitted_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
+    """The loop form of ``orientation="fitted"`` (in place of :func:`cascade_fit`; the
+    array form is :func:`shadowmath._fits._orientation.fitted_cascade`): cascade ``j``'s
+    map turned about the light's ``Z`` to the least-area rectangle enclosing its body's
+    vertices (:func:`._cascade_bounds.body_loop`, :func:`._rectangle_loop.rectangle_loop`)."""
+    pts = alloc(3 * BODY_VERTICES)
+    m = body_loop(sl.light_corners, sl.box_values, (e.box_light, e.box_camera), (sl.s0, sl.s1),
+                  pts)  # fmt: skip
+    b = points_bounds(pts, m, e.box_light)
+    store_turned(e.camera.axes, rectangle_loop(pts, m), b, (sl, j, o), row)
+
+
+def store_turned(a: Any, r: Any, b: Any, slo: Any, row: Any) -> None:
+    """A fitted cascade's row from the light frame ``a``, the least-area rectangle ``r``
+    (:class:`._enclosing_rectangle.Rectangle`: the turn ``(c, s)`` and its bounds) and the
+    :class:`LightBounds` ``b`` (its depths); ``slo = (slice, j, o)``. With ``(c, s)`` the
+    turn, ``X' = c X + s Y``, ``Y' = -s X + c Y``, ``Z' = Z``."""
+    sl, j, o = slo
+    c, s = r.c, r.s
+    turned = (c * a[0] + s * a[3], c * a[1] + s * a[4], c * a[2] + s * a[5],
+              c * a[3] - s * a[0], c * a[4] - s * a[1], c * a[5] - s * a[2],
+              a[6], a[7], a[8])  # fmt: skip
+    box = cascade_box((r.lo_u, r.hi_u, r.lo_v, r.hi_v, b.z_lo, b.z_hi))
+    store_cascade(turned, box, b.z_lo, (j, o), row)
+    row[ROW_AT.band_end], row[ROW_AT.half_width] = sl.s1, math.nan
+
+
 def stable_box(cam: Any, b: Any, W: Any, j: Any, o: Any) -> Any:
     """The :class:`StableBox` of one cascade: a square of half-width ``r`` plus half a
     texel, its centre snapped to whole texels (:func:`._fit_formulas.stable_sides`), its
@@ -544,7 +571,11 @@ def cascade_loop(inputs: Any, opts: Any, out: Any, splits: Any, status: Any) -> 
         for k in range(o.cascades + 1):
             splits[i][k] = cascade_split(G, k, rng, o)
         for j in range(o.cascades):
-            cascade_fit(e, cascade_slice(e, box, splits[i], j, o), j, o, out[i][j])
+            sl = cascade_slice(e, box, splits[i], j, o)
+            if o.fitted:
+                fitted_fit(e, sl, j, o, out[i][j])
+            else:
+                cascade_fit(e, sl, j, o, out[i][j])
 
 
 FUNCTIONS = (
@@ -561,6 +592,8 @@ FUNCTIONS = (
     "cascade_slice",
     "slice_corners",
     "cascade_fit",
+    "fitted_fit",
+    "store_turned",
     "stable_box",
     "cascade_tile",
     "store_cascade",
