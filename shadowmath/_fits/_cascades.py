@@ -8,8 +8,9 @@ The boundary converts and checks the arguments once, then runs the steps of
   for one to :data:`PYTHON_LOOP_CAMERAS` cameras without Numba;
 * the array mode, JAX input (and NumPy batches without Numba): the same steps once on
   whole arrays (the cascades on the last axis); values and gradients follow the same
-  expressions. ``warp="lispsm"`` and ``orientation="fitted"`` (:mod:`._orientation`) run
-  here only.
+  expressions. ``warp="lispsm"`` (:mod:`._lispsm`) runs here only; ``orientation="fitted"``
+  has both forms (:mod:`._orientation` here, :func:`~shadowmath._math._cascade_steps.fitted_fit`
+  in the loop).
 
 Both return a status word of :data:`shadowmath._boundary._status.CASCADE_CHECKS`; the
 boundary raises the first failing check's message (NumPy) or makes the entry NaN (JAX).
