@@ -50,6 +50,7 @@ the same process. Nothing is asserted about time.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import sys
@@ -754,10 +755,47 @@ def speed(cfg: Config, section: Section) -> None:
     )
 
 
+#: The warp's and the fitted orientation's targets with the fast extra: at most this many
+#: times the default fit's time (the same camera, in the same run).
+OPTION_TARGET = 2.0
+
+
+def option_speed(cfg: Config, section: Section) -> None:
+    """``warp="lispsm"`` and ``orientation="fitted"`` against the default fit, both as
+    installed (compiled with the fast extra) and with NumPy alone: ratios to the default."""
+    scene = SCENES[0]
+    args = (scene.sun, scene.view, perspective(FOV_Y, ASPECT, NEAR, FAR), scene.bounds, MAP_SIZE)
+    repeats, min_time = cfg.repeats(15), cfg.min_time
+
+    def fit(**options: object) -> Callable[[], object]:
+        return lambda: sm.fit_cascades(*args, max_distance=scene.distance,
+                                       pcf_radius=PCF_RADIUS, **options)  # fmt: skip
+
+    options = {
+        "warp='lispsm'": {"warp": "lispsm"},
+        "orientation='fitted'": {"orientation": "fitted"},
+    }
+    for where, context in (("as installed", contextlib.nullcontext), ("NumPy alone", numpy_alone)):
+        with context():
+            default = measure(fit(), repeats=repeats, min_time=min_time)
+            timed = {k: measure(fit(**v), repeats=repeats, min_time=min_time)
+                     for k, v in options.items()}  # fmt: skip
+        label = f"fit_cascades default, 1 camera ({where})"
+        for k, t in timed.items():
+            target = (
+                (f"≤ {OPTION_TARGET:g}× default", OPTION_TARGET)
+                if where[0] == "a"
+                else (None, None)
+            )
+            section.rows.append(Row(f"fit_cascades {k}, 1 camera ({where})", t, label, default,
+                                    *target))  # fmt: skip
+
+
 def run(cfg: Config) -> Section:
     section = Section(NAME, TITLE)
     section.text = resolution(cfg, section)
     speed(cfg, section)
+    option_speed(cfg, section)
     return section
 
 

@@ -86,6 +86,48 @@ def test_a_turned_rectangle_is_found_and_ties_keep_the_light_frame() -> None:
     assert r.s[0] == 0.0 and r.c[0] == 1.0
 
 
+def _loop_rectangle(x: np.ndarray, y: np.ndarray) -> Any:
+    """The loop form (Python floats) of the least-area rectangle of the points."""
+    from shadowmath._math._specialize import scalar_formulas
+
+    pts = [float(v) for p in zip(x, y, 0.0 * x, strict=True) for v in p]
+    return scalar_formulas().rectangle_loop(pts, len(x))
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_loop_form_finds_the_least_area_rectangle_of_the_array_form(seed: int) -> None:
+    """On the hull's edges only (the loop form) or over every pair of points (the array
+    form), the same least area, the oracle's; the rectangle holds every point and touches
+    each side; collinear and repeated points (a flat body) included."""
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(1, 30))
+    x, y = rng.normal(size=m) * rng.uniform(0.1, 50), rng.normal(size=m)
+    if seed % 4 == 1:  # on a line
+        y = 0.3 * x + 2.0
+    if seed % 4 == 2:  # repeated points
+        x, y = np.concatenate([x, x[:3]]), np.concatenate([y, y[:3]])
+    r = _loop_rectangle(x, y)
+    a = min_area_rectangle(np, x, y, np.ones_like(x, bool))
+    area = (r.hi_u - r.lo_u) * (r.hi_v - r.lo_v)
+    scale = float(np.max(np.abs(np.concatenate([x, y])))) ** 2
+    assert area == pytest.approx(float((a.hi_u - a.lo_u) * (a.hi_v - a.lo_v)), abs=1e-12 * scale)
+    if np.linalg.matrix_rank(np.column_stack([x - x[0], y - y[0]])) == 2:
+        assert area == pytest.approx(hull_min_area(np.column_stack([x, y])), rel=1e-9)
+    assert r.c > 0 and abs(r.s) <= r.c and r.c * r.c + r.s * r.s == pytest.approx(1.0)
+    u, v = r.c * x + r.s * y, r.c * y - r.s * x
+    assert (u.min(), u.max(), v.min(), v.max()) == (r.lo_u, r.hi_u, r.lo_v, r.hi_v)
+
+
+def test_the_loop_form_keeps_the_light_frame_on_a_tie() -> None:
+    u, v = np.array([0, 4, 4, 0, 2.0]), np.array([0, 0, 1, 1, 0.5])  # axis-aligned: a tie
+    r = _loop_rectangle(u, v)
+    assert (r.c, r.s, r.lo_u, r.hi_u, r.lo_v, r.hi_v) == (1.0, 0.0, 0.0, 4.0, 0.0, 1.0)
+    t = np.radians(-35.0)
+    r = _loop_rectangle(np.cos(t) * u - np.sin(t) * v, np.sin(t) * u + np.cos(t) * v)
+    assert (r.hi_u - r.lo_u) * (r.hi_v - r.lo_v) == pytest.approx(4.0, rel=1e-12)
+    assert r.s == pytest.approx(np.sin(t), abs=1e-12)
+
+
 @pytest.mark.parametrize(
     ("options", "message"),
     [

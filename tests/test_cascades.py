@@ -374,6 +374,8 @@ def test_errors_name_the_argument(change: dict[str, Any], message: str, path: st
     [{}, {"stable": True}, {"layout": "atlas", "count": 3}, {"splits": [0.5, 3.0, 20.0, 90.0]},
      {"max_distance": 60.0, "scheme": "log"}, {"up": np.array([0.0, 0.0, 1.0]), "api": "vulkan"},
      {"overlap": 0.0, "pcf_radius": 3}, {"depth_range": "visible"},
+     {"orientation": "fitted"}, {"orientation": "fitted", "layout": "atlas", "api": "webgpu",
+                                 "depth_range": "visible"},
      {"depth_range": np.array([[2.0, 50.0], [1.0, 30.0], [0.7, 200.0]]), "stable": True},
      {"depth_range": "visible", "stable": True,
       "state": sm.CascadeState(np.array([2.0, np.nan, 0.6]), np.array([60.0, np.nan, 99.0]),

@@ -289,8 +289,8 @@ MODULES: tuple[Mutation, ...] = (
     Mutation(
         "cascade-visible-near",
         "shadowmath/_math/_cascade_steps.py",
-        "    return b[0], b[1]\n",
-        "    return near, b[1]\n",
+        "    return b.lo_x, b.hi_x\n",
+        "    return near, b.hi_x\n",
         "visible_range: the camera's near plane kept as the range's near end",
         ("tests/test_cascade_range.py",),
     ),

@@ -5,7 +5,8 @@ slice, 12 of the box) clipped to the other solid with :func:`._cascade_formulas.
 (a vertex of the intersection is a clipped end of one of them):
 
 * :func:`_bounds_loop` (the loop mode: Python or Numba floats), where each corner's outcode
-  settles most edges without clipping;
+  settles most edges without clipping; :func:`body_loop` is its first half (the fitted
+  orientation reuses it), :func:`points_bounds` its second;
 * :func:`_bounds_array` (the array mode), every edge of every cascade at once, reductions
   over the last axis; :func:`cascade_body` is its first half (LiSPSM and the fitted
   orientation reuse it), :func:`body_bounds` its second.
@@ -14,21 +15,25 @@ slice, 12 of the box) clipped to the other solid with :func:`._cascade_formulas.
 take the slice's corners in light coordinates (``lc``, 8 x 3) and the box's half-space
 values at them (``gs``, 8 x 6), the box's corners in light coordinates and their camera
 side values and view depth (``boxp = (bl, bg)``, 8 x 3 and 8 x 5) and the slice's depths
-``d = (s0, s1)``; both return ``(lo_x, hi_x, lo_y, hi_y, z_lo, z_hi, zb_lo, zb_hi)``: the
-bounds (the slice's own where the intersection is empty; ``z_lo`` lowered to the box's
-nearest corner) and the box's ``z`` range.
+``d = (s0, s1)``; both return :class:`LightBounds`.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 # Shared formulas and primitives (the mode's buffer and array namespace), rebound by specialize().
-from ._cascade_formulas import EDGES, clip_plane, clip_segment, slice_values  # noqa: F401
-from ._cascade_steps import alloc, array_api
+from ._cascade_formulas import (  # noqa: F401
+    EDGES,
+    alloc,
+    array_api,
+    clip_plane,
+    clip_segment,
+    slice_values,
+)
 from ._formulas import where
 
 _E0 = (0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3)
@@ -36,59 +41,95 @@ _E1 = (1, 3, 5, 7, 2, 3, 6, 7, 4, 5, 6, 7)
 _EDGE_0 = np.array(_E0)
 _EDGE_1 = np.array(_E1)
 
+
+class LightBounds(NamedTuple):
+    """A cascade's light-space bounds: the intersection's (the slice's own where it is
+    empty; ``z_lo`` lowered to the box's nearest corner) and the scene box's ``z`` range."""
+
+    lo_x: Any
+    hi_x: Any
+    lo_y: Any
+    hi_y: Any
+    z_lo: Any
+    z_hi: Any
+    box_z_lo: Any
+    box_z_hi: Any
+
+
+#: The most vertices of a cascade's body: both ends of the 24 edges.
+BODY_VERTICES = 48
+
 #: Names bound per mode by specialize(): ``name: (loop form, array form)``.
 FORMS = {"cascade_bounds": ("_bounds_loop", "_bounds_array")}
 
 
 def _bounds_loop(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
-    """The loop form. Each corner's outcode (bit ``j``: outside half-space ``j``, Cohen and
-    Sutherland) settles most edges: a common bit puts the edge outside, no bit at either
-    end inside; :func:`clip_segment` gives the same answers, only slower."""
+    """The loop form: :func:`body_loop`'s vertices reduced (:func:`points_bounds`)."""
+    pts = alloc(3 * BODY_VERTICES)
+    return points_bounds(pts, body_loop(lc, gs, boxp, d, pts), boxp[0])
+
+
+def body_loop(lc: Any, gs: Any, boxp: Any, d: Any, pts: Any) -> Any:
+    """The loop form's vertices of the intersection: the clipped ends of the edges into
+    ``pts`` (``x, y, z`` each, at most :data:`BODY_VERTICES`), or the slice's own corners
+    where the intersection is empty or the whole slice; returns their count.
+
+    Each corner's outcode (bit ``j``: outside half-space ``j``, Cohen and Sutherland)
+    settles most edges: a common bit puts the edge outside, no bit at either end inside;
+    :func:`clip_segment` gives the same answers, only slower."""
     bl, bg = boxp
-    inf = math.inf
-    lx, hx_, ly, hy_, lz, hz = inf, -inf, inf, -inf, inf, -inf
     cs, cb = _outcodes(gs, bg, d)
     whole = True  # every slice corner in the (convex) box: the intersection is the slice
     for k in range(8):
         if cs[k] != 0:
             whole = False
-    seen = False
+    m = 0
     for e in range(0 if whole else 24):
         k0, k1 = _E0[e % 12], _E1[e % 12]
         codes = cs if e < 12 else cb
         c0, c1 = int(codes[k0]), int(codes[k1])
         if c0 & c1:
             continue
-        pts = lc if e < 12 else bl
+        p = lc if e < 12 else bl
         t0, t1, ok = _clip_crossed(gs, bg, d, (e, k0, k1), c0 | c1)
         if ok:
-            seen = True
-            p0 = (pts[3 * k0], pts[3 * k0 + 1], pts[3 * k0 + 2])
-            dx, dy, dz = pts[3 * k1] - p0[0], pts[3 * k1 + 1] - p0[1], pts[3 * k1 + 2] - p0[2]
+            p0 = (p[3 * k0], p[3 * k0 + 1], p[3 * k0 + 2])
+            dx, dy, dz = p[3 * k1] - p0[0], p[3 * k1 + 1] - p0[1], p[3 * k1 + 2] - p0[2]
             for t in (t0, t1):
-                x, y, z = p0[0] + t * dx, p0[1] + t * dy, p0[2] + t * dz
-                # Comparisons, not min()/max(): the Python run of this loop calls nothing.
-                if x < lx:
-                    lx = x
-                if x > hx_:
-                    hx_ = x
-                if y < ly:
-                    ly = y
-                if y > hy_:
-                    hy_ = y
-                if z < lz:
-                    lz = z
-                if z > hz:
-                    hz = z
-    if whole or not seen:
+                pts[3 * m], pts[3 * m + 1] = p0[0] + t * dx, p0[1] + t * dy
+                pts[3 * m + 2] = p0[2] + t * dz
+                m += 1
+    if m == 0:
         for k in range(8):
-            x, y, z = lc[3 * k], lc[3 * k + 1], lc[3 * k + 2]
-            lx, hx_, ly, hy_ = min(lx, x), max(hx_, x), min(ly, y), max(hy_, y)
-            lz, hz = min(lz, z), max(hz, z)
+            pts[3 * k], pts[3 * k + 1], pts[3 * k + 2] = lc[3 * k], lc[3 * k + 1], lc[3 * k + 2]
+        m = 8
+    return m
+
+
+def points_bounds(pts: Any, m: Any, bl: Any) -> Any:
+    """The :class:`LightBounds` of ``m`` vertices ``pts`` (:func:`body_loop`) and the box's
+    corners ``bl`` (8 x 3)."""
+    inf = math.inf
+    lx, hx_, ly, hy_, lz, hz = inf, -inf, inf, -inf, inf, -inf
+    for k in range(m):
+        x, y, z = pts[3 * k], pts[3 * k + 1], pts[3 * k + 2]
+        # Comparisons, not min()/max(): the Python run of this loop calls nothing.
+        if x < lx:
+            lx = x
+        if x > hx_:
+            hx_ = x
+        if y < ly:
+            ly = y
+        if y > hy_:
+            hy_ = y
+        if z < lz:
+            lz = z
+        if z > hz:
+            hz = z
     zb = zt = bl[2]
     for k in range(8):
         zb, zt = min(zb, bl[3 * k + 2]), max(zt, bl[3 * k + 2])
-    return lx, hx_, ly, hy_, min(min(zb, lz), hz), hz, zb, zt
+    return LightBounds(lx, hx_, ly, hy_, min(min(zb, lz), hz), hz, zb, zt)
 
 
 def _outcodes(gs: Any, bg: Any, d: Any) -> Any:
@@ -170,8 +211,8 @@ def _bounds_array(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
 
 
 def body_bounds(body: Any) -> Any:
-    """:func:`cascade_body`'s vertices reduced over the last axis: the bounds of the array
-    form (the slice's own where the intersection is empty)."""
+    """:func:`cascade_body`'s vertices reduced over the last axis: the array form's
+    :class:`LightBounds`."""
     xp = array_api
     ends, ok2, sl, bc = body
     seen = xp.any(ok2, axis=-1)
@@ -182,11 +223,13 @@ def body_bounds(body: Any) -> Any:
             for v, f in zip(ends, sl, strict=True)]  # fmt: skip
     zb_lo, zb_hi = xp.min(bc[2], axis=-1), xp.max(bc[2], axis=-1)
     z_lo = xp.minimum(xp.minimum(zb_lo, low[2]), high[2])
-    return low[0], high[0], low[1], high[1], z_lo, high[2], zb_lo, zb_hi
+    return LightBounds(low[0], high[0], low[1], high[1], z_lo, high[2], zb_lo, zb_hi)
 
 
 FUNCTIONS = (
     "_bounds_loop",
+    "body_loop",
+    "points_bounds",
     "_outcodes",
     "_clip_crossed",
     "cascade_body",

@@ -35,6 +35,13 @@ from typing import Any
 from ._fit_formulas import rint, stable_sides  # noqa: F401  (looked up by the specialized copies)
 from ._formulas import fabs, log2, sqrt, where  # noqa: F401
 
+#: Primitives of the mode, bound by specialize(): a float buffer of ``n`` entries
+#: (``alloc(n)``), entry ``k`` of a per-entry row (``take_last(G, k)``) and, in the array
+#: mode, the array namespace (``array_api``).
+alloc: Any = None
+take_last: Any = None
+array_api: Any = None
+
 #: The 12 edges of a box or slice as pairs of corner indices ``i + 2 j + 4 l``.
 EDGES = (
     (0, 1), (2, 3), (4, 5), (6, 7),

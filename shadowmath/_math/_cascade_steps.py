@@ -46,9 +46,12 @@ from shadowmath._boundary._status import (
 )
 
 # Shared formulas and primitives, rebound by specialize().
+from ._cascade_bounds import BODY_VERTICES, body_loop, points_bounds
 from ._cascade_formulas import (  # noqa: F401
     EDGES,
     affine,
+    alloc,
+    array_api,
     box_values,
     camera_values,
     cascade_box,
@@ -60,26 +63,112 @@ from ._cascade_formulas import (  # noqa: F401
     slice_sphere,
     slice_values,
     split_depth,
+    take_last,
 )
 from ._fit_formulas import fit_axes, fit_rows, placement_ok, safe_box, stable_sides, to_light
 from ._formulas import fabs, flag, isfinite, sqrt, where
+from ._rectangle_loop import rectangle_loop
 from ._rows import _mul16, inverse4, row16, tile_rows
 
-#: Primitives of the mode, bound by specialize(): a float buffer of ``n`` entries, a check's
-#: bit (``flag(ok, bit)``), entry ``k`` of a per-entry row (``take_last(G, k)``) and, in the
-#: array mode, the array namespace.
-alloc: Any = None
-take_last: Any = None
-array_api: Any = None
 #: The bounds pass of the mode (:data:`FORMS`).
 cascade_bounds: Any = None
 
 # Status bits (module constants: Numba freezes them at compile time).
 
-#: One output row per cascade: world_to_light, world_to_clip, world_to_texture (16 each),
-#: the frustum's eight numbers, the band's end, the texel's size along X and Y, and a
-#: stable cascade's laddered half-width (NaN otherwise).
-ROW = 48 + 8 + 3 + 1
+
+class RowFields(NamedTuple):
+    """The parts of a cascade's output row, by name: each part's width (:data:`ROW_WIDTH`)
+    or where it starts (:data:`ROW_AT`); the row is their concatenation, in this order."""
+
+    world_to_light: int  # 16 entries, row-major
+    world_to_clip: int  # 16
+    world_to_texture: int  # 16
+    frustum: int  # 8: OrthographicBox's fields, in its order
+    band_end: int  # 1
+    texel_size: int  # 2: along the map's X and Y
+    half_width: int  # 1: a stable cascade's laddered half-width (NaN otherwise)
+
+
+#: Each part's number of entries.
+ROW_WIDTH = RowFields(16, 16, 16, 8, 1, 2, 1)
+#: Where each part starts in the row.
+ROW_AT = RowFields._make(sum(ROW_WIDTH[:k]) for k in range(len(ROW_WIDTH)))
+#: The entries of one cascade's output row.
+ROW = sum(ROW_WIDTH)
+
+
+def row_part(name: str) -> slice:
+    """The entries of part ``name`` (a field of :class:`RowFields`) in a cascade's row."""
+    at = getattr(ROW_AT, name)
+    return slice(at, at + getattr(ROW_WIDTH, name))
+
+
+class CascadeInputs(NamedTuple):
+    """One entry's inputs, as per-entry values (row-major matrices)."""
+
+    light: Any  # 3: toward the light
+    view_matrix: Any  # 16 (not "view": Numba reserves the name)
+    projection: Any  # 16
+    box: Any  # 6: min then max corner
+    up: Any  # 3 (unused without o.has_up)
+
+
+class CascadeScalars(NamedTuple):
+    """One entry's scalars (NaN where not given); the compiled loop's columns, in order."""
+
+    lam: Any
+    max_distance: Any
+    overlap: Any
+    measured_near: Any  # a measured depth range (o.depth_range == 2)
+    measured_far: Any
+    previous_near: Any  # the range in use last frame (o.has_state)
+    previous_far: Any
+
+
+class CascadeCamera(NamedTuple):
+    """The camera's frustum edges and the light frame, for slicing."""
+
+    sign: Any  # view depth = sign * z_view
+    near_corners: Any  # 4 x 3, corner i + 2 j
+    far_corners: Any  # 4 x 4, homogeneous, w >= 0
+    view_to_world: Any  # 16
+    axes: Any  # 9: the light frame's X, Y, Z
+
+
+class CascadeEntry(NamedTuple):
+    """One camera's values before its cascades (:func:`cascade_entry`)."""
+
+    camera: CascadeCamera
+    lo: Any  # the view depths the splits span
+    hi: Any
+    lam: Any  # the scheme's blend
+    overlap: Any
+    sizes: Any  # the previous stable half-widths (a row)
+    box_light: Any  # the scene box's corners in light coordinates, 8 x 3
+    box_camera: Any  # their camera side values and view depth, 8 x 5
+    status: Any  # the checks' bits
+
+
+class CascadeSlice(NamedTuple):
+    """One cascade's slice of the camera frustum (:func:`cascade_slice`)."""
+
+    s0: Any  # its view depths, s0 <= s1 (s1 with the band)
+    s1: Any
+    view_corners: Any  # 8 x 3
+    light_corners: Any  # 8 x 3
+    box_values: Any  # the box's half-space values at the corners, 8 x 6
+
+
+class StableBox(NamedTuple):
+    """A stable cascade's box (:func:`stable_box`)."""
+
+    hx: Any  # half-sizes
+    hy: Any
+    cx: Any  # centre, light X and Y
+    cy: Any
+    z_lo: Any  # depth range, light Z
+    z_hi: Any
+    held: Any  # the laddered half-width (the sphere's radius without a state)
 
 
 class CascadeOptions(NamedTuple):
@@ -102,9 +191,10 @@ class CascadeOptions(NamedTuple):
     camera_clip: tuple[float, ...]  # OpenGL clip to the camera's (16)
     map_clip: tuple[float, ...]  # OpenGL clip to the maps' API's (16)
     map_texture: tuple[float, ...]  # its texture rows (16)
-    depth_range: int  # 0: the camera's, 1: the visible range, 2: measured (sc[3], sc[4])
-    has_state: bool  # the last range and sizes in use (sc[5], sc[6]; W): the ladder
-    inside: bool  # each cascade's band ends at its practical split (stable "auto")
+    depth_range: int  # 0: the camera's, 1: the visible range, 2: measured (CascadeScalars)
+    has_state: bool  # the last range and sizes in use (CascadeScalars.previous_*, W): the ladder
+    inside: bool = False  # each cascade's band ends at its practical split (stable "auto")
+    fitted: bool = False  # orientation="fitted": each map turned to its least-area rectangle
 
 
 _KINDS = {"bool": np.bool_, "float": np.float64, "int": np.int64}
@@ -186,7 +276,7 @@ def cascade_camera(V: Any, P: Any, o: Any, nc: Any, fc: Any) -> Any:
 
 def cascade_checks(inputs: Any, o: Any) -> Any:
     """The finiteness, affinity and order checks of one entry's inputs (status bits)."""
-    L, V, P, box, U = inputs
+    L, V, P, box, U = inputs.light, inputs.view_matrix, inputs.projection, inputs.box, inputs.up
     tv, tp = V[0], P[0]
     for k in range(1, 16):
         tv, tp = tv + V[k], tp + P[k]
@@ -206,7 +296,7 @@ def cascade_checks(inputs: Any, o: Any) -> Any:
 def cascade_range(near: Any, far: Any, sc: Any, G: Any, o: Any) -> Any:
     """The last split of the scheme (``near + 1`` where invalid) and the checks of the
     splits: given (``G``, ``n + 1`` increasing within the camera's range, to ``o.tol``
-    relative) or of the scheme (``sc = (lam, max_distance, overlap)``)."""
+    relative) or of the scheme (``sc``: :class:`CascadeScalars`)."""
     n = o.cascades
     if o.has_splits:
         ok = take_last(G, 1) > take_last(G, 0)
@@ -218,13 +308,13 @@ def cascade_range(near: Any, far: Any, sc: Any, G: Any, o: Any) -> Any:
         )
         return far, st | flag(inside, C_SPLITS_RANGE)
     if o.has_dmax:
-        d = sc[1]
+        d = sc.max_distance
         st = flag((d > near) & (d <= far), C_MAX_DISTANCE)
         end = where(d > near, lesser(d, far), near + 1.0)
     else:
         st = flag(isfinite(far), C_FAR_INFINITE)
         end = far
-    st = st | flag((sc[0] == 0) | (near > 0), C_LOG_NEAR)
+    st = st | flag((sc.lam == 0) | (near > 0), C_LOG_NEAR)
     return where(isfinite(end) & (end > near), end, near + 1.0), st
 
 
@@ -266,11 +356,11 @@ def box_pass(VP: Any, box: Any, a_sign: Any, bl: Any, bg: Any) -> None:
 
 
 def cascade_entry(inputs: Any, sc: Any, GW: Any, o: Any) -> Any:
-    """One camera's steps before its cascades: frustum, checks, split range, light frame
-    and scene box. ``inputs = (L, V, P, box, U)``: 3, 16, 16, 6 and 3 per-entry values;
-    ``sc = (lam, max_distance, overlap, measured near, measured far, previous near,
-    previous far)``; ``GW``: the given splits and the previous stable half-widths (rows)."""
-    L, V, P, box, U = inputs
+    """One camera's steps before its cascades (a :class:`CascadeEntry`): frustum, checks,
+    split range, light frame and scene box. ``inputs``: :class:`CascadeInputs`; ``sc``:
+    :class:`CascadeScalars`; ``GW``: the given splits and the previous stable half-widths
+    (rows)."""
+    L, V, P, box, U = inputs.light, inputs.view_matrix, inputs.projection, inputs.box, inputs.up
     G, W = GW
     nc, fc, bl, bg = alloc(12), alloc(16), alloc(24), alloc(40)
     sign, near, far, st = cascade_camera(V, P, o, nc, fc)
@@ -281,15 +371,15 @@ def cascade_entry(inputs: Any, sc: Any, GW: Any, o: Any) -> Any:
     st = st | cascade_checks(inputs, o) | st_range
     st = st | flag(ok_light, C_LIGHT_ZERO) | flag(ok_up, C_UP_PARALLEL)
     box_pass((V, P), box, (a, sign), bl, bg)
-    iV = inverse4(V)[0]
-    lo, hi = split_range((sign, nc, fc, iV, a), (box, bg), (near, end), sc, o)
-    return (sign, lo, hi, sc[0], sc[2], W), (nc, fc, bl, bg), a, iV, st
+    cam = CascadeCamera(sign, nc, fc, inverse4(V)[0], a)
+    lo, hi = split_range(cam, (box, bg), (near, end), sc, o)
+    return CascadeEntry(cam, lo, hi, sc.lam, sc.overlap, W, bl, bg, st)
 
 
 def split_range(cam: Any, scene: Any, ne: Any, sc: Any, o: Any) -> Any:
     """The view depths the splits span: the camera's ``ne = (near, end)``, or the visible
-    range (:func:`visible_range`) or a measured one (``sc[3:5]``) within it; with the
-    previous range (``sc[5:7]``), widened to the ladder with hysteresis
+    range (:func:`visible_range`) or a measured one (``sc.measured_*``) within it; with the
+    previous range (``sc.previous_*``), widened to the ladder with hysteresis
     (:func:`._cascade_formulas.depth_hysteresis`) and clamped to ``ne``."""
     near, end = ne
     if o.depth_range == 0:
@@ -297,9 +387,10 @@ def split_range(cam: Any, scene: Any, ne: Any, sc: Any, o: Any) -> Any:
     if o.depth_range == 1:
         lo, hi = visible_range(cam, scene, ne)
     else:
-        lo, hi = greater(lesser(sc[3], end), near), lesser(greater(sc[4], near), end)
+        lo = greater(lesser(sc.measured_near, end), near)
+        hi = lesser(greater(sc.measured_far, near), end)
     if o.has_state:
-        lo, hi = depth_hysteresis(lo, hi, sc[5], sc[6])
+        lo, hi = depth_hysteresis(lo, hi, sc.previous_near, sc.previous_far)
         lo, hi = greater(lo, near), lesser(hi, end)
     return lo, hi
 
@@ -318,25 +409,23 @@ def visible_range(cam: Any, scene: Any, ne: Any) -> Any:
         sd[3 * k], sd[3 * k + 1], sd[3 * k + 2] = near if k < 4 else end, zero, zero
         bd[3 * k], bd[3 * k + 1], bd[3 * k + 2] = bg[5 * k + 4], zero, zero
     b = cascade_bounds(sd, gs, (bd, bg), (near, end))
-    return b[0], b[1]
+    return b.lo_x, b.hi_x
 
 
 def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
-    """Cascade ``j``'s depths ``s0 <= s1`` (with its band; ``Z``: the ``n + 1`` splits)
-    and its slice's corners: view (``vc``), light (``lc``) and the box's half-space values
-    at them (``gs``)."""
-    (sign, _, _, _, ov, _), (nc, fc, _, _), a, iV, _ = e
+    """Cascade ``j``'s :class:`CascadeSlice`: its depths ``s0 <= s1`` (with its band;
+    ``Z``: the ``n + 1`` splits) and its slice's corners."""
     s0, s1 = take_last(Z, j), take_last(Z, j + 1)
-    s1 = lesser(s1 + ov * (s1 - s0), take_last(Z, o.cascades))
-    vc, lc, gs = slice_corners((sign, nc, fc, iV, a), box, s0, s1)
-    return s0, s1, vc, lc, gs
+    s1 = lesser(s1 + e.overlap * (s1 - s0), take_last(Z, o.cascades))
+    vc, lc, gs = slice_corners(e.camera, box, s0, s1)
+    return CascadeSlice(s0, s1, vc, lc, gs)
 
 
 def slice_corners(cam: Any, box: Any, s0: Any, s1: Any) -> Any:
     """The corners of the camera's slice between view depths ``s0`` and ``s1``: view
     (``vc``, 8 x 3), light (``lc``) and the box's half-space values at them (``gs``, 8 x 6).
-    ``cam = (sign, near corners, far corners, inverse view, light axes)``."""
-    sign, nc, fc, iV, a = cam
+    ``cam``: :class:`CascadeCamera`."""
+    sign, nc, fc, iV, a = cam.sign, cam.near_corners, cam.far_corners, cam.view_to_world, cam.axes
     vc, lc, gs = alloc(24), alloc(24), alloc(48)
     lo, hi = (box[0], box[1], box[2]), (box[3], box[4], box[5])
     for k in range(8):
@@ -355,33 +444,61 @@ def slice_corners(cam: Any, box: Any, s0: Any, s1: Any) -> Any:
 
 
 def cascade_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
-    """Cascade ``j``'s map into ``row`` (:data:`ROW` entries) from its slice ``sl``."""
-    s0, s1, vc, lc, gs = sl
-    _, (_, _, bl, bg), a, iV, _ = e
-    b = cascade_bounds(lc, gs, (bl, bg), (s0, s1))
+    """Cascade ``j``'s map into ``row`` (:data:`ROW` entries, parts at :data:`ROW_AT`) from
+    its :class:`CascadeSlice` ``sl`` and the camera's :class:`CascadeEntry` ``e``."""
+    a = e.camera.axes
+    b = cascade_bounds(sl.light_corners, sl.box_values, (e.box_light, e.box_camera), (sl.s0, sl.s1))
     if o.stable:
-        hx, hy, cx, cy, z_lo, z_hi, r = stable_box((vc, iV, a), b, e[0][5], j, o)
-        pad = (z_hi - z_lo) + greater(hx, hy)
-        near, far = pad, pad + (z_hi - z_lo)
-        row[59] = r
+        sb = stable_box((sl.view_corners, e.camera.view_to_world, a), b, e.sizes, j, o)
+        depth = sb.z_hi - sb.z_lo
+        pad = depth + greater(sb.hx, sb.hy)
+        box6, z_lo = (sb.hx, sb.hy, sb.cx, sb.cy, pad, pad + depth), sb.z_lo
+        row[ROW_AT.half_width] = sb.held
     else:
-        hx, hy, cx, cy, near, far = cascade_box((b[0], b[1], b[2], b[3], b[4], b[5]))
-        z_lo = b[4]
-        row[59] = math.nan
-    store_cascade(a, (hx, hy, cx, cy, near, far), z_lo, (j, o), row)
-    row[56] = s1
+        box6, z_lo = cascade_box((b.lo_x, b.hi_x, b.lo_y, b.hi_y, b.z_lo, b.z_hi)), b.z_lo
+        row[ROW_AT.half_width] = math.nan
+    store_cascade(a, box6, z_lo, (j, o), row)
+    row[ROW_AT.band_end] = sl.s1
+
+
+def fitted_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
+    """The loop form of ``orientation="fitted"`` (in place of :func:`cascade_fit`; the
+    array form is :func:`shadowmath._fits._orientation.fitted_cascade`): cascade ``j``'s
+    map turned about the light's ``Z`` to the least-area rectangle enclosing its body's
+    vertices (:func:`._cascade_bounds.body_loop`, :func:`._rectangle_loop.rectangle_loop`)."""
+    pts = alloc(3 * BODY_VERTICES)
+    m = body_loop(sl.light_corners, sl.box_values, (e.box_light, e.box_camera), (sl.s0, sl.s1),
+                  pts)  # fmt: skip
+    b = points_bounds(pts, m, e.box_light)
+    store_turned(e.camera.axes, rectangle_loop(pts, m), b, (sl, j, o), row)
+
+
+def store_turned(a: Any, r: Any, b: Any, slo: Any, row: Any) -> None:
+    """A fitted cascade's row from the light frame ``a``, the least-area rectangle ``r``
+    (:class:`._enclosing_rectangle.Rectangle`: the turn ``(c, s)`` and its bounds) and the
+    :class:`LightBounds` ``b`` (its depths); ``slo = (slice, j, o)``. With ``(c, s)`` the
+    turn, ``X' = c X + s Y``, ``Y' = -s X + c Y``, ``Z' = Z``."""
+    sl, j, o = slo
+    c, s = r.c, r.s
+    turned = (c * a[0] + s * a[3], c * a[1] + s * a[4], c * a[2] + s * a[5],
+              c * a[3] - s * a[0], c * a[4] - s * a[1], c * a[5] - s * a[2],
+              a[6], a[7], a[8])  # fmt: skip
+    box = cascade_box((r.lo_u, r.hi_u, r.lo_v, r.hi_v, b.z_lo, b.z_hi))
+    store_cascade(turned, box, b.z_lo, (j, o), row)
+    row[ROW_AT.band_end], row[ROW_AT.half_width] = sl.s1, math.nan
 
 
 def stable_box(cam: Any, b: Any, W: Any, j: Any, o: Any) -> Any:
-    """The stable box of one cascade: a square of half-width ``r`` plus half a texel,
-    its centre snapped to whole texels (:func:`._fit_formulas.stable_sides`), its depth
-    range (``b``: the bounds, with the box's own ``z``) and ``r``.
+    """The :class:`StableBox` of one cascade: a square of half-width ``r`` plus half a
+    texel, its centre snapped to whole texels (:func:`._fit_formulas.stable_sides`), its
+    depth range (``b``: the :class:`LightBounds`, with the box's own ``z``) and ``r``.
 
     ``r`` is the radius of the slice's sphere, centred there; with a previous state
     (``W``: the laddered half-widths in use) the half-width of the visible part's
     light-space bounds ``b`` on the ladder with hysteresis
-    (:func:`._cascade_formulas.ladder_hold`), returned as the last value, but at most
-    ``r``, centred on those bounds, with their depths."""
+    (:func:`._cascade_formulas.ladder_hold`), returned as ``held``, but at most
+    ``r``, centred on those bounds, with their depths. ``cam = (view corners, view to
+    world, light axes)``."""
     vc, iV, a = cam
     corners = (
         vc[0], vc[1], vc[2], vc[3], vc[4], vc[5], vc[6], vc[7], vc[8], vc[9], vc[10], vc[11],
@@ -393,18 +510,18 @@ def stable_box(cam: Any, b: Any, W: Any, j: Any, o: Any) -> Any:
     r = sqrt(r2)
     held = r
     if o.has_state:
-        held = ladder_hold(0.5 * greater(b[1] - b[0], b[3] - b[2]), take_last(W, j))
+        held = ladder_hold(0.5 * greater(b.hi_x - b.lo_x, b.hi_y - b.lo_y), take_last(W, j))
         r = lesser(held, r)
-        mx, my = 0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3])
+        mx, my = 0.5 * (b.lo_x + b.hi_x), 0.5 * (b.lo_y + b.hi_y)
         c = (mx * a[0] + my * a[3], mx * a[1] + my * a[4], mx * a[2] + my * a[5])
     hx, hy, ox, oy, _ = stable_sides((c, r * r), a, (o.mx, o.my, o.width, o.height), r, o.eps)
     cx = c[0] * a[0] + c[1] * a[1] + c[2] * a[2] + ox
     cy = c[0] * a[3] + c[1] * a[4] + c[2] * a[5] + oy
     if o.has_state:  # the visible part's own depths
-        return hx, hy, cx, cy, b[4], b[5], held
+        return StableBox(hx, hy, cx, cy, b.z_lo, b.z_hi, held)
     cz = c[0] * a[6] + c[1] * a[7] + c[2] * a[8]
-    z_hi = lesser(cz + r, b[7])
-    return hx, hy, cx, cy, lesser(b[6], z_hi - r), z_hi, held
+    z_hi = lesser(cz + r, b.box_z_hi)
+    return StableBox(hx, hy, cx, cy, lesser(b.box_z_lo, z_hi - r), z_hi, held)
 
 
 def cascade_tile(tex: Any, j: Any, o: Any) -> Any:
@@ -416,7 +533,7 @@ def cascade_tile(tex: Any, j: Any, o: Any) -> Any:
 
 
 def store_cascade(a: Any, box6: Any, z_lo: Any, jo: Any, row: Any) -> None:
-    """The cascade's matrices, frustum and texel size into ``row``."""
+    """The cascade's matrices, frustum and texel size into ``row`` (parts at :data:`ROW_AT`)."""
     j, o = jo
     hx, hy, cx, cy, near, far = box6
     shift = z_lo - near  # the origin, on Z through the world origin: x, y stay anchored
@@ -426,44 +543,51 @@ def store_cascade(a: Any, box6: Any, z_lo: Any, jo: Any, row: Any) -> None:
     box = safe_box((hx, hy, cx, cy, near, far))
     w, clip, tex = fit_rows((origin, a), box, (o.mx, o.my), True, api)
     tex = cascade_tile(tex, j, o)
+    at_w, at_c, at_t = ROW_AT.world_to_light, ROW_AT.world_to_clip, ROW_AT.world_to_texture
     for k in range(12):
-        row[k] = w[k]
-    row[12], row[13], row[14], row[15] = 0.0, 0.0, 0.0, 1.0
+        row[at_w + k] = w[k]
+    row[at_w + 12], row[at_w + 13], row[at_w + 14], row[at_w + 15] = 0.0, 0.0, 0.0, 1.0
     for k in range(16):
-        row[16 + k] = clip[k]
-        row[32 + k] = tex[k]
-    row[48], row[49], row[50], row[51] = hx, hy, near, far
-    row[52], row[53], row[54], row[55] = o.mx, o.my, cx, cy
-    row[57] = 2.0 * hx / (o.mx * o.width)
-    row[58] = 2.0 * hy / (o.my * o.height)
+        row[at_c + k] = clip[k]
+        row[at_t + k] = tex[k]
+    f = ROW_AT.frustum  # OrthographicBox's order
+    row[f], row[f + 1], row[f + 2], row[f + 3] = hx, hy, near, far
+    row[f + 4], row[f + 5], row[f + 6], row[f + 7] = o.mx, o.my, cx, cy
+    row[ROW_AT.texel_size] = 2.0 * hx / (o.mx * o.width)
+    row[ROW_AT.texel_size + 1] = 2.0 * hy / (o.my * o.height)
 
 
 def cascade_loop(inputs: Any, opts: Any, out: Any, splits: Any, status: Any) -> None:
     """The loop mode's driver: every camera's cascades, one camera at a time.
 
     ``inputs``: light ``(m, 3)``, views and projections ``(m, 16)``, boxes ``(m, 6)``
-    (min then max), ups ``(m, 3)``, scalars ``(m, 7)`` (lam, max_distance, overlap, the
-    measured depth range, the previous range in use), given splits ``(m, n + 1)`` and
-    the previous stable half-widths ``(m, n)``, each ``m = count or 1`` read at
-    ``i % m``; ``opts``: the options record (``opts[0]``). ``out``: ``(count, n, ROW)``; ``splits``:
-    ``(count, n + 1)``; ``status``: ``(count,)``.
+    (min then max), ups ``(m, 3)``, scalars ``(m, 7)`` (:class:`CascadeScalars`' fields in
+    order), given splits ``(m, n + 1)`` and the previous stable half-widths ``(m, n)``, each
+    ``m = count or 1`` read at ``i % m``; ``opts``: the options record (``opts[0]``).
+    ``out``: ``(count, n, ROW)``; ``splits``: ``(count, n + 1)``; ``status``: ``(count,)``.
     """
     light, views, projs, boxes, ups, scalars, given, sizes = inputs
     o = opts[0]
     for i in range(len(out)):
         L, U, bx = light[i % len(light)], ups[i % len(ups)], boxes[i % len(boxes)]
         box = (bx[0], bx[1], bx[2], bx[3], bx[4], bx[5])
-        G = given[i % len(given)]
+        G, s = given[i % len(given)], scalars[i % len(scalars)]
         e = cascade_entry(
-            ((L[0], L[1], L[2]), row16(views[i % len(views)], 0), row16(projs[i % len(projs)], 0),
-             box, (U[0], U[1], U[2])), scalars[i % len(scalars)], (G, sizes[i % len(sizes)]), o,
+            CascadeInputs((L[0], L[1], L[2]), row16(views[i % len(views)], 0),
+                          row16(projs[i % len(projs)], 0), box, (U[0], U[1], U[2])),
+            CascadeScalars(s[0], s[1], s[2], s[3], s[4], s[5], s[6]),
+            (G, sizes[i % len(sizes)]), o,
         )  # fmt: skip
-        status[i] = e[4]
-        rng = (e[0][1], e[0][2], e[0][3], e[0][4])
+        status[i] = e.status
+        rng = (e.lo, e.hi, e.lam, e.overlap)
         for k in range(o.cascades + 1):
             splits[i][k] = cascade_split(G, k, rng, o)
         for j in range(o.cascades):
-            cascade_fit(e, cascade_slice(e, box, splits[i], j, o), j, o, out[i][j])
+            sl = cascade_slice(e, box, splits[i], j, o)
+            if o.fitted:
+                fitted_fit(e, sl, j, o, out[i][j])
+            else:
+                cascade_fit(e, sl, j, o, out[i][j])
 
 
 FUNCTIONS = (
@@ -480,6 +604,8 @@ FUNCTIONS = (
     "cascade_slice",
     "slice_corners",
     "cascade_fit",
+    "fitted_fit",
+    "store_turned",
     "stable_box",
     "cascade_tile",
     "store_cascade",

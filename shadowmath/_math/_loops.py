@@ -19,12 +19,39 @@ the boundary raises the message of the first failing one.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 from ._fit_entry import fit_entry
 from ._formulas import compose_rows, planar_entries
 from ._rows import row16
 from ._vertex_passes import enclosing_support
+
+
+class FitRow(NamedTuple):
+    """Where each part of :func:`fit_loop`'s output row starts (:data:`FIT_ROW_AT`)."""
+
+    origin: int  # 3
+    axes: int  # 9: X, Y, Z
+    frustum: int  # 8: R_x, R_y, near, far, m_x, m_y, c_x, c_y (volume's order)
+
+
+#: The parts of :func:`fit_loop`'s output row.
+FIT_ROW_AT = FitRow(0, 3, 12)
+#: The entries of one output row.
+FIT_ROW = 12 + 8
+
+
+class FitMatrices(NamedTuple):
+    """Which matrix of :func:`fit_loop`'s ``(4, 4, 4)`` block is which (:data:`FIT_MATRIX`)."""
+
+    world_to_light: int
+    blocker_to_clip: int
+    world_to_texture: int
+    placement: int
+
+
+#: The matrices' places in the block.
+FIT_MATRIX = FitMatrices(0, 1, 2, 3)
 
 
 def planar_loop(plane: Any, light: Any, eps: float, out: Any, status: Any) -> None:
@@ -111,22 +138,25 @@ def fit_loop(operands: Any, opts: Any, out: Any) -> None:
 
 
 def _store(row: Any, mat: Any, e: Any, matrices: Any, margins: Any) -> None:
-    """One entry's output row (frame, frustum) and its four matrices."""
+    """One entry's output row (frame, frustum: parts at :data:`FIT_ROW_AT`) and its four
+    matrices (at :data:`FIT_MATRIX`)."""
     W, clip, tex, b = matrices
     for j in range(3):
-        row[j] = e.origin[j]
+        row[FIT_ROW_AT.origin + j] = e.origin[j]
     for j in range(9):
-        row[3 + j] = e.axes[j]
+        row[FIT_ROW_AT.axes + j] = e.axes[j]
+    f = FIT_ROW_AT.frustum
     for j in range(4):
-        row[12 + j] = e.box[j]
-    row[16], row[17], row[18], row[19] = margins[0], margins[1], e.box[4], e.box[5]
+        row[f + j] = e.box[j]
+    row[f + 4], row[f + 5], row[f + 6], row[f + 7] = margins[0], margins[1], e.box[4], e.box[5]
+    w, c, t, p = FIT_MATRIX
     for j in range(12):
-        mat[0, j // 4, j % 4] = W[j]
-    mat[0, 3, 0], mat[0, 3, 1], mat[0, 3, 2], mat[0, 3, 3] = 0.0, 0.0, 0.0, 1.0
+        mat[w, j // 4, j % 4] = W[j]
+    mat[w, 3, 0], mat[w, 3, 1], mat[w, 3, 2], mat[w, 3, 3] = 0.0, 0.0, 0.0, 1.0
     for j in range(16):
-        mat[1, j // 4, j % 4] = clip[j]
-        mat[2, j // 4, j % 4] = tex[j]
-        mat[3, j // 4, j % 4] = b[j]
+        mat[c, j // 4, j % 4] = clip[j]
+        mat[t, j // 4, j % 4] = tex[j]
+        mat[p, j // 4, j % 4] = b[j]
 
 
 FUNCTIONS = (

@@ -23,6 +23,7 @@ from shadowmath._fits.shadow._arrays import Inputs, driver, fit_arrays
 from shadowmath._fits.shadow._spot_select import spot_selection
 from shadowmath._geometry._adaptive_frustum import border_margin
 from shadowmath._math._frame import stack_matrix
+from shadowmath._math._loops import FIT_MATRIX, FIT_ROW_AT
 
 from ._allocate import ShadowAtlas
 from ._report import AtlasInputs, Report, pick
@@ -85,9 +86,9 @@ def fit_2d(
             out.append((atlas.light_tiles[lights[part], 0], *values))
     if block is not None:
         mats, frusta = block.mats, block.out
-        return [
-            (atlas.light_tiles[lights, 0], mats[:, 1], mats[:, 2], frusta[:, 14], frusta[:, 15])
-        ]
+        m, near = FIT_MATRIX, FIT_ROW_AT.frustum + 2  # the frustum's near, then far
+        clip, tex = mats[:, m.blocker_to_clip], mats[:, m.world_to_texture]
+        return [(atlas.light_tiles[lights, 0], clip, tex, frusta[:, near], frusta[:, near + 1])]
     return out
 
 
@@ -112,9 +113,13 @@ class _Block:
             for i in np.flatnonzero(errors).tolist():
                 report.fail(int(lights[part][i]), next(m for b, m in messages if errors[i] & b))
             failed = errors != 0
-            mats, out = self.mats[part], self.out[part]
-            mats[failed, 1], mats[failed, 2] = report.clip, report.tex
-            out[failed, 14:16] = 0.0
+            mats, out, m = self.mats[part], self.out[part], FIT_MATRIX
+            mats[failed, m.blocker_to_clip], mats[failed, m.world_to_texture] = (
+                report.clip,
+                report.tex,
+            )
+            near = FIT_ROW_AT.frustum + 2  # the frustum's near, then far
+            out[failed, near : near + 2] = 0.0
 
 
 def _receiver_flags(R: Array | None) -> tuple[bool, bool]:

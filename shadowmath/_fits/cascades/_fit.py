@@ -8,8 +8,9 @@ The boundary converts and checks the arguments once, then runs the steps of
   for one to :data:`PYTHON_LOOP_CAMERAS` cameras without Numba;
 * the array mode, JAX input (and NumPy batches without Numba): the same steps once on
   whole arrays (the cascades on the last axis); values and gradients follow the same
-  expressions. ``warp="lispsm"`` and ``orientation="fitted"`` (:mod:`._orientation`) run
-  here only.
+  expressions. ``warp="lispsm"`` (:mod:`._lispsm`) runs here only; ``orientation="fitted"``
+  has both forms (:mod:`._orientation` here, :func:`~shadowmath._math._cascade_steps.fitted_fit`
+  in the loop).
 
 Both return a status word of :data:`shadowmath._boundary._status.CASCADE_CHECKS`; the
 boundary raises the first failing check's message (NumPy) or makes the entry NaN (JAX).
@@ -43,7 +44,17 @@ from shadowmath._boundary._validate import (
 from shadowmath._fits._spec import ShadowMapSpec, api_rows, map_spec
 from shadowmath._geometry._api_convention import check_api as _check_api
 from shadowmath._math._bias import PcfFilter
-from shadowmath._math._cascade_steps import ROW, CascadeOptions, options_record
+from shadowmath._math._cascade_steps import (
+    ROW,
+    ROW_AT,
+    CascadeEntry,
+    CascadeInputs,
+    CascadeOptions,
+    CascadeScalars,
+    CascadeSlice,
+    options_record,
+    row_part,
+)
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._conventions import clip_from_gl as _clip_from_gl
 from shadowmath._math._frustum import NEAR_FAR_SLACK, OrthographicBox
@@ -344,14 +355,14 @@ def fit_cascades(
     _scalar_checks(checks, (lm, ov, dmax, S))
     W = _range_checks(checks, M, (Qn, Qf, W), (shape, n))
     C = _clip_from_gl(cam_api, camera_reversed_z)
-    given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None)
+    given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None, fitted)
     o, record = _options(
         spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row), inside=inside
     )
     call = _Call(ctx, spec, layout, shape, o)
     extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
     arrays = (L, V, P, box, U, S, dmax, lm, ov, extra, W)
-    if ctx.xp is np and warp is None and not fitted:
+    if ctx.xp is np and warp is None:
         python = not _kernels.available()
         if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
             try:
@@ -359,7 +370,7 @@ def fit_cascades(
             except (ZeroDivisionError, OverflowError):
                 pass  # Python floats raise where Numba's give inf: invalid input, which the
                 # array mode below reports with its message
-    return _arrays(call, checks, arrays, (warp, fitted))
+    return _arrays(call, checks, arrays, warp)
 
 
 def _range_option(
@@ -543,7 +554,7 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
     inputs = (
         flat_batch(L, shape, (3,)), flat_batch(V, shape, (4, 4)).reshape(-1, 16),
         flat_batch(P, shape, (4, 4)).reshape(-1, 16), flat_batch(box, shape, (2, 3)).reshape(-1, 6),
-        _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (7,)),
+        _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (_SCALARS,)),
         _NO_SPLITS if S is None else flat_batch(S, shape, (n + 1,)),
         _NO_SIZES if W is None else flat_batch(W, shape, (n,)),
     )  # fmt: skip
@@ -565,41 +576,39 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
     return _result(call, out.reshape(*shape, n, ROW), splits.reshape(*shape, n + 1))
 
 
-def _arrays(
-    call: _Call, checks: Checks, arrays: tuple[Any, ...], hooks: tuple[str | None, bool]
-) -> Cascades:
+def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | None) -> Cascades:
     """The array mode: the same steps once on whole arrays (NumPy or JAX), per-entry
     values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``);
-    ``hooks``: the warp and whether the maps are turned (``orientation="fitted"``)."""
+    ``warp``: the warp's name (or None); ``o.fitted``: the maps turned
+    (``orientation="fitted"``)."""
     ctx, o = call.ctx, call.o
     xp, F = ctx.xp, formulas(ctx.xp)
     L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
-    inputs = (
-        tuple(L[..., c, None] for c in range(3)),
-        tuple(V[..., i // 4, i % 4, None] for i in range(16)),
-        tuple(P[..., i // 4, i % 4, None] for i in range(16)),
-        tuple(box[..., i // 3, i % 3, None] for i in range(6)),
-        (0.0, 0.0, 0.0) if U is None else tuple(U[..., c, None] for c in range(3)),
+    inputs = CascadeInputs(
+        light=tuple(L[..., c, None] for c in range(3)),
+        view_matrix=tuple(V[..., i // 4, i % 4, None] for i in range(16)),
+        projection=tuple(P[..., i // 4, i % 4, None] for i in range(16)),
+        box=tuple(box[..., i // 3, i % 3, None] for i in range(6)),
+        up=(0.0, 0.0, 0.0) if U is None else tuple(U[..., c, None] for c in range(3)),
     )
     more = (math.nan,) * 4 if extra is None else extra
-    sc = tuple(
+    sc = CascadeScalars._make(
         v if v is None or isinstance(v, float) else v[..., None] for v in (lm, dmax, ov, *more)
     )
     j = np.arange(o.cascades + 1, dtype=ctx.dtype)  # the cascades' indices, in the work dtype
     with np.errstate(all="ignore"):  # invalid entries: their status bits say so
         e = F.cascade_entry(inputs, sc, (S, W), o)
-        splits = F.cascade_split(S, j, e[0][1:5], o)
-        sl = F.cascade_slice(e, inputs[3], splits, j[:-1], o)
+        splits = F.cascade_split(S, j, (e.lo, e.hi, e.lam, e.overlap), o)
+        sl = F.cascade_slice(e, inputs.box, splits, j[:-1], o)
         row: list[Any] = [0.0] * ROW
-        warp, fitted = hooks
-        if fitted:
+        if o.fitted:
             fitted_cascade(xp, F, (e, sl, j[:-1], o), row)
         else:
             F.cascade_fit(e, sl, j[:-1], o, row)
         if warp is not None:
             _warp(call, (e, sl, j[:-1]), (V, P), row)
     for bit, message in cascade_messages():
-        checks.require((e[4][..., 0] & bit) == 0, message)
+        checks.require((e.status[..., 0] & bit) == 0, message)
     full = (*call.shape, o.cascades)
     rows = xp.stack([xp.broadcast_to(xp.asarray(v, dtype=ctx.dtype), full) for v in row], -1)
     splits = xp.broadcast_to(splits, (*call.shape, o.cascades + 1))
@@ -614,39 +623,50 @@ class _WarpCamera(NamedTuple):
     clip_rows: Array  # (*b, 4, 4): projection @ view
 
 
-def _warp(call: _Call, steps: tuple[Any, ...], VP: tuple[Array, Array], row: list[Any]) -> None:
+def _warp(
+    call: _Call,
+    steps: tuple[CascadeEntry, CascadeSlice, Any],
+    VP: tuple[Array, Array],
+    row: list[Any],
+) -> None:
     """The LiSPSM hook (:mod:`._lispsm`): the warp replaces clip, texture rows and size."""
     xp, F, o = call.ctx.xp, formulas(call.ctx.xp), call.o
     e, sl, j = steps
     V, P = VP
-    body = F.cascade_body(sl[3], sl[4], (e[1][2], e[1][3]), (sl[0], sl[1]))
-    iV = xp.stack(xp.broadcast_arrays(*e[3]), axis=-1)[..., 0, :]
-    cam = _WarpCamera(e[0][0][..., 0], xp.reshape(iV, (*iV.shape[:-1], 4, 4)), matmul(xp, P, V))
-    size = xp.stack(xp.broadcast_arrays(row[57], row[58]), axis=-1)
-    ortho = (tuple(row[16:32]), tuple(row[32:48]), size)
+    body = F.cascade_body(
+        sl.light_corners, sl.box_values, (e.box_light, e.box_camera), (sl.s0, sl.s1)
+    )
+    iV = xp.stack(xp.broadcast_arrays(*e.camera.view_to_world), axis=-1)[..., 0, :]
+    cam = _WarpCamera(
+        e.camera.sign[..., 0], xp.reshape(iV, (*iV.shape[:-1], 4, 4)), matmul(xp, P, V)
+    )
+    clip_at, tex_at, size_at = (row_part(k) for k in ("world_to_clip", "world_to_texture",
+                                                       "texel_size"))  # fmt: skip
+    size = xp.stack(xp.broadcast_arrays(*row[size_at]), axis=-1)
+    ortho = (tuple(row[clip_at]), tuple(row[tex_at]), size)
     clip, tex, size = warp_cascades(
-        xp, F, body, cam, V, a=e[2], spec=call.spec, ortho=ortho,
+        xp, F, body, cam, V, a=e.camera.axes, spec=call.spec, ortho=ortho,
         tile=lambda rows: F.cascade_tile(rows, j, o),
     )  # fmt: skip
-    row[16:32], row[32:48] = clip, tex
-    row[57], row[58] = size[..., 0], size[..., 1]
+    row[clip_at], row[tex_at] = clip, tex
+    row[size_at] = size[..., 0], size[..., 1]
 
 
 def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
     """The result from each cascade's row ``(*batch, n, ROW)`` and the splits."""
     xp, n, spec = call.ctx.xp, call.o.cascades, call.spec
-    m = xp.reshape(rows[..., :48], (*call.shape, n, 3, 4, 4))
-    rx, ry, near, far, m_x, m_y, cx, cy = (rows[..., 48 + k] for k in range(8))
-    state = CascadeState(splits[..., 0], splits[..., -1], rows[..., 59])
+    m = xp.reshape(rows[..., : ROW_AT.frustum], (*call.shape, n, 3, 4, 4))  # the three matrices
+    box = OrthographicBox(*(rows[..., ROW_AT.frustum + k] for k in range(8)))
+    state = CascadeState(splits[..., 0], splits[..., -1], rows[..., ROW_AT.half_width])
     texture = _texture(n, spec.size, call.layout)
     return Cascades(
         world_to_light=m[..., 0, :, :],
-        frustum=OrthographicBox(rx, ry, near, far, m_x, m_y, cx, cy),
+        frustum=box,
         world_to_clip=m[..., 1, :, :],
         world_to_texture=m[..., 2, :, :],
         splits=splits,
-        band_end=rows[..., 56],
-        texel_size=rows[..., 57:59],
+        band_end=rows[..., ROW_AT.band_end],
+        texel_size=rows[..., row_part("texel_size")],
         viewports=_tiles(n, spec.size, call.layout),
         texture_size=texture[0],
         texture_layers=texture[1],
@@ -659,6 +679,7 @@ def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
 PYTHON_LOOP_CAMERAS = 4
 
 _NO_UP = np.zeros((1, 3))
+_SCALARS = len(CascadeScalars._fields)  # the compiled loop's columns of scalars
 _NO_SPLITS = np.zeros((1, 2))
 _NO_SIZES = np.zeros((1, 1))
 
@@ -691,7 +712,7 @@ def _options(
     spec: ShadowMapSpec,
     layout: str,
     n: int,
-    given: tuple[bool, bool, bool, int, bool],
+    given: tuple[bool, bool, bool, int, bool, bool],
     *,
     eps: float,
     C: tuple[float, ...],
@@ -701,10 +722,10 @@ def _options(
     few recur every frame)."""
     cols, rows = _grid(n, layout)
     C_api, TC_api = api_rows(spec.api, spec.reversed_z)
-    has_up, has_splits, has_dmax, range_code, has_state = given
+    has_up, has_splits, has_dmax, range_code, has_state, fitted = given
     o = CascadeOptions(
         has_up=has_up, stable=spec.stable, has_splits=has_splits, has_dmax=has_dmax,
-        depth_range=range_code, has_state=has_state, inside=inside,
+        depth_range=range_code, has_state=has_state, inside=inside, fitted=fitted,
         mx=float(spec.margins[0]), my=float(spec.margins[1]), width=float(spec.size[0]),
         height=float(spec.size[1]), eps=eps, tol=math.sqrt(eps), cascades=n,
         slack=NEAR_FAR_SLACK, cols=cols, rows=rows, camera_clip=C, map_clip=tuple(C_api),

@@ -17,7 +17,6 @@ raises except :func:`check_orientation`, on the options.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from shadowmath._math._enclosing_rectangle import min_area_rectangle
@@ -46,11 +45,13 @@ def check_orientation(orientation: object, stable: bool, warp: object) -> bool:
 def fitted_cascade(xp: Any, F: Any, steps: tuple[Any, Any, Any, Any], row: list[Any]) -> None:
     """The array mode's cascade fit (in place of ``cascade_fit``) with each map turned to
     its body's minimum-area rectangle. ``steps = (e, sl, j, o)``: the entry, the slices,
-    the cascades' indices and the options; ``row``: the cascades' rows (``ROW``)."""
+    the cascades' indices and the options; ``row``: the cascades' rows (parts at
+    ``ROW_AT``)."""
     e, sl, j, o = steps
-    s0, s1, _, lc, gs = sl
-    _, (_, _, bl, bg), a, _, _ = e
-    body = F.cascade_body(lc, gs, (bl, bg), (s0, s1))
+    a = e.camera.axes
+    body = F.cascade_body(
+        sl.light_corners, sl.box_values, (e.box_light, e.box_camera), (sl.s0, sl.s1)
+    )
     b = F.body_bounds(body)
     ends, ok, corners, _ = body
     seen = xp.any(ok, axis=-1, keepdims=True)  # else the slice's own corners, as body_bounds
@@ -58,10 +59,4 @@ def fitted_cascade(xp: Any, F: Any, steps: tuple[Any, Any, Any, Any], row: list[
     y = xp.concat([ends[1], xp.broadcast_to(corners[1], (*ok.shape[:-1], 8))], axis=-1)
     use = xp.concat([ok, xp.broadcast_to(~seen, (*ok.shape[:-1], 8))], axis=-1)
     r = min_area_rectangle(xp, x, y, use)
-    c, s = r.c, r.s
-    turned = (c * a[0] + s * a[3], c * a[1] + s * a[4], c * a[2] + s * a[5],
-              c * a[3] - s * a[0], c * a[4] - s * a[1], c * a[5] - s * a[2],
-              a[6], a[7], a[8])  # fmt: skip
-    box = F.cascade_box((r.lo_u, r.hi_u, r.lo_v, r.hi_v, b[4], b[5]))
-    F.store_cascade(turned, box, b[4], (j, o), row)
-    row[56], row[59] = s1, math.nan
+    F.store_turned(a, r, b, (sl, j, o), row)

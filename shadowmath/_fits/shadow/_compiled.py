@@ -23,6 +23,7 @@ from shadowmath._fits._spec import FitKey, fit_options
 from shadowmath._math._fit_entry import FitOptions
 from shadowmath._math._frame import LightFrame
 from shadowmath._math._frustum import volume
+from shadowmath._math._loops import FIT_MATRIX, FIT_ROW, FIT_ROW_AT
 from shadowmath._math._specialize import scalar_formulas
 
 from ._arrays import Inputs
@@ -30,9 +31,10 @@ from ._result import ShadowSetup
 
 _FIELDS = tuple(typing.get_type_hints(FitOptions).items())
 
-#: One output row: origin, X, Y, Z (3 each), then the eight numeric frustum fields;
-#: one matrix block (4, 4, 4): world_to_light, blocker_to_clip, world_to_texture, placement.
-ROW = 12 + 8
+#: One output row: origin, X, Y, Z (3 each), then the eight numeric frustum fields (parts at
+#: ``FIT_ROW_AT``); one matrix block (4, 4, 4): world_to_light, blocker_to_clip,
+#: world_to_texture, placement (at ``FIT_MATRIX``).
+ROW = FIT_ROW
 
 _IDENTITY = np.eye(4).reshape(1, 4, 4)
 _NONE = np.zeros(1)
@@ -128,17 +130,22 @@ def views(key: FitKey, shape: tuple[int, ...], out: Buffers, used: Array) -> Sha
     """The setup as views of the output blocks, with ``casters_used`` (first-axis
     indexing: the cheapest views; one entry's frustum fields are NumPy scalars)."""
     rows, mats = out.rows, out.mats
+    starts = (FIT_ROW_AT.origin, *(FIT_ROW_AT.axes + 3 * k for k in range(3)))
+    f = FIT_ROW_AT.frustum
     if shape:
         v = np.moveaxis(rows.reshape(*shape, ROW), -1, 0)
         M = np.moveaxis(mats.reshape(*shape, 4, 4, 4), -3, 0)
-        frame = LightFrame(*(np.moveaxis(v[i : i + 3], 0, -1) for i in (0, 3, 6, 9)))
-        fields: Any = v[12:20]
+        frame = LightFrame(*(np.moveaxis(v[i : i + 3], 0, -1) for i in starts))
+        fields: Any = v[f : f + 8]
     else:
         v, M = rows[0], mats[0]
-        frame = LightFrame._make((v[0:3], v[3:6], v[6:9], v[9:12]))
-        fields = v[12:20]
+        frame = LightFrame._make(v[i : i + 3] for i in starts)
+        fields = v[f : f + 8]
     frustum = volume(fields, key.directional)
-    return ShadowSetup._make((frame, frustum, M[0], M[3], M[1], M[2], used, key.texels))
+    m = FIT_MATRIX
+    return ShadowSetup._make((frame, frustum, M[m.world_to_light], M[m.placement],
+                              M[m.blocker_to_clip], M[m.world_to_texture], used,
+                              key.texels))  # fmt: skip
 
 
 #: The compiled loop's options record: :class:`FitOptions`' fields by name, then the
