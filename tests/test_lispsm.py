@@ -9,6 +9,7 @@ Jacobian of the texture coordinates ``(s / q, t / q)``).
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
 import jax
@@ -19,7 +20,6 @@ from scipy.optimize import linprog
 from scipy.spatial import HalfspaceIntersection
 
 import shadowmath as sm
-from shadowmath._fits import _lispsm
 from shadowmath._fits._lispsm import WARP_MIN_SIN
 
 from .cameras import look_at, perspective
@@ -288,9 +288,11 @@ def test_jax_traces_the_newton_steps_once(monkeypatch: pytest.MonkeyPatch) -> No
     with their number (traced as copies, they were a quarter of the gradient's program and
     doubled its compile time)."""
     sun, view, proj, box = scene(6)
+    # The warp's module, beside the module that defines fit_cascades.
+    lispsm = importlib.import_module(sm.fit_cascades.__module__.rpartition(".")[0] + "._lispsm")
 
     def equations(steps: int) -> int:
-        monkeypatch.setattr(_lispsm, "NEWTON_STEPS", steps)
+        monkeypatch.setattr(lispsm, "NEWTON_STEPS", steps)
         program = jax.make_jaxpr(
             lambda light: sm.fit_cascades(light, view, proj, box, SIZE, warp="lispsm")
         )
