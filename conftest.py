@@ -15,6 +15,16 @@ import pytest
 # after every call in the test suite (shadowmath/_boundary/_shapes.py).
 os.environ["SHADOWMATH_CHECK_SHAPES"] = "1"
 
+# Before JAX is imported: JAX's persistent compilation cache (docs/performance.md), so that
+# a program compiled once (by another pytest-xdist worker, a child process the tests start,
+# or an earlier run) is loaded from disk instead of compiled again. Entries are keyed by the
+# lowered program, so changed code compiles afresh. The environment reaches child processes.
+os.environ.setdefault(
+    "JAX_COMPILATION_CACHE_DIR",
+    os.path.join(os.path.dirname(os.path.abspath(__file__)), ".pytest_cache", "jax-cache"),
+)
+os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.1")
+
 import shadowmath
 
 

@@ -18,6 +18,10 @@ Sections (``--only NAME``, repeatable or comma-separated):
 * ``large``: one 4M-vertex float32 blocker against one flat ``sum`` of the array.
 * ``derivatives``: the jitted gradient of the fitting objective against its forward pass;
   ``optimize_frustum`` on 1,000 and 500,000 vertices and on a batch of 100 blockers.
+* ``compile``: the first ``jax.jit(jax.value_and_grad(loss))`` through ``fit_shadow`` (per light
+  kind and main options), ``fit_cascades`` (four cascades; ``stable``, LiSPSM) and
+  ``pcss_parameters``, float64: the jaxpr's equations and the time to lower and compile it in a
+  fresh trace (targets: 1 s for ``fit_shadow``, 2 s for four cascades).
 * ``gpu``: the batch and large-blocker figures on a GPU (skipped without one).
 * ``coverage``: ``benchmarks/bench_fit.py``, the optimized fit's coverage (needs OpenGL).
 * ``cascades``: ``benchmarks/bench_cascades.py``, ``fit_cascades``: the shadow-map texel's area

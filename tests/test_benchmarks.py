@@ -25,6 +25,7 @@ EXPECTED = [
     "suns",
     "large",
     "derivatives",
+    "compile",
     "gpu",
     "coverage",
     "cascades",

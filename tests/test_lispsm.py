@@ -9,6 +9,7 @@ Jacobian of the texture coordinates ``(s / q, t / q)``).
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
 import jax
@@ -280,6 +281,24 @@ def test_jax_gives_numpy_values_under_jit() -> None:
         assert isinstance(c.world_to_clip, jax.Array)
         for a, b in zip(leaves(ref), leaves(c), strict=True):
             np.testing.assert_allclose(b, a, rtol=1e-11, atol=1e-13)
+
+
+def test_jax_traces_the_newton_steps_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Under JAX the warp cap's Newton steps are one loop: the traced program does not grow
+    with their number (traced as copies, they were a quarter of the gradient's program and
+    doubled its compile time)."""
+    sun, view, proj, box = scene(6)
+    # The warp's module, beside the module that defines fit_cascades.
+    lispsm = importlib.import_module(sm.fit_cascades.__module__.rpartition(".")[0] + "._lispsm")
+
+    def equations(steps: int) -> int:
+        monkeypatch.setattr(lispsm, "NEWTON_STEPS", steps)
+        program = jax.make_jaxpr(
+            lambda light: sm.fit_cascades(light, view, proj, box, SIZE, warp="lispsm")
+        )
+        return len(program(jnp.asarray(sun)).jaxpr.eqns)
+
+    assert equations(2) == equations(8)
 
 
 def test_jax_gradient_wrt_the_light_matches_central_differences() -> None:

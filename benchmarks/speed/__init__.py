@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from . import batch, coverage, derivatives, gpu, large, options, single, suns
+from . import batch, compile, coverage, derivatives, gpu, large, options, single, suns
 
 SECTIONS: dict[str, ModuleType] = {
-    m.NAME: m for m in (single, options, batch, suns, large, derivatives, gpu, coverage)
+    m.NAME: m for m in (single, options, batch, suns, large, derivatives, compile, gpu, coverage)
 }

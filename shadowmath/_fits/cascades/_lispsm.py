@@ -374,10 +374,20 @@ def _capped(xp: Any, F: Any, vertices: tuple[Any, Any, Any], lam: Any, cap: tupl
     spread = 0.5 * (spread + xp.max(xp.where(valid, xp.abs(s) - s, 0.0), axis=-1))
     floor = F.sqrt(target / F.where(spread > 0, spread, target)) - 1.0
     inf = xp.asarray(float("inf"), dtype=s.dtype)
-    for _ in range(NEWTON_STEPS):
+
+    def newton(lam: Any) -> Any:
         a, da = _area(xp, vertices, lam, check)
         step = lam - (a - target) / F.where(da > 0, da, inf)
-        lam = F.where(a > target, xp.maximum(step, floor), lam)
+        return F.where(a > target, xp.maximum(step, floor), lam)
+
+    lam = newton(lam)  # the first step gives lam its final shape and dtype
+    if xp is np:
+        for _ in range(NEWTON_STEPS - 1):
+            lam = newton(lam)
+    else:  # JAX: the same steps traced once (a loop, not NEWTON_STEPS copies to compile)
+        from jax import lax
+
+        lam = lax.fori_loop(1, NEWTON_STEPS, lambda _, x: newton(x), lam)
     a, _ = _area(xp, vertices, lam, check)
     return F.where(a > target * (1.0 + 1e-9), xp.minimum(floor, lam), lam)
 
