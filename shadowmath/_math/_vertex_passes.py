@@ -6,7 +6,7 @@ on Python floats for one small fit. Each pass reads the vertices once, placing
 each through ``b`` on the fly (``vs = (V, b, has_b)``: one entry's vertices as one
 flat row ``x0, y0, z0, x1, ...`` of ``3 N`` numbers, its placement's 16 entries, and
 whether it has one). The same passes on whole arrays are reductions over the last
-axis (:class:`shadowmath._fits.shadow._arrays.ArrayPasses`); both call the per-vertex
+axis (:class:`._passes.ArrayPasses`); both call the per-vertex
 formulas of :mod:`._fit_formulas`. Sums are accumulated in float64 whatever the
 input dtype.
 
