@@ -77,7 +77,7 @@ FITS: dict[str, dict[str, str]] = {
     "camera": {"_shadow_camera": "shadow_camera of any fit, camera_to_world"},
 }
 #: The pieces the fits share, once, beside the packages (top-level modules of ``_fits``).
-FITS_SHARED = ("_spec", "_light_kinds")
+FITS_SHARED = ("_spec", "_light_kinds", "_backend")
 #: Inside ``_fits``, bottom to top: the shared modules, then the fits that build on others.
 FIT_LAYERS: tuple[tuple[str, ...], ...] = (
     FITS_SHARED,

@@ -40,6 +40,7 @@ from shadowmath._boundary._validate import (
     require_last,
     require_matrix,
 )
+from shadowmath._fits._backend import form
 from shadowmath._fits._spec import ShadowMapSpec, api_rows, map_spec
 from shadowmath._geometry._api_convention import check_api as _check_api
 from shadowmath._math._bias import PcfFilter
@@ -342,14 +343,14 @@ def fit_cascades(
     call = _Call(ctx, spec, layout, shape, o)
     extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
     arrays = (L, V, P, box, U, S, dmax, lm, ov, extra, W)
-    if ctx.xp is np and warp is None and not fitted:
-        python = not _kernels.available()
-        if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
-            try:
-                return _compiled(call, arrays, None if python else record)
-            except (ZeroDivisionError, OverflowError):
-                pass  # Python floats raise where Numba's give inf: invalid input, which the
-                # array mode below reports with its message
+    small = math.prod(shape) <= PYTHON_LOOP_CAMERAS
+    chosen = form(ctx.xp is np and warp is None and not fitted, small=small)
+    if chosen != "arrays":
+        try:
+            return _compiled(call, arrays, None if chosen == "python" else record)
+        except (ZeroDivisionError, OverflowError):
+            pass  # Python floats raise where Numba's give inf: invalid input, which the
+            # array mode below reports with its message
     return _arrays(call, checks, arrays, (warp, fitted))
 
 

@@ -24,6 +24,7 @@ from shadowmath._boundary._validate import (
     is_tracer,
     non_finite,
 )
+from shadowmath._fits._backend import form
 from shadowmath._fits._spec import ShadowMapSpec
 from shadowmath._fits.atlas._fit import AtlasFit
 from shadowmath._fits.cascades._fit import Cascades
@@ -37,6 +38,20 @@ __all__ = ["PcssParameters", "PcssWidths", "pcss_parameters", "pcss_widths"]
 
 BAD_RADIUS = "light_radius: expected finite values >= 0"
 BAD_ANGLE = "angular_radius: expected radians in [0, pi/2)"
+
+
+def radius_ok(xp: Any, R: Any) -> Any:
+    """``light_radius`` is valid: finite and ``>= 0`` (``xp``: ``math`` for a float, or
+    an array namespace); the one check of every path."""
+    return xp.isfinite(R) & (R >= 0)
+
+
+def angle_ok(xp: Any, theta: Any) -> Any:
+    """``angular_radius`` is valid: finite radians in ``[0, pi/2)`` (``xp`` as in
+    :func:`radius_ok`); the one check of every path."""
+    return xp.isfinite(theta) & (theta >= 0) & (theta < math.pi / 2)
+
+
 WARPED = "fit: a warped cascade (warp='lispsm') has no constant K"
 
 #: At most this many NumPy maps run on Python floats (about 2 us a map).
@@ -200,10 +215,10 @@ def _scalar_maps(m: Maps, R: Any, theta: Any, cascades: bool) -> tuple[Array, Ar
     """``(K, d_near)`` of a few NumPy maps, compiled by Numba (float64, the ``fast`` extra)
     or one map at a time on Python floats; raises what the checks would."""
     r = 0.0 if R is None else float(R)
-    if not (math.isfinite(r) and r >= 0):
+    if not radius_ok(math, r):
         raise ValueError(BAD_RADIUS)
     a = 0.0 if theta is None else float(theta)
-    if not (math.isfinite(a) and 0 <= a < math.pi / 2):
+    if not angle_ok(math, a):
         raise ValueError(BAD_ANGLE)
     M, w, h = m.M, float(m.size[0]), float(m.size[1])
     batch = M.shape[:-2]
@@ -212,7 +227,7 @@ def _scalar_maps(m: Maps, R: Any, theta: Any, cascades: bool) -> tuple[Array, Ar
     if not m.perspective:  # the frame's Z: a view of world_to_light, batch as the maps'
         t: Any = m.toward  # given with every orthographic map of this path
         toward = (t if t.shape[:-1] == batch else np.broadcast_to(t, (*batch, 3))).reshape(-1, 3)
-    if M.dtype == np.float64 and _kernels.available():
+    if form(M.dtype == np.float64) == "compiled":
         out = np.empty((*batch, 3))
         rows = M.reshape(-1, 16)
         bad = _kernels.loops().pcss_loop(rows, (w, h), spread, toward, out.reshape(-1, 3))
@@ -239,9 +254,9 @@ def _array_maps(fit: PcssFit, m: Maps, R: Any, theta: Any) -> tuple[Array, Array
     checks = Checks(ctx)
     zero = ctx.constant(0.0)
     if R is not None:
-        checks.require(xp.isfinite(R) & (R >= 0), BAD_RADIUS)
+        checks.require(radius_ok(xp, R), BAD_RADIUS)
     if theta is not None:
-        checks.require(xp.isfinite(theta) & (theta >= 0) & (theta < math.pi / 2), BAD_ANGLE)
+        checks.require(angle_ok(xp, theta), BAD_ANGLE)
         theta = theta[..., None] if isinstance(fit, Cascades) else theta
     R, T = (zero if R is None else R), (zero if theta is None else theta)
     shape = batch_shape(tuple(M.shape[:-2]), tuple(R.shape), tuple(T.shape),

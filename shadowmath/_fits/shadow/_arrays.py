@@ -26,9 +26,9 @@ from shadowmath._boundary._status import (
     PROJECTIVE,
     VERTICES,
     WIDE_WARNING,
-    fit_messages,
 )
-from shadowmath._boundary._validate import Array, Checks, Context, all_finite, raise_status
+from shadowmath._boundary._validate import Array, Checks, Context, all_finite
+from shadowmath._fits._backend import failure_messages, raise_fit_status
 from shadowmath._fits._spec import FitKey, fit_options
 from shadowmath._math._fit_entry import Entry
 from shadowmath._math._passes import ArrayPasses
@@ -137,17 +137,14 @@ def fit_arrays(ctx: Context, checks: Checks, key: FitKey, a: Inputs, d: Driver) 
 
 
 #: The checks' bits and messages in report order (the vertices' check is exact here).
-_MESSAGES = fit_messages(False)
+_MESSAGES = failure_messages(None)
 
 
 def _report(ctx: Context, checks: Checks, status: Flags | int) -> None:
     """The failed checks, in report order: raised (NumPy) or recorded (JAX: NaN outputs)."""
     xp = ctx.xp
     if isinstance(status, int):  # one NumPy entry on Python floats: the loop's status word
-        if status & ~WIDE_WARNING:
-            raise_status(np.asarray(status), _MESSAGES)
-        if status & WIDE_WARNING:
-            msg.warn_wide()
+        raise_fit_status(np.asarray([status]), (), None)
         return
     ok = status.checks
     for bit, message in _MESSAGES:

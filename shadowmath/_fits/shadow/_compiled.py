@@ -2,7 +2,8 @@
 
 Packs the trusted arrays as the loop reads them (batch entry ``i`` of an operand at
 ``i % len``), runs it, raises the first failed check in the order of
-:mod:`._status`, and returns views of the loop's two output blocks.
+:mod:`shadowmath._boundary._status` (:func:`shadowmath._fits._backend.raise_fit_status`),
+and returns views of the loop's two output blocks.
 """
 
 from __future__ import annotations
@@ -16,9 +17,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from shadowmath._backends import _kernels
-from shadowmath._boundary import _messages as msg
-from shadowmath._boundary._status import WIDE_WARNING, fit_messages
-from shadowmath._boundary._validate import Array, Context, flat_batch, raise_status
+from shadowmath._boundary._validate import Array, Context, flat_batch
+from shadowmath._fits._backend import raise_fit_status
 from shadowmath._fits._spec import FitKey, fit_options
 from shadowmath._math._fit_entry import FitOptions
 from shadowmath._math._frame import LightFrame
@@ -84,7 +84,6 @@ def run(
     ``record``: :func:`options`' record of ``key`` and the dtype, if known.
     """
     status = out.status
-    one = len(status) == 1
     arrays = operands(shape, a)
     if python:
         lists = tuple(v.tolist() for v in arrays)
@@ -94,12 +93,7 @@ def run(
         record = options(key, ctx.dtype)[0] if record is None else record
         # (a plain tuple: Numba dispatches it about 0.6 us faster than the NamedTuple)
         _kernels.loops().fit_loop(arrays, record, (out.rows, out.mats, status))
-    if status[0] if one else status.any():
-        errors = status & ~WIDE_WARNING
-        if errors[0] if one else errors.any():
-            finite = bool(np.isfinite(a.verts).all())
-            raise_status(errors.reshape(shape), fit_messages(finite))
-        msg.warn_wide()
+    raise_fit_status(status, shape, a.verts)
 
 
 def operands(shape: tuple[int, ...], a: Inputs) -> tuple[Array, ...]:

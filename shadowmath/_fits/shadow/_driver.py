@@ -20,7 +20,6 @@ from typing import Any, Literal
 
 import numpy as np
 
-from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Real
 from shadowmath._boundary._validate import (
@@ -34,6 +33,7 @@ from shadowmath._boundary._validate import (
     recorded_jit,
     require_matrix,
 )
+from shadowmath._fits._backend import form
 from shadowmath._fits._spec import FitKey, ShadowMapSpec, map_spec
 from shadowmath._geometry._light_frame import check_aim
 from shadowmath._math._bias import PcfFilter
@@ -261,12 +261,10 @@ def _fit(
     ``casters_used``."""
     if method == "optimized":
         return _optimized(ctx, a, key.margins)._replace(casters_used=used, map_size=key.texels)
-    if not ctx.is_jax:
-        if _kernels.available():
-            return _compiled.fit(ctx, key, shape, a, used=used)
-        small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
-        if small and _kernels.python_loop():
-            return _compiled.fit(ctx, key, shape, a, used=used, python=True)
+    small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
+    chosen = form(not ctx.is_jax, small=small)
+    if chosen != "arrays":
+        return _compiled.fit(ctx, key, shape, a, used=used, python=chosen == "python")
     return _fit_on_arrays(ctx, a, shape, key)._replace(casters_used=used, map_size=key.texels)
 
 
