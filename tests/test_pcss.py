@@ -8,7 +8,6 @@ texels with ``K |d - d'|`` of the depths the map stores (``r`` of ``world_to_tex
 
 from __future__ import annotations
 
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -28,11 +27,14 @@ def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> Non
     """Every test on each of the door's paths: a few NumPy maps compiled by Numba (where it
     is installed) or on Python floats, and whole arrays (JAX, batches, atlases)."""
     if request.param == "floats":
-        monkeypatch.setattr(
-            "shadowmath._fits.pcss._parameters._kernels", SimpleNamespace(available=bool)
-        )
+        monkeypatch.setattr("shadowmath._fits.pcss._parameters.form", _python_floats)
     if request.param == "arrays":
         monkeypatch.setattr("shadowmath._fits.pcss._parameters._SCALAR_MAPS", 0)
+
+
+def _python_floats(numpy: bool, *, small: bool = False) -> str:
+    """The backend choice of the "floats" path: the loop on Python floats, never compiled."""
+    return "python"
 
 
 def caster_box(rng: np.random.Generator) -> np.ndarray:
