@@ -7,7 +7,7 @@ every fit makes (``fit_shadow``, the atlas's 2D lights, ``fit_cascades``, the PC
 * ``"compiled"``: NumPy input with the compiled loops available (the ``fast`` extra,
   not disabled by ``SHADOWMATH_NUMBA=0``);
 * ``"python"``: small NumPy input without them, the same loop on Python floats (where
-  the caller has such a loop, and not inside :func:`._kernels.array_path`);
+  the caller has such a loop, and not inside :func:`shadowmath._backends._kernels.array_path`);
 * ``"arrays"``: anything else (JAX input, large NumPy batches without Numba).
 
 :func:`raise_fit_status` and :func:`first_failure` read ``fit_shadow``'s loop status words (bits of

@@ -1,7 +1,7 @@
 """The fits' passes over the vertices, as loops: the per-entry backend of :mod:`._fit_entry`.
 
 Plain Python over scalars in the subset that Numba compiles (tuples, ``len``,
-``a[i]`` indexing, ``math``): :func:`._kernels.loops` compiles them, or they run
+``a[i]`` indexing, ``math``): :func:`shadowmath._backends._kernels.loops` compiles them, or they run
 on Python floats for one small fit. Each pass reads the vertices once, placing
 each through ``b`` on the fly (``vs = (V, b, has_b)``: one entry's vertices as one
 flat row ``x0, y0, z0, x1, ...`` of ``3 N`` numbers, its placement's 16 entries, and

@@ -1,4 +1,4 @@
-"""``fit_shadow``'s driver on whole arrays (NumPy or JAX): :func:`._fit_entry.fit_entry` once.
+"""``fit_shadow``'s driver on whole arrays (NumPy or JAX): ``fit_entry`` run once.
 
 :func:`fit_arrays` runs the one per-entry driver of the fit,
 :func:`shadowmath._math._fit_entry.fit_entry`, once on whole arrays: each per-entry

@@ -1,9 +1,10 @@
-""":func:`fit_shadow` through the compiled loop of :mod:`._loops` (NumPy input, Numba installed).
+""":func:`fit_shadow` through the compiled loop (NumPy input, Numba installed).
 
-Packs the trusted arrays as the loop reads them (batch entry ``i`` of an operand at
-``i % len``), runs it, raises the first failed check in the order of
-:mod:`shadowmath._boundary._status` (:func:`shadowmath._fits._backend.raise_fit_status`),
-and returns views of the loop's two output blocks.
+Packs the trusted arrays as the loop (:func:`shadowmath._math._loops.fit_loop`) reads
+them (batch entry ``i`` of an operand at ``i % len``), runs it, raises the first failed
+check in the order of :mod:`shadowmath._boundary._status`
+(:func:`shadowmath._fits._backend.raise_fit_status`), and returns views of the loop's two
+output blocks.
 """
 
 from __future__ import annotations
@@ -105,7 +106,7 @@ def operands(shape: tuple[int, ...], a: Inputs) -> tuple[Array, ...]:
         light = flat_batch(a.light, shape, a.light.shape[-1:])
         verts = flat_batch(a.verts, shape, a.verts.shape[-2:])
     # Each entry's vertices as one flat row x0, y0, z0, x1, ... (a view of a C-contiguous
-    # array): the loops read them at a stride the compiler knows (:mod:`._vertex_passes`).
+    # array): the loops read them at a stride the compiler knows (_math/_vertex_passes.py).
     verts = verts.reshape(len(verts), verts.shape[-2] * verts.shape[-1])  # (-1: not for 0 entries)
     return (
         light,

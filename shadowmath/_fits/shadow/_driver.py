@@ -1,14 +1,14 @@
 """The whole of Nagy's projective shadow texture set-up in one call: :func:`fit_shadow`.
 
 A boundary: it reads the light's kind once (its type, or ``w`` of a homogeneous
-``(x, y, z, w)``), makes the static :class:`._spec.FitKey`, converts and checks the
+``(x, y, z, w)``), makes the static :class:`shadowmath._fits._spec.FitKey`, converts and checks the
 arrays' shapes once, then runs the one driver of the fit,
 :func:`shadowmath._math._fit_entry.fit_entry`, on the trusted arrays in one of
 three ways:
 
 * NumPy input with Numba installed: compiled, per batch entry (:mod:`._compiled`);
   one small NumPy fit without Numba runs the same loop on Python floats;
-* concrete JAX input: on whole arrays (:func:`._fit_arrays.fit_arrays`) under a
+* concrete JAX input: on whole arrays (:func:`._arrays.fit_arrays`) under a
   ``jax.jit`` cached per key, with the failed checks read back in one host sync;
 * NumPy without Numba, or JAX inside a transformation: on whole arrays directly.
 """
@@ -182,7 +182,7 @@ def fit_shadow(
     (behind the light: ``w < 0``). Point lights keep every caster: their one frustum
     aims at the casters and has no fixed "behind" (use a spot light or a cube map).
 
-    Every light and option runs the same fit steps (:mod:`._fit_formulas`): in the
+    Every light and option runs the same fit steps (:mod:`shadowmath._math._fit_formulas`): in the
     compiled loop for NumPy input with the ``fast`` extra, on whole arrays otherwise.
 
     Raises:
