@@ -60,7 +60,9 @@ FITS: dict[str, dict[str, str]] = {
     },
     "atlas": {
         "_allocate": "allocate_atlas: the tiles' sizes and places (ShadowAtlas)",
-        "_fit": "fit_atlas: its door and its result AtlasFit",
+        "_door": "fit_atlas: the lights, casters and options read and checked once",
+        "_driver": "fit_atlas' driver: the 2D groups and the cube lights, tiles gathered",
+        "_result": "AtlasFit, what the fit returns",
         "_lights": "the atlas's lights read into kinds and rows",
         "_fit_2d": "the 2D lights' driver, one group at a time",
         "_fit_cubes": "the cube lights' driver, six faces each",
@@ -68,9 +70,15 @@ FITS: dict[str, dict[str, str]] = {
         "_viewports": "atlas_viewports, atlas_tile_transforms",
         "_redraw": "atlas_redraw",
     },
-    "cube": {"_depth_range": "cube_depth_range: door, driver and result CubeDepthRange"},
+    "cube": {
+        "_door": "cube_depth_range: the casters and receivers read, converted and checked",
+        "_driver": "cube_depth_core on trusted arrays (also the atlas's cube lights)",
+        "_result": "CubeDepthRange, what the fit returns",
+    },
     "pcss": {
-        "_parameters": "pcss_parameters, pcss_widths: door, drivers and results",
+        "_door": "pcss_parameters and pcss_widths: their doors",
+        "_driver": "pcss_parameters' driver: Python floats or compiled, and whole arrays",
+        "_result": "PcssParameters, PcssWidths: what the functions return",
         "_maps": "each fit's maps as the PCSS formulas read them",
         "_room": "pcss_border_texels, widen_cascades",
     },
@@ -226,9 +234,9 @@ def test_the_rules_find_what_they_forbid() -> None:
     types = Import("shadowmath._math._loops", "shadowmath._boundary._status", ("LIGHT", "Array"))
     module = Import("shadowmath._math._planar", "shadowmath._boundary", ("_status",))
     assert checks_in_cores([check, types, module]) == [check, module]
-    shadow_to_atlas = Import("shadowmath._fits.shadow._door", "shadowmath._fits.atlas._fit", ())
-    atlas_to_shadow = Import("shadowmath._fits.atlas._fit", "shadowmath._fits.shadow._door", ())
-    spec_to_cube = Import("shadowmath._fits._spec", "shadowmath._fits.cube", ("_depth_range",))
+    shadow_to_atlas = Import("shadowmath._fits.shadow._door", "shadowmath._fits.atlas._door", ())
+    atlas_to_shadow = Import("shadowmath._fits.atlas._door", "shadowmath._fits.shadow._door", ())
+    spec_to_cube = Import("shadowmath._fits._spec", "shadowmath._fits.cube", ("_driver",))
     assert upward_in_fits([shadow_to_atlas, atlas_to_shadow, spec_to_cube]) == [
         shadow_to_atlas,
         spec_to_cube,

@@ -27,9 +27,9 @@ def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> Non
     """Every test on each of the door's paths: a few NumPy maps compiled by Numba (where it
     is installed) or on Python floats, and whole arrays (JAX, batches, atlases)."""
     if request.param == "floats":
-        monkeypatch.setattr("shadowmath._fits.pcss._parameters.form", _python_floats)
+        monkeypatch.setattr("shadowmath._fits.pcss._driver.form", _python_floats)
     if request.param == "arrays":
-        monkeypatch.setattr("shadowmath._fits.pcss._parameters._SCALAR_MAPS", 0)
+        monkeypatch.setattr("shadowmath._fits.pcss._door._SCALAR_MAPS", 0)
 
 
 def _python_floats(numpy: bool, *, small: bool = False) -> str:

@@ -19,7 +19,8 @@ from shadowmath._geometry._depth_bias import check_kernel
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._pcf import border_texels
 
-from ._parameters import BAD_ANGLE, PcssParameters, angle_ok
+from ._driver import BAD_ANGLE, angle_ok
+from ._result import PcssParameters
 
 
 def pcss_border_texels(parameters: PcssParameters, *, pcf_filter: PcfFilter = "box") -> int:
