@@ -55,9 +55,9 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._fits.camera._shadow_camera import ShadowCamera as ShadowCamera
     from ._fits.camera._shadow_camera import camera_to_world as camera_to_world
     from ._fits.camera._shadow_camera import shadow_camera as shadow_camera
-    from ._fits.cascades._fit import Cascades as Cascades
-    from ._fits.cascades._fit import CascadeState as CascadeState
-    from ._fits.cascades._fit import fit_cascades as fit_cascades
+    from ._fits.cascades._door import fit_cascades as fit_cascades
+    from ._fits.cascades._result import Cascades as Cascades
+    from ._fits.cascades._result import CascadeState as CascadeState
     from ._fits.cascades._splits import cascade_splits as cascade_splits
     from ._fits.cube._door import cube_depth_range as cube_depth_range
     from ._fits.cube._result import CubeDepthRange as CubeDepthRange
@@ -197,11 +197,8 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "._fits.atlas._redraw": ("atlas_redraw",),
     "._fits.atlas._viewports": ("atlas_tile_transforms", "atlas_viewports"),
     "._fits.cascades._splits": ("cascade_splits",),
-    "._fits.cascades._fit": (
-        "CascadeState",
-        "Cascades",
-        "fit_cascades",
-    ),
+    "._fits.cascades._door": ("fit_cascades",),
+    "._fits.cascades._result": ("CascadeState", "Cascades"),
     "._fits.cube._door": ("cube_depth_range",),
     "._fits.cube._result": ("CubeDepthRange",),
     "._fits.shadow._optimize_frustum": (

@@ -41,7 +41,8 @@ from ._fits._spec import ShadowMapSpec
 from ._fits.atlas._allocate import ShadowAtlas
 from ._fits.atlas._door import fit_atlas
 from ._fits.atlas._result import AtlasFit
-from ._fits.cascades._fit import Cascades, fit_cascades
+from ._fits.cascades._door import fit_cascades
+from ._fits.cascades._result import Cascades
 from ._fits.cube._door import cube_depth_range
 from ._fits.cube._result import CubeDepthRange
 from ._fits.shadow._driver import fit_shadow

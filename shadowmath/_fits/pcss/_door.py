@@ -17,7 +17,7 @@ import numpy as np
 from shadowmath._boundary._shapes import ArrayLike, BoolLike, MapSize, Real
 from shadowmath._boundary._validate import Checks, batch_shape, convert, is_tracer, non_finite
 from shadowmath._fits._spec import ShadowMapSpec
-from shadowmath._fits.cascades._fit import Cascades
+from shadowmath._fits.cascades._result import Cascades
 from shadowmath._math._pcss import kernel_widths
 
 from ._driver import array_maps, scalar_maps

@@ -17,7 +17,7 @@ from shadowmath._backends import _kernels
 from shadowmath._boundary._validate import Array, Checks, Context, batch_shape, convert
 from shadowmath._fits._backend import form
 from shadowmath._fits.atlas._result import AtlasFit
-from shadowmath._fits.cascades._fit import Cascades
+from shadowmath._fits.cascades._result import Cascades
 from shadowmath._fits.cube._result import CubeDepthRange
 from shadowmath._math._specialize import formulas, scalar_formulas
 

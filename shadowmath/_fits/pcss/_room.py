@@ -14,7 +14,7 @@ import numpy as np
 
 from shadowmath._boundary._shapes import ArrayLike, Real
 from shadowmath._boundary._validate import Checks, convert
-from shadowmath._fits.cascades._fit import Cascades
+from shadowmath._fits.cascades._result import Cascades
 from shadowmath._geometry._depth_bias import check_kernel
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._pcf import border_texels
