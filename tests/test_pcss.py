@@ -154,6 +154,20 @@ def test_sun_penumbra_is_the_cone_of_its_angular_radius(reversed_z: bool) -> Non
         orthographic_case(fit.world_to_texture, size, Z, near_point, p, theta, B, 1.7)
 
 
+def test_a_point_light_and_a_sun_of_size_zero_cast_hard_shadows() -> None:
+    """``light_radius = 0`` and ``angular_radius = 0`` lie inside the documented ranges
+    (``>= 0``, ``[0, pi/2)``): accepted on every path (the fixture runs each), with no
+    search and no penumbra, ``K = 0``; the smallest negative size is refused by name."""
+    verts = caster_box(np.random.default_rng(5))
+    point = sm.fit_shadow([0.0, 9.0, 0.0], verts, 256)
+    sun = sm.fit_shadow(np.array([0.3, 1.0, 0.2, 0.0]), verts, 256)
+    for fit, size in ((point, "light_radius"), (sun, "angular_radius")):
+        p = sm.pcss_parameters(fit, **{size: 0.0})
+        assert np.array_equal(p.texels_per_depth, np.zeros(2)), size
+        with pytest.raises(ValueError, match=f"^{size}: expected"):
+            sm.pcss_parameters(fit, **{size: -5e-324})
+
+
 def cascade_points(view: np.ndarray, depth_: float) -> np.ndarray:
     """The point on the camera's axis at view depth ``depth_``."""
     inv = np.linalg.inv(view)
