@@ -16,6 +16,7 @@ shared modules beside them, and the packages have layers of their own
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 from typing import NamedTuple
 
@@ -244,3 +245,17 @@ def test_the_rules_find_what_they_forbid() -> None:
         shadow_to_atlas,
         spec_to_cube,
     ]
+
+
+def test_the_architecture_page_names_only_files_that_exist() -> None:
+    """Every ``*.py`` path ``docs/architecture.md`` names (from the package's root or
+    shortened to its last parts, e.g. ``cascades/_lispsm.py``) is a module of the package:
+    a move or split that leaves the page behind fails here (tests' files count too)."""
+    repo = ROOT.parent
+    page = (repo / "docs" / "architecture.md").read_text()
+    files = ["/" + p.relative_to(repo).as_posix() for d in ("shadowmath", "tests")
+             for p in (repo / d).rglob("*.py")]  # fmt: skip
+    named = set(re.findall(r"`([\w/]+\.py)\b", page))
+    assert named, "the page names no files"
+    missing = sorted(n for n in named if not any(f.endswith("/" + n) for f in files))
+    assert missing == []
