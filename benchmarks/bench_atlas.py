@@ -37,7 +37,7 @@ import shadowmath as sm
 
 # Until shadowmath exports them (sm.allocate_atlas, ...), from their module.
 from shadowmath._fits.atlas._allocate import ShadowAtlas, allocate_atlas
-from shadowmath._fits.atlas._fit import fit_atlas
+from shadowmath._fits.atlas._door import fit_atlas
 from shadowmath._fits.atlas._viewports import atlas_tile_transforms
 
 NAME = "atlas"

@@ -30,7 +30,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from speed._timing import Config, Row, Section, measure, run_alone, synced
 
 import shadowmath as sm
-from shadowmath._fits.cube._depth_range import _candidates
+from shadowmath._fits.cube._driver import _candidates
 
 NAME = "cube"
 TITLE = "cube_depth_range: a point light's cube-map near/far over caster triangles"

@@ -47,24 +47,24 @@ if TYPE_CHECKING:  # what mypy and readers see; at run time each name loads on f
     from ._fits._spec import ShadowMapSpec as ShadowMapSpec
     from ._fits.atlas._allocate import ShadowAtlas as ShadowAtlas
     from ._fits.atlas._allocate import allocate_atlas as allocate_atlas
-    from ._fits.atlas._fit import AtlasFit as AtlasFit
-    from ._fits.atlas._fit import fit_atlas as fit_atlas
+    from ._fits.atlas._door import fit_atlas as fit_atlas
     from ._fits.atlas._redraw import atlas_redraw as atlas_redraw
+    from ._fits.atlas._result import AtlasFit as AtlasFit
     from ._fits.atlas._viewports import atlas_tile_transforms as atlas_tile_transforms
     from ._fits.atlas._viewports import atlas_viewports as atlas_viewports
     from ._fits.camera._shadow_camera import ShadowCamera as ShadowCamera
     from ._fits.camera._shadow_camera import camera_to_world as camera_to_world
     from ._fits.camera._shadow_camera import shadow_camera as shadow_camera
-    from ._fits.cascades._fit import Cascades as Cascades
-    from ._fits.cascades._fit import CascadeState as CascadeState
-    from ._fits.cascades._fit import fit_cascades as fit_cascades
+    from ._fits.cascades._door import fit_cascades as fit_cascades
+    from ._fits.cascades._result import Cascades as Cascades
+    from ._fits.cascades._result import CascadeState as CascadeState
     from ._fits.cascades._splits import cascade_splits as cascade_splits
-    from ._fits.cube._depth_range import CubeDepthRange as CubeDepthRange
-    from ._fits.cube._depth_range import cube_depth_range as cube_depth_range
-    from ._fits.pcss._parameters import PcssParameters as PcssParameters
-    from ._fits.pcss._parameters import PcssWidths as PcssWidths
-    from ._fits.pcss._parameters import pcss_parameters as pcss_parameters
-    from ._fits.pcss._parameters import pcss_widths as pcss_widths
+    from ._fits.cube._door import cube_depth_range as cube_depth_range
+    from ._fits.cube._result import CubeDepthRange as CubeDepthRange
+    from ._fits.pcss._door import pcss_parameters as pcss_parameters
+    from ._fits.pcss._door import pcss_widths as pcss_widths
+    from ._fits.pcss._result import PcssParameters as PcssParameters
+    from ._fits.pcss._result import PcssWidths as PcssWidths
     from ._fits.pcss._room import pcss_border_texels as pcss_border_texels
     from ._fits.pcss._room import widen_cascades as widen_cascades
     from ._fits.shadow._driver import fit_shadow as fit_shadow
@@ -192,29 +192,21 @@ _MODULES: dict[str, tuple[str, ...]] = {
     ),
     "._boundary._messages": ("ShadowFitWarning",),
     "._fits.atlas._allocate": ("ShadowAtlas", "allocate_atlas"),
-    "._fits.atlas._fit": ("AtlasFit", "fit_atlas"),
+    "._fits.atlas._door": ("fit_atlas",),
+    "._fits.atlas._result": ("AtlasFit",),
     "._fits.atlas._redraw": ("atlas_redraw",),
     "._fits.atlas._viewports": ("atlas_tile_transforms", "atlas_viewports"),
     "._fits.cascades._splits": ("cascade_splits",),
-    "._fits.cascades._fit": (
-        "CascadeState",
-        "Cascades",
-        "fit_cascades",
-    ),
-    "._fits.cube._depth_range": (
-        "CubeDepthRange",
-        "cube_depth_range",
-    ),
+    "._fits.cascades._door": ("fit_cascades",),
+    "._fits.cascades._result": ("CascadeState", "Cascades"),
+    "._fits.cube._door": ("cube_depth_range",),
+    "._fits.cube._result": ("CubeDepthRange",),
     "._fits.shadow._optimize_frustum": (
         "FrustumFit",
         "optimize_frustum",
     ),
-    "._fits.pcss._parameters": (
-        "PcssParameters",
-        "PcssWidths",
-        "pcss_parameters",
-        "pcss_widths",
-    ),
+    "._fits.pcss._door": ("pcss_parameters", "pcss_widths"),
+    "._fits.pcss._result": ("PcssParameters", "PcssWidths"),
     "._fits.pcss._room": (
         "pcss_border_texels",
         "widen_cascades",

@@ -39,9 +39,12 @@ from ._boundary._shapes import ArrayLike, Float, Int, Real
 from ._boundary._validate import Array, check_faces, is_jax
 from ._fits._spec import ShadowMapSpec
 from ._fits.atlas._allocate import ShadowAtlas
-from ._fits.atlas._fit import AtlasFit, fit_atlas
-from ._fits.cascades._fit import Cascades, fit_cascades
-from ._fits.cube._depth_range import CubeDepthRange, cube_depth_range
+from ._fits.atlas._door import fit_atlas
+from ._fits.atlas._result import AtlasFit
+from ._fits.cascades._door import fit_cascades
+from ._fits.cascades._result import Cascades
+from ._fits.cube._door import cube_depth_range
+from ._fits.cube._result import CubeDepthRange
 from ._fits.shadow._driver import fit_shadow
 from ._fits.shadow._result import ShadowSetup
 from ._geometry._cube_faces import cube_face_projection, cube_face_views

@@ -20,7 +20,7 @@ import pytest
 import shadowmath as sm
 from shadowmath._backends import _kernels
 from shadowmath._fits.atlas._allocate import ShadowAtlas, allocate_atlas
-from shadowmath._fits.atlas._fit import fit_atlas
+from shadowmath._fits.atlas._door import fit_atlas
 from shadowmath._fits.atlas._viewports import atlas_tile_transforms, atlas_viewports
 
 APIS: tuple[Any, ...] = ("opengl", "vulkan", "direct3d", "metal", "webgpu")

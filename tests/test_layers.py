@@ -16,6 +16,7 @@ shared modules beside them, and the packages have layers of their own
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 from typing import NamedTuple
 
@@ -53,14 +54,18 @@ FITS: dict[str, dict[str, str]] = {
         "_optimize_frustum": "optimize_frustum, and fit_shadow(method='optimized')",
     },
     "cascades": {
-        "_fit": "fit_cascades: its door, its two drivers and its result Cascades",
+        "_door": "fit_cascades: the arguments read and checked once, the driver's form chosen",
+        "_driver": "fit_cascades' driver in its two forms (compiled loop, whole arrays)",
+        "_result": "Cascades and CascadeState, what the fit returns",
         "_splits": "cascade_splits",
         "_lispsm": "the LiSPSM warp (warp='lispsm')",
         "_orientation": "the fitted orientation (orientation='fitted')",
     },
     "atlas": {
         "_allocate": "allocate_atlas: the tiles' sizes and places (ShadowAtlas)",
-        "_fit": "fit_atlas: its door and its result AtlasFit",
+        "_door": "fit_atlas: the lights, casters and options read and checked once",
+        "_driver": "fit_atlas' driver: the 2D groups and the cube lights, tiles gathered",
+        "_result": "AtlasFit, what the fit returns",
         "_lights": "the atlas's lights read into kinds and rows",
         "_fit_2d": "the 2D lights' driver, one group at a time",
         "_fit_cubes": "the cube lights' driver, six faces each",
@@ -68,16 +73,22 @@ FITS: dict[str, dict[str, str]] = {
         "_viewports": "atlas_viewports, atlas_tile_transforms",
         "_redraw": "atlas_redraw",
     },
-    "cube": {"_depth_range": "cube_depth_range: door, driver and result CubeDepthRange"},
+    "cube": {
+        "_door": "cube_depth_range: the casters and receivers read, converted and checked",
+        "_driver": "cube_depth_core on trusted arrays (also the atlas's cube lights)",
+        "_result": "CubeDepthRange, what the fit returns",
+    },
     "pcss": {
-        "_parameters": "pcss_parameters, pcss_widths: door, drivers and results",
+        "_door": "pcss_parameters and pcss_widths: their doors",
+        "_driver": "pcss_parameters' driver: Python floats or compiled, and whole arrays",
+        "_result": "PcssParameters, PcssWidths: what the functions return",
         "_maps": "each fit's maps as the PCSS formulas read them",
         "_room": "pcss_border_texels, widen_cascades",
     },
     "camera": {"_shadow_camera": "shadow_camera of any fit, camera_to_world"},
 }
 #: The pieces the fits share, once, beside the packages (top-level modules of ``_fits``).
-FITS_SHARED = ("_spec", "_light_kinds")
+FITS_SHARED = ("_spec", "_light_kinds", "_backend")
 #: Inside ``_fits``, bottom to top: the shared modules, then the fits that build on others.
 FIT_LAYERS: tuple[tuple[str, ...], ...] = (
     FITS_SHARED,
@@ -187,7 +198,8 @@ def test_each_fit_is_a_package_of_the_parts_listed() -> None:
         assert modules == set(parts), name
     shared = {p.stem for p in fits.glob("*.py") if p.name != "__init__.py"}
     assert shared == set(FITS_SHARED)
-    assert {"_door", "_driver", "_result"} <= set(FITS["shadow"])
+    for fit in ("shadow", "cascades", "atlas", "cube", "pcss"):  # each shows its parts
+        assert {"_door", "_driver", "_result"} <= set(FITS[fit]), fit
 
 
 def test_no_fit_imports_a_higher_one() -> None:
@@ -226,10 +238,24 @@ def test_the_rules_find_what_they_forbid() -> None:
     types = Import("shadowmath._math._loops", "shadowmath._boundary._status", ("LIGHT", "Array"))
     module = Import("shadowmath._math._planar", "shadowmath._boundary", ("_status",))
     assert checks_in_cores([check, types, module]) == [check, module]
-    shadow_to_atlas = Import("shadowmath._fits.shadow._door", "shadowmath._fits.atlas._fit", ())
-    atlas_to_shadow = Import("shadowmath._fits.atlas._fit", "shadowmath._fits.shadow._door", ())
-    spec_to_cube = Import("shadowmath._fits._spec", "shadowmath._fits.cube", ("_depth_range",))
+    shadow_to_atlas = Import("shadowmath._fits.shadow._door", "shadowmath._fits.atlas._door", ())
+    atlas_to_shadow = Import("shadowmath._fits.atlas._door", "shadowmath._fits.shadow._door", ())
+    spec_to_cube = Import("shadowmath._fits._spec", "shadowmath._fits.cube", ("_driver",))
     assert upward_in_fits([shadow_to_atlas, atlas_to_shadow, spec_to_cube]) == [
         shadow_to_atlas,
         spec_to_cube,
     ]
+
+
+def test_the_architecture_page_names_only_files_that_exist() -> None:
+    """Every ``*.py`` path ``docs/architecture.md`` names (from the package's root or
+    shortened to its last parts, e.g. ``cascades/_lispsm.py``) is a module of the package:
+    a move or split that leaves the page behind fails here (tests' files count too)."""
+    repo = ROOT.parent
+    page = (repo / "docs" / "architecture.md").read_text()
+    files = ["/" + p.relative_to(repo).as_posix() for d in ("shadowmath", "tests")
+             for p in (repo / d).rglob("*.py")]  # fmt: skip
+    named = set(re.findall(r"`([\w/]+\.py)\b", page))
+    assert named, "the page names no files"
+    missing = sorted(n for n in named if not any(f.endswith("/" + n) for f in files))
+    assert missing == []

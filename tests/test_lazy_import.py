@@ -42,7 +42,7 @@ def test_first_use_loads_the_defining_module_only():
     seen = _fresh(
         "import json, sys; import shadowmath; shadowmath.cascade_splits; "
         "print(json.dumps([m in sys.modules for m in "
-        "('shadowmath._fits.cascades._splits', 'shadowmath._fits.atlas._fit', 'jax', 'numba')]))"
+        "('shadowmath._fits.cascades._splits', 'shadowmath._fits.atlas._door', 'jax', 'numba')]))"
     )
     assert seen == [True, False, False, False]
 

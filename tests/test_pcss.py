@@ -8,7 +8,6 @@ texels with ``K |d - d'|`` of the depths the map stores (``r`` of ``world_to_tex
 
 from __future__ import annotations
 
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -28,11 +27,14 @@ def path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> Non
     """Every test on each of the door's paths: a few NumPy maps compiled by Numba (where it
     is installed) or on Python floats, and whole arrays (JAX, batches, atlases)."""
     if request.param == "floats":
-        monkeypatch.setattr(
-            "shadowmath._fits.pcss._parameters._kernels", SimpleNamespace(available=bool)
-        )
+        monkeypatch.setattr("shadowmath._fits.pcss._driver.form", _python_floats)
     if request.param == "arrays":
-        monkeypatch.setattr("shadowmath._fits.pcss._parameters._SCALAR_MAPS", 0)
+        monkeypatch.setattr("shadowmath._fits.pcss._door._SCALAR_MAPS", 0)
+
+
+def _python_floats(numpy: bool, *, small: bool = False) -> str:
+    """The backend choice of the "floats" path: the loop on Python floats, never compiled."""
+    return "python"
 
 
 def caster_box(rng: np.random.Generator) -> np.ndarray:
@@ -150,6 +152,20 @@ def test_sun_penumbra_is_the_cone_of_its_angular_radius(reversed_z: bool) -> Non
         near_point = (light_to_world @ [0.0, 0.0, float(fit.frustum.near), 1.0])[:3]
         B = verts[rng.integers(8)]
         orthographic_case(fit.world_to_texture, size, Z, near_point, p, theta, B, 1.7)
+
+
+def test_a_point_light_and_a_sun_of_size_zero_cast_hard_shadows() -> None:
+    """``light_radius = 0`` and ``angular_radius = 0`` lie inside the documented ranges
+    (``>= 0``, ``[0, pi/2)``): accepted on every path (the fixture runs each), with no
+    search and no penumbra, ``K = 0``; the smallest negative size is refused by name."""
+    verts = caster_box(np.random.default_rng(5))
+    point = sm.fit_shadow([0.0, 9.0, 0.0], verts, 256)
+    sun = sm.fit_shadow(np.array([0.3, 1.0, 0.2, 0.0]), verts, 256)
+    for fit, size in ((point, "light_radius"), (sun, "angular_radius")):
+        p = sm.pcss_parameters(fit, **{size: 0.0})
+        assert np.array_equal(p.texels_per_depth, np.zeros(2)), size
+        with pytest.raises(ValueError, match=f"^{size}: expected"):
+            sm.pcss_parameters(fit, **{size: -5e-324})
 
 
 def cascade_points(view: np.ndarray, depth_: float) -> np.ndarray:

@@ -266,9 +266,9 @@ def test_the_array_paths_receiver_blocks_change_nothing(
     directional: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     # Without Numba the receivers' pass runs in blocks of receivers (NumPy temporaries of
-    # at most _fit_arrays._BLOCK numbers): with blocks of one to three receivers per entry
+    # at most _passes._BLOCK numbers): with blocks of one to three receivers per entry
     # the batch fits as the compiled loop does, entry by entry, points and triangles alike.
-    from shadowmath._fits.shadow import _arrays as _fit_arrays
+    from shadowmath._math import _passes
 
     scenes = [_scene(seed, directional) for seed in range(4)]
     light = type(scenes[0][0])(np.stack([s[0][0] for s in scenes]))
@@ -277,7 +277,7 @@ def test_the_array_paths_receiver_blocks_change_nothing(
     for receivers in (sm.Triangles(tris), tris.reshape(4, -1, 3)):
         whole = sm.fit_shadow(light, verts, 64, receivers=receivers)
         for block in (4, 8, 12):
-            monkeypatch.setattr(_fit_arrays, "_BLOCK", block)
+            monkeypatch.setattr(_passes, "_BLOCK", block)
             with _kernels.array_path():
                 blocked = sm.fit_shadow(light, verts, 64, receivers=receivers)
             np.testing.assert_allclose(blocked.frustum.far, whole.frustum.far, rtol=1e-12)

@@ -227,7 +227,7 @@ ATLAS_F = "shadowmath/_fits/atlas/_allocate.py"
 ATLAS = ("tests/test_atlas.py",)
 CAMERA_F = "shadowmath/_fits/camera/_shadow_camera.py"
 CAMERA = ("tests/test_shadow_camera.py",)
-CUBE_DEPTH_F = "shadowmath/_fits/cube/_depth_range.py"
+CUBE_DEPTH_F = "shadowmath/_fits/cube/_driver.py"
 CUBE_DEPTH = ("tests/test_cube_depth.py",)
 CUBE_F = "shadowmath/_math/_cube.py"
 CUBE = ("tests/test_cube.py",)
@@ -857,10 +857,10 @@ NEWEST: tuple[Mutation, ...] = (
     # splits-far-equals-near and atlas-hysteresis-upper above)
     Mutation(
         "pcss-array-radius-zero",
-        "shadowmath/_fits/pcss/_parameters.py",
-        "checks.require(xp.isfinite(R) & (R >= 0), BAD_RADIUS)",
-        "checks.require(xp.isfinite(R) & (R > 0), BAD_RADIUS)",
-        "pcss_parameters on arrays: a light radius of 0 (a point light) refused",
+        "shadowmath/_fits/pcss/_driver.py",
+        "return xp.isfinite(R) & (R >= 0)",
+        "return xp.isfinite(R) & (R > 0)",
+        "pcss_parameters (its one radius check): a light radius of 0 (a point light) refused",
         SURVIVORS,
     ),
     Mutation(

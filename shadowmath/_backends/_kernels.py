@@ -1,7 +1,7 @@
 """The compiled loops' switch and loader (optional: needs Numba).
 
 Numba is imported on first use, never by ``import shadowmath``. The loops of
-:mod:`._loops` inline the formulas of several modules, while Numba keys its disk
+:mod:`shadowmath._math._loops` inline the formulas of several modules, while Numba keys its disk
 cache to the source file of each compiled function only: a change of a formula
 in another file would leave a new process running the old machine code. So the
 loops are compiled with Numba's cache directory set to a folder named after a
@@ -161,8 +161,8 @@ def _select(c: Any, a: Any, b: Any) -> Any:
 
 def sphere_support(points: Any) -> Any:
     """The minimal enclosing sphere's support of ``(*batch, N, 3)`` points: ``(*batch, 5)``
-    int32 rows ``(i_0, i_1, i_2, i_3, k)``: Welzl's algorithm compiled (:mod:`._loops`)
-    when Numba is available, else every entry at once in NumPy
+    int32 rows ``(i_0, i_1, i_2, i_3, k)``: Welzl's algorithm compiled
+    (:mod:`shadowmath._math._loops`) when Numba is available, else every entry at once in NumPy
     (:func:`shadowmath._math._ball_support.support_arrays`)."""
     p = np.asarray(points, dtype=np.float64)
     flat = np.ascontiguousarray(p.reshape(-1, *p.shape[-2:]))

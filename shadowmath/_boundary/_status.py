@@ -1,6 +1,6 @@
 """One table of the fits' value checks: their order, their status bits and their messages.
 
-A fit's per-entry formulas (:mod:`._fit_formulas`) return their checks as booleans
+A fit's per-entry formulas (:mod:`shadowmath._math._fit_formulas`) return their checks as booleans
 (True: valid). The array path hands each to ``Checks.require`` with its message
 from this table; the compiled loops set the check's bit in a status word, and the
 boundary raises the message of the first failing bit, in the same order. The bit

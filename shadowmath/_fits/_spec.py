@@ -219,7 +219,8 @@ class FitKey(NamedTuple):
 
 @functools.lru_cache(maxsize=256)
 def fit_options(key: FitKey, eps: float, single: bool = False) -> FitOptions:
-    """The options record of :func:`._fit_entry.fit_entry` for ``key``: its fields by name.
+    """The options record of :func:`shadowmath._math._fit_entry.fit_entry` for ``key``: its
+    fields by name.
 
     ``eps``: the input dtype's; ``single``: float32 input computed in float64 (per entry).
     """

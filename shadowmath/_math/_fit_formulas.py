@@ -1,7 +1,7 @@
 """The fits' per-vertex and per-entry formulas, one source for every backend.
 
-The fits (:mod:`._fit_arrays` on whole arrays, :mod:`._loops` compiled per
-batch entry) are two drivers of the same steps:
+The fits (:mod:`shadowmath._fits.shadow._arrays` on whole arrays, :mod:`._loops`
+compiled per batch entry) are two drivers of the same steps:
 
 1. a pass over the vertices (through the placement, :func:`place`): sums,
    bounds and scales;
@@ -18,7 +18,7 @@ Every step here is plain arithmetic written with the primitives ``where``,
 reduce. Flags that are static for a call (``has_up``, ``directional``, ...) are
 Python booleans: the array driver branches on them while tracing, the compiled
 loop at run time. Checks come back as booleans (True: valid), in the order of
-:data:`._status.FORMULA_CHECKS`; ``True`` means the check does not apply.
+:data:`shadowmath._boundary._status.FORMULA_CHECKS`; ``True`` means the check does not apply.
 
 Trusted inputs only: nothing here raises.
 """
@@ -165,7 +165,7 @@ def fov_ok(sides: tuple[Any, Any, Any, Any], margins: tuple[float, float]) -> tu
 
     The map's edge is at ``u = c +- h / m`` (NDC ``+-1``); ``atan`` of the larger is
     half the field of view. Limits: ``MAX_FOV_TAN`` (170 degrees, refused) and
-    ``WIDE_FOV_TAN`` (120 degrees, warned) of :mod:`._messages`.
+    ``WIDE_FOV_TAN`` (120 degrees, warned) of :mod:`shadowmath._boundary._messages`.
     """
     half_x, half_y, cx, cy = sides
     tx = fabs(cx) + half_x / margins[0]

@@ -3,7 +3,7 @@
 Every function here is plain Python over scalars, written in the subset that
 Numba compiles (tuples, ``len``, ``a[i][j]`` indexing, ``math``). Like the
 formulas, they are specialized (:func:`._specialize.specialize`): compiled by
-Numba through :func:`._kernels.loops` (whose cache folder is keyed on every
+Numba through :func:`shadowmath._backends._kernels.loops` (whose cache folder is keyed on every
 source of the package, so the machine code on disk can never be older than the
 formulas it inlines), or bound to Python floats for one small NumPy fit without
 Numba (:func:`._specialize.scalar_formulas`), where a Python loop over a few
@@ -12,7 +12,7 @@ vertices beats hundreds of NumPy calls.
 :func:`fit_loop` reads each batch entry's operands and runs :func:`._fit_entry.fit_entry`,
 the one driver of the fit that the array path runs on whole arrays too, with the
 vertex passes of :mod:`._vertex_passes`; it stores the frame, the frustum's fields
-and the matrices. Validity is reported per entry as the bits of :mod:`._status`;
+and the matrices. Validity is reported per entry as the bits of :mod:`shadowmath._boundary._status`;
 the boundary raises the message of the first failing one.
 """
 

@@ -1,7 +1,7 @@
 r"""Percentage-closer soft shadows (PCSS): the texels per unit of stored depth of any map.
 
 A shader's blocker search and penumbra are linear in the stored depth ``d`` (trusted
-cores; the door is :mod:`shadowmath._fits.pcss._parameters`):
+cores; the door is :mod:`shadowmath._fits.pcss._door`):
 
 .. math::
 

@@ -1,12 +1,12 @@
 """The fits' passes over the vertices, as loops: the per-entry backend of :mod:`._fit_entry`.
 
 Plain Python over scalars in the subset that Numba compiles (tuples, ``len``,
-``a[i]`` indexing, ``math``): :func:`._kernels.loops` compiles them, or they run
+``a[i]`` indexing, ``math``): :func:`shadowmath._backends._kernels.loops` compiles them, or they run
 on Python floats for one small fit. Each pass reads the vertices once, placing
 each through ``b`` on the fly (``vs = (V, b, has_b)``: one entry's vertices as one
 flat row ``x0, y0, z0, x1, ...`` of ``3 N`` numbers, its placement's 16 entries, and
 whether it has one). The same passes on whole arrays are reductions over the last
-axis (:class:`shadowmath._fits.shadow._arrays.ArrayPasses`); both call the per-vertex
+axis (:class:`._passes.ArrayPasses`); both call the per-vertex
 formulas of :mod:`._fit_formulas`. Sums are accumulated in float64 whatever the
 input dtype.
 

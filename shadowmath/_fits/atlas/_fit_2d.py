@@ -14,8 +14,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shadowmath._backends import _kernels
-from shadowmath._boundary._status import WIDE_WARNING, fit_messages
 from shadowmath._boundary._validate import Array, Checks, Context
+from shadowmath._fits._backend import failure_messages, failures, first_failure, form
 from shadowmath._fits._light_kinds import SPOT, SUN
 from shadowmath._fits._spec import FitKey
 from shadowmath._fits.shadow import _compiled
@@ -58,7 +58,7 @@ def fit_2d(
     per_light = verts[lights] if verts.ndim == 3 else None
     near_all = None if n is None else pick(ctx, n, lights)
     far_all = None if f is None else pick(ctx, f, lights)
-    compiled = not ctx.is_jax and _kernels.available()
+    compiled = form(not ctx.is_jax) == "compiled"
     block = _Block(ctx, lights.size) if compiled else None
     out = []
     for start, end, c in zip(starts, ends, code[starts].tolist(), strict=True):
@@ -107,11 +107,11 @@ class _Block:
         operands = _compiled.operands((count,), a)
         options, _ = _compiled.options(key, self.ctx.dtype)
         _kernels.loops().fit_loop(operands, options, (self.out[part], self.mats[part], status))
-        errors = status & ~WIDE_WARNING
+        errors = failures(status)
         if errors.any():
-            messages = fit_messages(bool(np.isfinite(a.verts).all()))
+            messages = failure_messages(a.verts)
             for i in np.flatnonzero(errors).tolist():
-                report.fail(int(lights[part][i]), next(m for b, m in messages if errors[i] & b))
+                report.fail(int(lights[part][i]), first_failure(int(errors[i]), messages))
             failed = errors != 0
             mats, out, m = self.mats[part], self.out[part], FIT_MATRIX
             mats[failed, m.blocker_to_clip], mats[failed, m.world_to_texture] = (

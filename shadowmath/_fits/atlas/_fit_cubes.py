@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shadowmath._boundary._validate import Array, Context, non_finite
-from shadowmath._fits.cube._depth_range import AT_LIGHT, cube_depth_core
+from shadowmath._fits.cube._driver import AT_LIGHT, cube_depth_core
 from shadowmath._math._conventions import texture_from_clip as _texture_from_clip
 from shadowmath._math._cube import APIS as _APIS
 from shadowmath._math._cube import cube_face_views as _cube_face_views

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from shadowmath._boundary._shapes import ArrayLike, Bool, Integer
 
 from ._allocate import find_tiles
-from ._fit import AtlasFit
+from ._result import AtlasFit
 
 __all__ = ["atlas_redraw"]
 

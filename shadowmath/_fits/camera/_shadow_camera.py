@@ -35,7 +35,7 @@ from shadowmath._boundary._validate import (
     require_last,
     require_matrix,
 )
-from shadowmath._fits.cascades._fit import Cascades
+from shadowmath._fits.cascades._result import Cascades
 from shadowmath._fits.shadow._result import ShadowSetup
 from shadowmath._math._frame import LightFrame
 from shadowmath._math._frustum import Frustum, OrthographicBox

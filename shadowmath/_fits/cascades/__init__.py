@@ -1,2 +1,2 @@
-""":func:`fit_cascades` (:mod:`._fit`: door, drivers and result), the splits, the LiSPSM warp and
-the fitted orientation."""
+""":func:`fit_cascades` (its door :mod:`._door`, driver :mod:`._driver` and result
+:mod:`._result`), the splits, the LiSPSM warp and the fitted orientation."""

@@ -10,9 +10,9 @@ import numpy as np
 
 from shadowmath._boundary._validate import Array, convert, is_tracer
 from shadowmath._fits._spec import ShadowMapSpec
-from shadowmath._fits.atlas._fit import AtlasFit
-from shadowmath._fits.cascades._fit import Cascades
-from shadowmath._fits.cube._depth_range import CubeDepthRange
+from shadowmath._fits.atlas._result import AtlasFit
+from shadowmath._fits.cascades._result import Cascades
+from shadowmath._fits.cube._result import CubeDepthRange
 from shadowmath._fits.shadow._result import ShadowSetup
 from shadowmath._geometry._adaptive_frustum import texel_counts
 from shadowmath._geometry._cube_faces import face_scale

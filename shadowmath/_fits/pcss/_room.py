@@ -14,12 +14,13 @@ import numpy as np
 
 from shadowmath._boundary._shapes import ArrayLike, Real
 from shadowmath._boundary._validate import Checks, convert
-from shadowmath._fits.cascades._fit import Cascades
+from shadowmath._fits.cascades._result import Cascades
 from shadowmath._geometry._depth_bias import check_kernel
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._pcf import border_texels
 
-from ._parameters import BAD_ANGLE, PcssParameters
+from ._driver import BAD_ANGLE, angle_ok
+from ._result import PcssParameters
 
 
 def pcss_border_texels(parameters: PcssParameters, *, pcf_filter: PcfFilter = "box") -> int:
@@ -122,7 +123,7 @@ def widen_cascades(cascades: Cascades, *, angular_radius: Real[ArrayLike, "*#bat
         "fixed texel grid, so that they do not shimmer); fit them with stable=False to widen "
         "them, or widen the stable squares by refitting with a larger border_texels",
     )
-    checks.require(xp.isfinite(theta) & (theta >= 0) & (theta < math.pi / 2), BAD_ANGLE)
+    checks.require(angle_ok(xp, theta), BAD_ANGLE)
     if not ctx.lazy and not bool(xp.all(tex[..., 3, :3] == 0)):
         raise ValueError("cascades: warped cascades (warp='lispsm') are not boxes")
     box = cascades.frustum

@@ -1,8 +1,10 @@
-""":func:`fit_shadow` through the compiled loop of :mod:`._loops` (NumPy input, Numba installed).
+""":func:`fit_shadow` through the compiled loop (NumPy input, Numba installed).
 
-Packs the trusted arrays as the loop reads them (batch entry ``i`` of an operand at
-``i % len``), runs it, raises the first failed check in the order of
-:mod:`._status`, and returns views of the loop's two output blocks.
+Packs the trusted arrays as the loop (:func:`shadowmath._math._loops.fit_loop`) reads
+them (batch entry ``i`` of an operand at ``i % len``), runs it, raises the first failed
+check in the order of :mod:`shadowmath._boundary._status`
+(:func:`shadowmath._fits._backend.raise_fit_status`), and returns views of the loop's two
+output blocks.
 """
 
 from __future__ import annotations
@@ -16,9 +18,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from shadowmath._backends import _kernels
-from shadowmath._boundary import _messages as msg
-from shadowmath._boundary._status import WIDE_WARNING, fit_messages
-from shadowmath._boundary._validate import Array, Context, flat_batch, raise_status
+from shadowmath._boundary._validate import Array, Context, flat_batch
+from shadowmath._fits._backend import raise_fit_status
 from shadowmath._fits._spec import FitKey, fit_options
 from shadowmath._math._fit_entry import FitOptions
 from shadowmath._math._frame import LightFrame
@@ -86,7 +87,6 @@ def run(
     ``record``: :func:`options`' record of ``key`` and the dtype, if known.
     """
     status = out.status
-    one = len(status) == 1
     arrays = operands(shape, a)
     if python:
         lists = tuple(v.tolist() for v in arrays)
@@ -96,12 +96,7 @@ def run(
         record = options(key, ctx.dtype)[0] if record is None else record
         # (a plain tuple: Numba dispatches it about 0.6 us faster than the NamedTuple)
         _kernels.loops().fit_loop(arrays, record, (out.rows, out.mats, status))
-    if status[0] if one else status.any():
-        errors = status & ~WIDE_WARNING
-        if errors[0] if one else errors.any():
-            finite = bool(np.isfinite(a.verts).all())
-            raise_status(errors.reshape(shape), fit_messages(finite))
-        msg.warn_wide()
+    raise_fit_status(status, shape, a.verts)
 
 
 def operands(shape: tuple[int, ...], a: Inputs) -> tuple[Array, ...]:
@@ -113,7 +108,7 @@ def operands(shape: tuple[int, ...], a: Inputs) -> tuple[Array, ...]:
         light = flat_batch(a.light, shape, a.light.shape[-1:])
         verts = flat_batch(a.verts, shape, a.verts.shape[-2:])
     # Each entry's vertices as one flat row x0, y0, z0, x1, ... (a view of a C-contiguous
-    # array): the loops read them at a stride the compiler knows (:mod:`._vertex_passes`).
+    # array): the loops read them at a stride the compiler knows (_math/_vertex_passes.py).
     verts = verts.reshape(len(verts), verts.shape[-2] * verts.shape[-1])  # (-1: not for 0 entries)
     return (
         light,

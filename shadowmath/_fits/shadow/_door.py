@@ -3,7 +3,7 @@ cheaply for arrays of a kind already seen.
 
 :func:`open_door` reads the light's kind (its type, or ``w`` of a homogeneous
 ``(x, y, z, w)``), converts the arrays, checks their shapes and makes the static
-:class:`._spec.FitKey`. Everything it decides depends only on the operands' types,
+:class:`shadowmath._fits._spec.FitKey`. Everything it decides depends only on the operands' types,
 dtypes and shapes and on the options, so a :class:`PreparedDoor` keeps it for one
 :func:`signature` and :meth:`PreparedDoor.reopen` hands new arrays of that signature
 to the fit with a few attribute reads (the values are still checked, by the fit).

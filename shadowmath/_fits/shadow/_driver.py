@@ -1,14 +1,14 @@
 """The whole of Nagy's projective shadow texture set-up in one call: :func:`fit_shadow`.
 
 A boundary: it reads the light's kind once (its type, or ``w`` of a homogeneous
-``(x, y, z, w)``), makes the static :class:`._spec.FitKey`, converts and checks the
+``(x, y, z, w)``), makes the static :class:`shadowmath._fits._spec.FitKey`, converts and checks the
 arrays' shapes once, then runs the one driver of the fit,
 :func:`shadowmath._math._fit_entry.fit_entry`, on the trusted arrays in one of
 three ways:
 
 * NumPy input with Numba installed: compiled, per batch entry (:mod:`._compiled`);
   one small NumPy fit without Numba runs the same loop on Python floats;
-* concrete JAX input: on whole arrays (:func:`._fit_arrays.fit_arrays`) under a
+* concrete JAX input: on whole arrays (:func:`._arrays.fit_arrays`) under a
   ``jax.jit`` cached per key, with the failed checks read back in one host sync;
 * NumPy without Numba, or JAX inside a transformation: on whole arrays directly.
 """
@@ -20,7 +20,6 @@ from typing import Any, Literal
 
 import numpy as np
 
-from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
 from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Real
 from shadowmath._boundary._validate import (
@@ -34,6 +33,7 @@ from shadowmath._boundary._validate import (
     recorded_jit,
     require_matrix,
 )
+from shadowmath._fits._backend import form
 from shadowmath._fits._spec import FitKey, ShadowMapSpec, map_spec
 from shadowmath._geometry._light_frame import check_aim
 from shadowmath._math._bias import PcfFilter
@@ -182,7 +182,7 @@ def fit_shadow(
     (behind the light: ``w < 0``). Point lights keep every caster: their one frustum
     aims at the casters and has no fixed "behind" (use a spot light or a cube map).
 
-    Every light and option runs the same fit steps (:mod:`._fit_formulas`): in the
+    Every light and option runs the same fit steps (:mod:`shadowmath._math._fit_formulas`): in the
     compiled loop for NumPy input with the ``fast`` extra, on whole arrays otherwise.
 
     Raises:
@@ -261,12 +261,10 @@ def _fit(
     ``casters_used``."""
     if method == "optimized":
         return _optimized(ctx, a, key.margins)._replace(casters_used=used, map_size=key.texels)
-    if not ctx.is_jax:
-        if _kernels.available():
-            return _compiled.fit(ctx, key, shape, a, used=used)
-        small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
-        if small and _kernels.python_loop():
-            return _compiled.fit(ctx, key, shape, a, used=used, python=True)
+    small = not shape and _points(a) <= _compiled.PYTHON_LOOP_POINTS
+    chosen = form(not ctx.is_jax, small=small)
+    if chosen != "arrays":
+        return _compiled.fit(ctx, key, shape, a, used=used, python=chosen == "python")
     return _fit_on_arrays(ctx, a, shape, key)._replace(casters_used=used, map_size=key.texels)
 
 

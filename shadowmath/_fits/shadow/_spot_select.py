@@ -1,13 +1,13 @@
 """A spot light's casters selected at the door, before the fit's drivers (see
 :mod:`shadowmath._math._spot_casters` for the rule and why it is exact).
 
-The frame is the fit's own (:func:`._fit_formulas.fit_axes` of the cone's axis and
+The frame is the fit's own (:func:`shadowmath._math._fit_formulas.fit_axes` of the cone's axis and
 ``up``), so the pyramid the casters are clipped to is the one the map is clipped to.
 
 Triangles are clipped by the compiled loop (:mod:`shadowmath._math._spot_loop`) for
 one NumPy light with Numba (:func:`clipped`), by
-:func:`._spot_casters.select_triangles` for other NumPy input (only the straddling
-triangles through the 19 candidates), and by :func:`._spot_casters.clip_triangles`
+:func:`shadowmath._math._spot_casters.select_triangles` for other NumPy input (only the straddling
+triangles through the 19 candidates), and by :func:`shadowmath._math._spot_casters.clip_triangles`
 (static shapes) under JAX. The first two hand the fit the kept points only.
 """
 
@@ -66,7 +66,7 @@ def clipped(
     (:func:`shadowmath._math._spot_loop.spot_clip_loop`): the kept points ``(K, 3)``
     compacted (``square()`` ``(4, 3)`` when none is), and the triangles kept.
 
-    ``planes`` ``(5, 4)`` finite (:func:`._spot_casters.pyramid_planes` on the
+    ``planes`` ``(5, 4)`` finite (:func:`shadowmath._math._spot_casters.pyramid_planes` on the
     triangles' coordinates). The loop's output starts at ``3 M + 19 (M / 8 + 1)`` rows
     and doubles whenever fewer than 19 are left for the next triangle.
     """

@@ -1,74 +1,33 @@
-r"""Percentage-closer soft shadows from every fit: :func:`pcss_parameters`, :func:`pcss_widths`.
+"""Percentage-closer soft shadows from every fit: the doors of :func:`pcss_parameters` and
+:func:`pcss_widths`.
 
-The door reads each fit's maps (:mod:`._pcss_maps`: ``world_to_texture`` and the texture's
-size), checks the light's size, and runs the formulas of :mod:`shadowmath._math._pcss`: on
-Python floats for a few NumPy maps (one light's map, its cascades), on whole arrays
-otherwise. ``docs/pcss.md`` derives them.
+``pcss_parameters`` reads each fit's maps (:mod:`._maps`: ``world_to_texture`` and the
+texture's size), checks that the light's size each map needs is given, and runs the
+driver (:mod:`._driver`): on Python floats (or compiled) for a few NumPy maps (one
+light's map, its cascades), on whole arrays otherwise. ``docs/pcss.md`` derives the
+formulas (:mod:`shadowmath._math._pcss`).
 """
 
 from __future__ import annotations
 
-import math
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from shadowmath._backends import _kernels
-from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, MapSize, Real
-from shadowmath._boundary._validate import (
-    Array,
-    Checks,
-    Context,
-    batch_shape,
-    convert,
-    is_tracer,
-    non_finite,
-)
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, MapSize, Real
+from shadowmath._boundary._validate import Checks, batch_shape, convert, is_tracer, non_finite
 from shadowmath._fits._spec import ShadowMapSpec
-from shadowmath._fits.atlas._fit import AtlasFit
-from shadowmath._fits.cascades._fit import Cascades
-from shadowmath._fits.cube._depth_range import CubeDepthRange
+from shadowmath._fits.cascades._result import Cascades
 from shadowmath._math._pcss import kernel_widths
-from shadowmath._math._specialize import formulas, scalar_formulas
 
-from ._maps import BAD_CUBE, Maps, PcssFit, fit_maps, switch
+from ._driver import array_maps, scalar_maps
+from ._maps import Maps, PcssFit, fit_maps, switch
+from ._result import PcssParameters, PcssWidths
 
 __all__ = ["PcssParameters", "PcssWidths", "pcss_parameters", "pcss_widths"]
 
-BAD_RADIUS = "light_radius: expected finite values >= 0"
-BAD_ANGLE = "angular_radius: expected radians in [0, pi/2)"
-WARPED = "fit: a warped cascade (warp='lispsm') has no constant K"
-
 #: At most this many NumPy maps run on Python floats (about 2 us a map).
 _SCALAR_MAPS = 8
-
-
-class PcssParameters(NamedTuple):
-    """What a PCSS shader needs of one shadow map (:func:`pcss_parameters`).
-
-    Attributes:
-        texels_per_depth: ``(*maps, 2)`` ``K``: the blocker search radius and the penumbra
-            width in texels (along the texture's ``s`` and ``t``) per unit of stored depth.
-        near_depth: ``(*maps,)`` ``d_near``: the depth stored at the map's near plane, 0
-            (or 1 with reversed Z): no caster is nearer the light.
-    """
-
-    texels_per_depth: Float[Array, "*maps 2"]
-    near_depth: Float[Array, "*maps"]
-
-
-class PcssWidths(NamedTuple):
-    """The blocker search radius and the penumbra width in texels (:func:`pcss_widths`).
-
-    Attributes:
-        search: ``(*batch, 2)`` the blocker search radius along ``s`` and ``t``: the light
-            as the receiver sees it, on the near plane (the light's size in texels at the
-            receiver's depth).
-        penumbra: ``(*batch, 2)`` the penumbra's half-width (the PCF filter's radius).
-    """
-
-    search: Float[Array, "*batch 2"]
-    penumbra: Float[Array, "*batch 2"]
 
 
 def pcss_parameters(
@@ -144,9 +103,9 @@ def pcss_parameters(
     _require_sizes(m, light_radius, angular_radius)
     cascades = type(fit) is Cascades
     if _few(m, light_radius, angular_radius):
-        K, near = _scalar_maps(m, light_radius, angular_radius, cascades)
+        K, near = scalar_maps(m, light_radius, angular_radius, cascades)
     else:
-        K, near = _array_maps(fit, m, light_radius, angular_radius)
+        K, near = array_maps(fit, m, light_radius, angular_radius)
     if rev is not None and not is_tracer(near) and bool(np.any(np.asarray(near) == float(not rev))):
         raise ValueError(
             f"reversed_z: the fit's matrices store depth {'without' if rev else 'with'} reversed Z"
@@ -194,104 +153,6 @@ def _few(m: Maps, R: Any, theta: Any) -> bool:
         and type(R) in _NUMBERS
         and type(theta) in _NUMBERS
     )
-
-
-def _scalar_maps(m: Maps, R: Any, theta: Any, cascades: bool) -> tuple[Array, Array]:
-    """``(K, d_near)`` of a few NumPy maps, compiled by Numba (float64, the ``fast`` extra)
-    or one map at a time on Python floats; raises what the checks would."""
-    r = 0.0 if R is None else float(R)
-    if not (math.isfinite(r) and r >= 0):
-        raise ValueError(BAD_RADIUS)
-    a = 0.0 if theta is None else float(theta)
-    if not (math.isfinite(a) and 0 <= a < math.pi / 2):
-        raise ValueError(BAD_ANGLE)
-    M, w, h = m.M, float(m.size[0]), float(m.size[1])
-    batch = M.shape[:-2]
-    spread = r if m.perspective else math.tan(a)
-    toward = _NO_TRAVEL
-    if not m.perspective:  # the frame's Z: a view of world_to_light, batch as the maps'
-        t: Any = m.toward  # given with every orthographic map of this path
-        toward = (t if t.shape[:-1] == batch else np.broadcast_to(t, (*batch, 3))).reshape(-1, 3)
-    if M.dtype == np.float64 and _kernels.available():
-        out = np.empty((*batch, 3))
-        rows = M.reshape(-1, 16)
-        bad = _kernels.loops().pcss_loop(rows, (w, h), spread, toward, out.reshape(-1, 3))
-    else:
-        F = scalar_formulas()
-        out = np.empty((*batch, 3), dtype=M.dtype)
-        bad = F.pcss_loop(M.reshape(-1, 16).tolist(), (w, h), spread, toward.tolist(),
-                          out.reshape(-1, 3))  # fmt: skip
-    if cascades and bad:
-        raise ValueError(WARPED)
-    return out[..., :2], out[..., 2]
-
-
-#: ``toward`` of perspective maps in :func:`~shadowmath._math._pcss.pcss_loop`.
-_NO_TRAVEL = np.zeros((0, 3))
-
-
-def _array_maps(fit: PcssFit, m: Maps, R: Any, theta: Any) -> tuple[Array, Array]:
-    """``(K, d_near)`` on whole arrays (JAX, batches, an atlas); invalid entries NaN."""
-    ctx, (M, toward, R, theta) = convert(
-        fit=m.M, toward=m.toward, light_radius=R, angular_radius=theta
-    )
-    xp = ctx.xp
-    checks = Checks(ctx)
-    zero = ctx.constant(0.0)
-    if R is not None:
-        checks.require(xp.isfinite(R) & (R >= 0), BAD_RADIUS)
-    if theta is not None:
-        checks.require(xp.isfinite(theta) & (theta >= 0) & (theta < math.pi / 2), BAD_ANGLE)
-        theta = theta[..., None] if isinstance(fit, Cascades) else theta
-    R, T = (zero if R is None else R), (zero if theta is None else theta)
-    shape = batch_shape(tuple(M.shape[:-2]), tuple(R.shape), tuple(T.shape),
-                        names=("fit", "light_radius", "angular_radius"))  # fmt: skip
-    M = xp.broadcast_to(M, (*shape, 4, 4))
-    R, T = xp.broadcast_to(R, shape), xp.broadcast_to(T, shape)
-    if isinstance(fit, Cascades):
-        checks.require(xp.all(M[..., 3, :3] == 0, axis=-1), WARPED)
-    if isinstance(fit, CubeDepthRange):
-        n, f = (ctx.constant(0.0) + v for v in (fit.near, fit.far))
-        checks.require((n > 0) & (f > n), BAD_CUBE)
-    K, near = _terms(ctx, m._replace(M=M, toward=toward), R, T)
-    if isinstance(fit, AtlasFit):  # a failed light's tiles: near = far = 0
-        failed = (fit.near == 0) & (fit.far == 0)
-        nan = xp.asarray(math.nan, dtype=ctx.dtype)
-        K, near = xp.where(failed[..., None], nan, K), xp.where(failed, nan, near)
-    if checks.invalid is not None:  # near is often a constant, whose 0 * NaN XLA folds to 0
-        near = xp.where(checks.invalid, xp.asarray(math.nan, dtype=ctx.dtype), near)
-    return checks.poison(K, 1), near
-
-
-def _entries(A: Array) -> tuple[Array, ...]:
-    return tuple(A[..., i // 4, i % 4] for i in range(16))
-
-
-def _terms(ctx: Context, m: Maps, R: Array, T: Array) -> tuple[Array, Array]:
-    """``(K, d_near)`` of every map: perspective, orthographic, or an atlas's mix (each
-    formula on the other kind's tiles reads a harmless stand-in: no warning, finite
-    gradients)."""
-    xp, M, F = ctx.xp, m.M, formulas(ctx.xp)
-    w, h = float(m.size[0]), float(m.size[1])
-    if m.perspective is True:
-        Ks, Kt, near = F.pcss_perspective(_entries(M), w, h, R)
-        return xp.stack((Ks, Kt), axis=-1), xp.asarray(near, dtype=ctx.dtype)
-    persp = None if m.perspective is False else xp.asarray(m.perspective)
-    M_o = M if persp is None else xp.where(persp[..., None, None], ctx.constant(_BOX), M)
-    sign = -1.0 if m.reversed else 1.0  # without the travel: d_near at reversed_z
-    toward = (sign * M_o[..., 2, 0], sign * M_o[..., 2, 1], sign * M_o[..., 2, 2]) if (
-        m.toward is None) else (m.toward[..., 0], m.toward[..., 1], m.toward[..., 2])  # fmt: skip
-    Ks, Kt, near = F.pcss_orthographic(_entries(M_o), w, h, xp.tan(T), toward)
-    if persp is not None:
-        M_p = xp.where(persp[..., None, None], M, ctx.constant(_PYRAMID))
-        ps, pt, pn = F.pcss_perspective(_entries(M_p), w, h, R)
-        Ks, Kt, near = (xp.where(persp, a, b) for a, b in ((ps, Ks), (pt, Kt), (pn, near)))
-    return xp.stack((Ks, Kt), axis=-1), xp.asarray(near, dtype=ctx.dtype)
-
-
-#: Stand-ins for the other kind's tiles: a 90-degree frustum and a unit box.
-_PYRAMID = ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, -1.0), (0.0, 0.0, 1.0, 0.0))
-_BOX = ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
 
 
 def pcss_widths(

@@ -1,16 +1,17 @@
-r"""Every tile of a shadow atlas fitted: :func:`fit_atlas`.
+"""Every tile of a shadow atlas fitted: the door of :func:`fit_atlas`.
 
-Per frame a renderer calls :func:`allocate_atlas` (:mod:`._atlas_allocate`), then
-:func:`fit_atlas` with the lights (read by :mod:`._atlas_lights`) and their casters: one
+Per frame a renderer calls :func:`allocate_atlas` (:mod:`._allocate`), then
+:func:`fit_atlas` with the lights (read by :mod:`._lights`) and their casters: one
 fit per tile, drawn with ``world_to_clip[t]`` inside ``viewports[t]`` and sampled with
-``world_to_texture[t]`` (:mod:`._atlas_viewports`). The 2D lights are grouped by (kind,
-tile size, border) and each group runs :func:`fit_shadow`'s compiled loop once (NumPy with
-Numba) or its array driver (JAX, or NumPy alone) (:mod:`._atlas_2d`); the cube lights'
-faces are :func:`cube_face_views` and :func:`cube_face_projection` with the border ring,
-on whole arrays (:mod:`._atlas_cubes`); a light that cannot be fitted is reported
-(:mod:`._atlas_report`). Then :func:`atlas_redraw` (:mod:`._atlas_redraw`) compares this
-frame's fit with the last one: the tiles to draw (a tile's identity is its key ``(light
-id, face)``, not its index).
+``world_to_texture[t]`` (:mod:`._viewports`). The door reads and checks the options, the
+lights and the arrays once; the driver (:mod:`._driver`) groups the 2D lights by (kind,
+tile size, border) and runs each group through :func:`fit_shadow`'s compiled loop once
+(NumPy with Numba) or its array driver (JAX, or NumPy alone) (:mod:`._fit_2d`); the cube
+lights' faces are :func:`cube_face_views` and :func:`cube_face_projection` with the border
+ring, on whole arrays (:mod:`._fit_cubes`); a light that cannot be fitted is reported
+(:mod:`._report`). Then :func:`atlas_redraw` (:mod:`._redraw`) compares this frame's fit
+with the last one: the tiles to draw (a tile's identity is its key ``(light id, face)``,
+not its index).
 
 The rule, the borders and the API conventions are written out in ``docs/atlas.md``.
 """
@@ -18,12 +19,11 @@ The rule, the borders and the API conventions are written out in ``docs/atlas.md
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
-from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Int, Real
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, Real
 from shadowmath._boundary._validate import RECEIVER_KINDS, Array, convert, non_finite, shape_error
 from shadowmath._fits._light_kinds import POINT
 from shadowmath._fits._spec import ShadowMapSpec, map_spec
@@ -33,60 +33,16 @@ from shadowmath._geometry._depth_bias import check_kernel as _check_kernel
 from shadowmath._math._bias import PcfFilter
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._pcf import border_texels as _border_texels
-from shadowmath._math._vector import matmul
 from shadowmath.lights import Light
 from shadowmath.receivers import Mesh, Triangles
 
 from ._allocate import ShadowAtlas
-from ._fit_2d import fit_2d
-from ._fit_cubes import fit_cubes
+from ._driver import fit_tiles
 from ._lights import read_lights
-from ._report import AtlasInputs, Report, gather
-from ._viewports import atlas_viewports, tile_transforms
+from ._report import AtlasInputs, Report
+from ._result import AtlasFit
 
 __all__ = ["AtlasFit", "fit_atlas"]
-
-Ints = NDArray[np.int64]
-
-
-class AtlasFit(NamedTuple):
-    """Every tile's matrices (the result of :func:`fit_atlas`), in the chosen API's conventions.
-
-    Attributes:
-        world_to_clip: ``(T, 4, 4)`` draw tile ``t``'s casters with ``world_to_clip[t]``
-            inside ``viewports[t]`` (scissor to it too).
-        world_to_texture: ``(T, 4, 4)`` world to the atlas's ``(s q, t q, r q, q)``:
-            ``(s, t)`` the atlas texture coordinates, ``r`` the depth stored there.
-        viewports: ``(T, 4)`` ``(x, y, width, height)``, :func:`atlas_viewports`.
-        tile_clamp: ``(T, 4)`` the atlas's :attr:`ShadowAtlas.tile_clamp`.
-        near, far: ``(T,)`` each tile's depth range (light ``z`` for a 2D map, the
-            distance along the face's axis for a cube face).
-        texture_size: ``(width, height)`` of the depth texture to allocate, in texels:
-            ``(atlas_size, atlas_size)``; every viewport lies inside it.
-        tile_id, tile_face: ``(T,)`` each tile's key ``(light id, face)``, the
-            atlas's :attr:`ShadowAtlas.tile_id` and :attr:`ShadowAtlas.tile_face`:
-            cache a tile's depths by key, not by index.
-        light_errors: ``(L,)`` per light ``None``, or the message of what was wrong with
-            its fit (what :func:`fit_shadow` would raise for it, e.g. a caster within
-            rounding of the light). Such a light's tiles get matrices that draw
-            nothing and sample lit (OpenGL clip ``z = -2 w``: before the near plane;
-            ``s = t = 1/2``) and ``near = far = 0``; every other light is fitted.
-
-    Which tiles to redraw this frame: :func:`atlas_redraw` ``(fit, previous_fit)``,
-    True where a tile is new, its viewport moved or resized, its ``world_to_clip``
-    changed, or the texture did.
-    """
-
-    world_to_clip: Float[Array, "T 4 4"]
-    world_to_texture: Float[Array, "T 4 4"]
-    viewports: Int[Ints, "T 4"]
-    tile_clamp: Float[NDArray[np.float64], "T 4"]
-    near: Float[Array, " T"]
-    far: Float[Array, " T"]
-    texture_size: tuple[int, int]
-    tile_id: Int[Ints, " T"]
-    tile_face: Int[Ints, " T"]
-    light_errors: tuple[str | None, ...] = ()
 
 
 def fit_atlas(
@@ -215,20 +171,8 @@ def fit_atlas(
         i = int(np.flatnonzero(atlas.light_cube & (kinds != POINT))[0])
         raise ValueError(f"lights[{i}]: a cube map needs a point light (atlas cube=True)")
     report = Report(ctx, api, reversed_z, count)
-    parts: list[tuple[Ints, Array, Array, Array, Array]] = []
     inputs = AtlasInputs(data, verts, tris, R, n, f)
-    parts.extend(fit_2d(ctx, atlas, kinds, inputs, report))
-    cubes = np.flatnonzero(atlas.light_cube & (atlas.light_size > 0))
-    if cubes.size:
-        parts.append(fit_cubes(ctx, atlas, cubes, inputs, api=api, report=report))
-    T = xp.asarray(tile_transforms(atlas.tile_rect, atlas.atlas_size), dtype=ctx.dtype)
-    clip, tex, lo, hi = gather(ctx, parts, atlas.tile_light.shape[0])
-    errors = tuple(report.errors)
-    return AtlasFit(
-        clip, matmul(xp, T, tex), atlas_viewports(atlas), atlas.tile_clamp, lo, hi,
-        texture_size=(atlas.atlas_size, atlas.atlas_size), tile_id=atlas.tile_id,
-        tile_face=atlas.tile_face, light_errors=errors,
-    )  # fmt: skip
+    return fit_tiles(ctx, atlas, kinds, inputs, report, api=api)
 
 
 def _atlas_spec(

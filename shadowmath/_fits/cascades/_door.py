@@ -1,69 +1,46 @@
-r"""Cascaded shadow maps fitted to a camera: :func:`fit_cascades`.
+"""Cascaded shadow maps fitted to a camera: the door of :func:`fit_cascades`.
 
-The boundary converts and checks the arguments once, then runs the steps of
-:mod:`shadowmath._math._cascade_steps` (written once) in one of two modes:
-
-* the loop mode, NumPy input: :func:`~shadowmath._math._cascade_steps.cascade_loop` over
-  cameras and cascades, compiled by Numba (the ``fast`` extra), or run by Python on lists
-  for one to :data:`PYTHON_LOOP_CAMERAS` cameras without Numba;
-* the array mode, JAX input (and NumPy batches without Numba): the same steps once on
-  whole arrays (the cascades on the last axis); values and gradients follow the same
-  expressions. ``warp="lispsm"`` (:mod:`._lispsm`) runs here only; ``orientation="fitted"``
-  has both forms (:mod:`._orientation` here, :func:`~shadowmath._math._cascade_steps.fitted_fit`
-  in the loop).
-
-Both return a status word of :data:`shadowmath._boundary._status.CASCADE_CHECKS`; the
-boundary raises the first failing check's message (NumPy) or makes the entry NaN (JAX).
+It converts and checks the arguments once (the options into a ``ShadowMapSpec``, the
+warp, the orientation, the splits, the arrays and their shapes, the measured depth
+range), makes the static options record, and runs the driver (:mod:`._driver`) in the
+form :func:`shadowmath._fits._backend.form` chooses; the driver returns the result
+(:mod:`._result`).
 """
 
 from __future__ import annotations
 
 import functools
 import math
-from typing import Any, Literal, NamedTuple
+from typing import Any, Literal
 
 import numpy as np
 
-from shadowmath._backends import _kernels
 from shadowmath._boundary._projection import check_projection
-from shadowmath._boundary._shapes import ArrayLike, BoolLike, Float, Int, Real
-from shadowmath._boundary._status import cascade_messages
+from shadowmath._boundary._shapes import ArrayLike, BoolLike, Real
 from shadowmath._boundary._validate import (
     Array,
     Checks,
-    Context,
     all_finite,
     batch_shape,
     convert,
-    flat_batch,
     non_finite,
-    raise_status,
     require_last,
     require_matrix,
 )
+from shadowmath._fits._backend import form
 from shadowmath._fits._spec import ShadowMapSpec, api_rows, map_spec
 from shadowmath._geometry._api_convention import check_api as _check_api
 from shadowmath._math._bias import PcfFilter
-from shadowmath._math._cascade_steps import (
-    ROW,
-    ROW_AT,
-    CascadeEntry,
-    CascadeInputs,
-    CascadeOptions,
-    CascadeScalars,
-    CascadeSlice,
-    options_record,
-    row_part,
-)
+from shadowmath._math._cascade_steps import CascadeOptions, options_record
 from shadowmath._math._conventions import GraphicsApi
 from shadowmath._math._conventions import clip_from_gl as _clip_from_gl
-from shadowmath._math._frustum import NEAR_FAR_SLACK, OrthographicBox
-from shadowmath._math._specialize import formulas, scalar_formulas
-from shadowmath._math._vector import matmul
+from shadowmath._math._frustum import NEAR_FAR_SLACK
 from shadowmath.lights import DirectionalLight
 
-from ._lispsm import check_warp, warp_cascades
-from ._orientation import check_orientation, fitted_cascade
+from ._driver import PYTHON_LOOP_CAMERAS, _arrays, _Call, _compiled
+from ._lispsm import check_warp
+from ._orientation import check_orientation
+from ._result import Cascades, CascadeState, _grid
 from ._splits import CascadeScheme, check_count, scheme_lam, stable_bands_inside
 
 __all__ = ["CascadeState", "Cascades", "fit_cascades"]
@@ -71,91 +48,6 @@ __all__ = ["CascadeState", "Cascades", "fit_cascades"]
 CascadeLayout = Literal["layers", "atlas"]
 DepthRangeName = Literal["camera", "visible"]
 _RANGE_CODES = {"camera": 0, "visible": 1}
-
-
-class CascadeState(NamedTuple):
-    """What a :func:`fit_cascades` call used, for the next frame's hysteresis.
-
-    Start with :meth:`initial` (nothing in use yet), then give the last frame's result's
-    ``state`` to the next call as ``state=`` (with ``depth_range`` ``"visible"`` or
-    measured): the depth range's ends, and with ``stable=True`` each cascade's size,
-    are then values of a fixed ladder ``2^(k/4)`` that grow at once and shrink only past
-    a margin of one step, so the splits and the stable cascades' sizes change only at
-    ladder steps (``docs/cascades.md``).
-
-    Attributes:
-        near: ``(*batch,)`` the first split in use (NaN: none yet).
-        far: ``(*batch,)`` the last split in use (NaN: none yet).
-        half_width: ``(*batch, n)`` each stable cascade's laddered half-width (the
-            square uses the lesser of it and the slice's sphere's radius, then adds its
-            half texel of snapping room); NaN: none yet; NaN in a result without
-            ``stable=True``, the sphere's radius in one without ``state``.
-
-    Example:
-        >>> import shadowmath as sm
-        >>> sm.CascadeState.initial()
-        CascadeState(near=nan, far=nan, half_width=nan)
-    """
-
-    near: Real[ArrayLike, "*#batch"]
-    far: Real[ArrayLike, "*#batch"]
-    half_width: Real[ArrayLike, "*#batch _"] | Real[ArrayLike, ""]
-
-    @classmethod
-    def initial(cls) -> CascadeState:
-        """The state before the first frame: nothing in use (every value NaN)."""
-        return cls(math.nan, math.nan, math.nan)
-
-
-class Cascades(NamedTuple):
-    """Everything a renderer needs to draw and sample a directional light's cascades.
-
-    ``n`` is the number of cascades; every matrix is in the ``api``'s conventions.
-
-    Attributes:
-        world_to_light: ``(*batch, n, 4, 4)`` world to each cascade's light
-            coordinates (one rotation for all, origins differ along ``Z`` only; with
-            ``orientation="fitted"`` each turned about ``Z`` by its own angle).
-        frustum: the :class:`OrthographicBox` of each cascade, fields ``(*batch, n)``.
-        world_to_clip: ``(*batch, n, 4, 4)`` world to the cascade's clip coordinates:
-            draw the casters into cascade ``i`` with ``world_to_clip[i] @ model``.
-        world_to_texture: ``(*batch, n, 4, 4)`` world to ``(s, t, r, 1)``: texture
-            coordinates in the cascade's layer, or in the atlas (``layout="atlas"``),
-            and the stored depth ``r`` to compare with.
-        splits: ``(*batch, n + 1)`` the view depths that bound the cascades: cascade
-            ``i`` serves view depths ``[splits[i], splits[i + 1])``.
-        band_end: ``(*batch, n)`` cascade ``i`` is fitted out to ``band_end[i] >=
-            splits[i + 1]``; in ``[splits[i + 1], band_end[i]]`` the shader blends
-            cascades ``i`` and ``i + 1`` (weight of ``i + 1``: the fraction of the band
-            passed). The last cascade has no band (``band_end = splits[n]``).
-        texel_size: ``(*batch, n, 2)`` the world size of one texel along light ``X``
-            and ``Y`` (for normal-offset and slope bias).
-        viewports: ``(n, 4)`` integers ``(x, y, width, height)`` of each cascade's
-            tile in the atlas, in the API's own viewport convention (``(0, 0, W, H)``
-            for every cascade with ``layout="layers"``).
-        texture_size: ``(width, height)`` in texels of the depth texture to allocate
-            (the same for every batch entry): each layer's, ``(W, H)``, with
-            ``layout="layers"``; the atlas's, ``(cols W, rows H)`` (``cols =
-            ceil(sqrt(n))``, ``rows = ceil(n / cols)``), with ``layout="atlas"``.
-            Every viewport lies inside it.
-        texture_layers: the texture's layer count: ``n`` with ``layout="layers"``
-            (a texture array), 1 with ``layout="atlas"``.
-        state: what this fit used (the splits' ends, the stable sizes): the next
-            frame's ``state=`` (not needed by a renderer).
-    """
-
-    world_to_light: Float[Array, "*batch n 4 4"]
-    frustum: OrthographicBox
-    world_to_clip: Float[Array, "*batch n 4 4"]
-    world_to_texture: Float[Array, "*batch n 4 4"]
-    splits: Float[Array, "*batch n+1"]
-    band_end: Float[Array, "*batch n"]
-    texel_size: Float[Array, "*batch n 2"]
-    viewports: Int[Array, "n 4"]
-    texture_size: tuple[int, int]
-    texture_layers: int
-
-    state: CascadeState
 
 
 def fit_cascades(
@@ -362,14 +254,14 @@ def fit_cascades(
     call = _Call(ctx, spec, layout, shape, o)
     extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
     arrays = (L, V, P, box, U, S, dmax, lm, ov, extra, W)
-    if ctx.xp is np and warp is None:
-        python = not _kernels.available()
-        if not python or (_kernels.python_loop() and math.prod(shape) <= PYTHON_LOOP_CAMERAS):
-            try:
-                return _compiled(call, arrays, None if python else record)
-            except (ZeroDivisionError, OverflowError):
-                pass  # Python floats raise where Numba's give inf: invalid input, which the
-                # array mode below reports with its message
+    small = math.prod(shape) <= PYTHON_LOOP_CAMERAS
+    chosen = form(ctx.xp is np and warp is None, small=small)
+    if chosen != "arrays":
+        try:
+            return _compiled(call, arrays, None if chosen == "python" else record)
+        except (ZeroDivisionError, OverflowError):
+            pass  # Python floats raise where Numba's give inf: invalid input, which the
+            # array mode below reports with its message
     return _arrays(call, checks, arrays, warp)
 
 
@@ -501,189 +393,6 @@ def _light_vector(checks: Checks, L: Array) -> Array:
     return L
 
 
-@functools.lru_cache(maxsize=64)
-def _tiles(n: int, size: tuple[int, int], layout: str) -> Array:
-    """Each cascade's viewport ``(x, y, w, h)`` (read-only: shared by every call)."""
-    w, h = size
-    if layout == "layers":
-        ports = np.tile(np.array([0, 0, w, h]), (n, 1))
-    else:
-        cols = _grid(n, layout)[0]
-        cells = np.array([(i % cols, i // cols) for i in range(n)])
-        ports = np.column_stack([cells[:, 0] * w, cells[:, 1] * h, np.full(n, w), np.full(n, h)])
-    ports.setflags(write=False)
-    return ports
-
-
-def _texture(n: int, size: tuple[int, int], layout: str) -> tuple[tuple[int, int], int]:
-    """The texture holding ``n`` cascades of ``size``: ``texture_size``, ``texture_layers``."""
-    w, h = int(size[0]), int(size[1])
-    if layout == "layers":
-        return (w, h), n
-    cols, rows = _grid(n, layout)
-    return (cols * w, rows * h), 1
-
-
-class _Call(NamedTuple):
-    """One call's context: backend, map, layout, batch shape and options record."""
-
-    ctx: Context
-    spec: ShadowMapSpec
-    layout: str
-    shape: tuple[int, ...]
-    o: CascadeOptions
-
-
-def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
-    """The loop mode: :func:`._cascade_steps.cascade_loop` compiled by Numba (``fast``
-    extra, ``record`` its options), or, ``record`` None, run by Python on lists (a few
-    cameras without Numba)."""
-    ctx, shape, o = call.ctx, call.shape, call.o
-    L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
-    n, total = o.cascades, math.prod(shape)
-    values = (
-        lm,
-        np.nan if dmax is None else dmax,
-        ov,
-        *((np.nan,) * 4 if extra is None else extra),
-    )
-    if all(type(v) is float or (type(v) is np.ndarray and v.ndim == 0) for v in values):
-        scal = np.array([[float(v) for v in values]])  # one camera's: no broadcasting
-    else:
-        scal = np.stack(np.broadcast_arrays(*values), axis=-1)
-    inputs = (
-        flat_batch(L, shape, (3,)), flat_batch(V, shape, (4, 4)).reshape(-1, 16),
-        flat_batch(P, shape, (4, 4)).reshape(-1, 16), flat_batch(box, shape, (2, 3)).reshape(-1, 6),
-        _NO_UP if U is None else flat_batch(U, shape, (3,)), flat_batch(scal, shape, (_SCALARS,)),
-        _NO_SPLITS if S is None else flat_batch(S, shape, (n + 1,)),
-        _NO_SIZES if W is None else flat_batch(W, shape, (n,)),
-    )  # fmt: skip
-    if record is None:  # the same loop on Python lists and floats
-        rows = [[[0.0] * ROW for _ in range(n)] for _ in range(total)]
-        cuts, flags = [[0.0] * (n + 1) for _ in range(total)], [0] * total
-        loop_inputs = tuple(v.tolist() for v in inputs)
-        scalar_formulas().cascade_loop(loop_inputs, (o,), rows, cuts, flags)
-        out = np.asarray(rows, dtype=ctx.dtype)
-        splits = np.asarray(cuts, dtype=ctx.dtype)
-        status = np.asarray(flags, dtype=np.int64)
-    else:
-        out = np.empty((total, n, ROW), dtype=ctx.dtype)
-        splits = np.empty((total, n + 1), dtype=ctx.dtype)
-        status = np.zeros(total, dtype=np.int64)
-        _kernels.loops().cascade_loop(inputs, record, out, splits, status)
-    if status[0] if total == 1 else status.any():
-        raise_status(status.reshape(shape), cascade_messages())
-    return _result(call, out.reshape(*shape, n, ROW), splits.reshape(*shape, n + 1))
-
-
-def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | None) -> Cascades:
-    """The array mode: the same steps once on whole arrays (NumPy or JAX), per-entry
-    values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``);
-    ``warp``: the warp's name (or None); ``o.fitted``: the maps turned
-    (``orientation="fitted"``)."""
-    ctx, o = call.ctx, call.o
-    xp, F = ctx.xp, formulas(ctx.xp)
-    L, V, P, box, U, S, dmax, lm, ov, extra, W = arrays
-    inputs = CascadeInputs(
-        light=tuple(L[..., c, None] for c in range(3)),
-        view_matrix=tuple(V[..., i // 4, i % 4, None] for i in range(16)),
-        projection=tuple(P[..., i // 4, i % 4, None] for i in range(16)),
-        box=tuple(box[..., i // 3, i % 3, None] for i in range(6)),
-        up=(0.0, 0.0, 0.0) if U is None else tuple(U[..., c, None] for c in range(3)),
-    )
-    more = (math.nan,) * 4 if extra is None else extra
-    sc = CascadeScalars._make(
-        v if v is None or isinstance(v, float) else v[..., None] for v in (lm, dmax, ov, *more)
-    )
-    j = np.arange(o.cascades + 1, dtype=ctx.dtype)  # the cascades' indices, in the work dtype
-    with np.errstate(all="ignore"):  # invalid entries: their status bits say so
-        e = F.cascade_entry(inputs, sc, (S, W), o)
-        splits = F.cascade_split(S, j, (e.lo, e.hi, e.lam, e.overlap), o)
-        sl = F.cascade_slice(e, inputs.box, splits, j[:-1], o)
-        row: list[Any] = [0.0] * ROW
-        if o.fitted:
-            fitted_cascade(xp, F, (e, sl, j[:-1], o), row)
-        else:
-            F.cascade_fit(e, sl, j[:-1], o, row)
-        if warp is not None:
-            _warp(call, (e, sl, j[:-1]), (V, P), row)
-    for bit, message in cascade_messages():
-        checks.require((e.status[..., 0] & bit) == 0, message)
-    full = (*call.shape, o.cascades)
-    rows = xp.stack([xp.broadcast_to(xp.asarray(v, dtype=ctx.dtype), full) for v in row], -1)
-    splits = xp.broadcast_to(splits, (*call.shape, o.cascades + 1))
-    return _result(call, checks.poison(rows, 2), checks.poison(splits, 1))
-
-
-class _WarpCamera(NamedTuple):
-    """What the LiSPSM hook reads of the camera (per entry, ``(*b, ...)``)."""
-
-    sign: Array  # (*b,): view depth = sign * z_view
-    view_to_world: Array  # (*b, 4, 4)
-    clip_rows: Array  # (*b, 4, 4): projection @ view
-
-
-def _warp(
-    call: _Call,
-    steps: tuple[CascadeEntry, CascadeSlice, Any],
-    VP: tuple[Array, Array],
-    row: list[Any],
-) -> None:
-    """The LiSPSM hook (:mod:`._lispsm`): the warp replaces clip, texture rows and size."""
-    xp, F, o = call.ctx.xp, formulas(call.ctx.xp), call.o
-    e, sl, j = steps
-    V, P = VP
-    body = F.cascade_body(
-        sl.light_corners, sl.box_values, (e.box_light, e.box_camera), (sl.s0, sl.s1)
-    )
-    iV = xp.stack(xp.broadcast_arrays(*e.camera.view_to_world), axis=-1)[..., 0, :]
-    cam = _WarpCamera(
-        e.camera.sign[..., 0], xp.reshape(iV, (*iV.shape[:-1], 4, 4)), matmul(xp, P, V)
-    )
-    clip_at, tex_at, size_at = (row_part(k) for k in ("world_to_clip", "world_to_texture",
-                                                       "texel_size"))  # fmt: skip
-    size = xp.stack(xp.broadcast_arrays(*row[size_at]), axis=-1)
-    ortho = (tuple(row[clip_at]), tuple(row[tex_at]), size)
-    clip, tex, size = warp_cascades(
-        xp, F, body, cam, V, a=e.camera.axes, spec=call.spec, ortho=ortho,
-        tile=lambda rows: F.cascade_tile(rows, j, o),
-    )  # fmt: skip
-    row[clip_at], row[tex_at] = clip, tex
-    row[size_at] = size[..., 0], size[..., 1]
-
-
-def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
-    """The result from each cascade's row ``(*batch, n, ROW)`` and the splits."""
-    xp, n, spec = call.ctx.xp, call.o.cascades, call.spec
-    m = xp.reshape(rows[..., : ROW_AT.frustum], (*call.shape, n, 3, 4, 4))  # the three matrices
-    box = OrthographicBox(*(rows[..., ROW_AT.frustum + k] for k in range(8)))
-    state = CascadeState(splits[..., 0], splits[..., -1], rows[..., ROW_AT.half_width])
-    texture = _texture(n, spec.size, call.layout)
-    return Cascades(
-        world_to_light=m[..., 0, :, :],
-        frustum=box,
-        world_to_clip=m[..., 1, :, :],
-        world_to_texture=m[..., 2, :, :],
-        splits=splits,
-        band_end=rows[..., ROW_AT.band_end],
-        texel_size=rows[..., row_part("texel_size")],
-        viewports=_tiles(n, spec.size, call.layout),
-        texture_size=texture[0],
-        texture_layers=texture[1],
-        state=state,
-    )
-
-
-#: The most cameras that NumPy without Numba fits with the loop run by Python (beyond,
-#: the array driver, vectorized over the cameras, is faster).
-PYTHON_LOOP_CAMERAS = 4
-
-_NO_UP = np.zeros((1, 3))
-_SCALARS = len(CascadeScalars._fields)  # the compiled loop's columns of scalars
-_NO_SPLITS = np.zeros((1, 2))
-_NO_SIZES = np.zeros((1, 1))
-
-
 def _scalar_checks(checks: Checks, values: tuple[Any, ...]) -> None:
     """lam, overlap, max_distance and splits: finite, and lam and overlap in range (the
     steps trust them). Python floats are checked as they are."""
@@ -737,10 +446,3 @@ def _options(
 _HALF_WIDTH = "state: half_width must be positive or NaN"
 _LAM_RANGE = "lam: the practical scheme's blend must lie in [0, 1]"
 _OVERLAP_RANGE = "overlap: the blend band must be a fraction in [0, 1)"
-
-
-def _grid(n: int, layout: str) -> tuple[int, int]:
-    if layout == "layers":
-        return 0, 0  # the loop's mark: no tiles
-    cols = math.ceil(math.sqrt(n))
-    return cols, math.ceil(n / cols)
