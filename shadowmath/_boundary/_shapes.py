@@ -25,6 +25,21 @@ the annotations are well formed; the shapes and dtypes are checked at run time, 
 tests. (``numpy.typing.ArrayLike`` for inputs would make mypy refuse the cores' use of
 the arguments they receive, which are typed ``Any`` today.)
 
+**The cores' per-entry values.** A per-entry formula (``_math/_formulas.py`` and the
+other modules that :func:`shadowmath._math._specialize.specialize` binds) runs on one
+batch entry (Python or Numba floats) and on whole arrays (NumPy, JAX) alike, so its
+parameters are typed by what they are in both:
+
+* :data:`Scalar`: one real component, a number per entry or an array of the batch's
+  shape (components broadcast: a cascade's ``(*batch, C)`` beside a camera's
+  ``(*batch, 1)``, so the shape is not held to one memo);
+* :data:`Truth`: one boolean component, ``bool`` per entry or a boolean array;
+* :data:`Row`: a flat row of components, a sequence of numbers per entry (a tuple, a list,
+  or a 1-D NumPy buffer in the compiled loops) or a tuple of arrays of the batch's shape.
+
+For mypy they are ``Any``, as :data:`Array` is; at run time (the suite's checked cores)
+each is a marker whose ``isinstance`` accepts exactly those values.
+
 ``*#batch`` marks leading batch dimensions that broadcast against the other arguments'; a
 named size (``N``) is one size in every argument and result of a call, ``_`` any size (the
 fields of a type that one call may hold twice, such as :class:`Mesh`).
@@ -63,6 +78,9 @@ __all__ = [
     "Integer",
     "MapSize",
     "Real",
+    "Row",
+    "Scalar",
+    "Truth",
     "shapes_checked",
 ]
 
@@ -76,6 +94,9 @@ if TYPE_CHECKING:
     IntLike: TypeAlias = int
     BoolLike: TypeAlias = bool
     MapSize: TypeAlias = int | tuple[int, int]
+    Scalar: TypeAlias = Any
+    Truth: TypeAlias = Any
+    Row: TypeAlias = Any
 else:
     from numbers import Integral as IntLike
 
@@ -93,6 +114,43 @@ else:
 
     class MapSize(metaclass=_MapSizeType):
         """Run-time marker of a map size: an integer or two (see the module's docstring)."""
+
+    def _kind(value: object) -> str:
+        """The dtype kind of a number or an array (``b``, ``i``, ``u``, ``f``...), else ``""``."""
+        if isinstance(value, bool | _np.bool_):
+            return "b"
+        if isinstance(value, int | float):
+            return "f" if isinstance(value, float) else "i"
+        dtype = getattr(value, "dtype", None)
+        if dtype is None or not hasattr(value, "shape"):
+            return ""
+        return str(_np.dtype(dtype).kind)
+
+    class _ComponentType(type):
+        kinds = ""
+
+        def __instancecheck__(cls, value: object) -> bool:
+            kind = _kind(value)
+            return bool(kind) and kind in cls.kinds
+
+    class Scalar(metaclass=_ComponentType):
+        """Run-time marker of a real component: a number or a real array."""
+
+        kinds = "iuf"
+
+    class Truth(metaclass=_ComponentType):
+        """Run-time marker of a boolean component: a ``bool`` or a boolean array."""
+
+        kinds = "b"
+
+    class _RowType(type):
+        def __instancecheck__(cls, value: object) -> bool:
+            if isinstance(value, tuple | list):
+                return all(isinstance(v, Scalar | Truth) for v in value)
+            return getattr(value, "ndim", None) == 1 and isinstance(value, Scalar)
+
+    class Row(metaclass=_RowType):
+        """Run-time marker of a flat row of components (see the module's docstring)."""
 
     class ArrayLike:
         """Run-time marker of an input array type (see the module's docstring)."""

@@ -22,11 +22,13 @@ nearest corner) and the box's ``z`` range.
 from __future__ import annotations
 
 import math
-from typing import Any
+from types import ModuleType
 
 import numpy as np
 
 # Shared formulas and primitives (the mode's buffer and array namespace), rebound by specialize().
+from shadowmath._boundary._shapes import Row, Scalar, Truth
+
 from ._cascade_formulas import EDGES, clip_plane, clip_segment, slice_values  # noqa: F401
 from ._cascade_steps import alloc, array_api
 from ._formulas import where
@@ -40,7 +42,9 @@ _EDGE_1 = np.array(_E1)
 FORMS = {"cascade_bounds": ("_bounds_loop", "_bounds_array")}
 
 
-def _bounds_loop(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
+def _bounds_loop(
+    lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar]
+) -> tuple[Scalar, ...]:
     """The loop form. Each corner's outcode (bit ``j``: outside half-space ``j``, Cohen and
     Sutherland) settles most edges: a common bit puts the edge outside, no bit at either
     end inside; :func:`clip_segment` gives the same answers, only slower."""
@@ -91,7 +95,7 @@ def _bounds_loop(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
     return lx, hx_, ly, hy_, min(min(zb, lz), hz), hz, zb, zt
 
 
-def _outcodes(gs: Any, bg: Any, d: Any) -> Any:
+def _outcodes(gs: Row, bg: Row, d: tuple[Scalar, Scalar]) -> tuple[Row, Row]:
     """The slice's corners' outcodes against the box, the box's against the slice."""
     s0, s1 = d
     cs, cb = alloc(8), alloc(8)
@@ -110,7 +114,9 @@ def _outcodes(gs: Any, bg: Any, d: Any) -> Any:
     return cs, cb
 
 
-def _clip_crossed(gs: Any, bg: Any, d: Any, edge: Any, crossed: int) -> Any:
+def _clip_crossed(
+    gs: Row, bg: Row, d: tuple[Scalar, Scalar], edge: tuple[int, int, int], crossed: int
+) -> tuple[Scalar, Scalar, Truth]:
     """Edge ``edge = (e, k0, k1)`` clipped by the planes an end is outside of (``crossed``;
     the others change nothing): ``(t0, t1, ok)``."""
     e, k0, k1 = edge
@@ -132,7 +138,9 @@ def _clip_crossed(gs: Any, bg: Any, d: Any, edge: Any, crossed: int) -> Any:
     return t0, t1, ok and t0 <= t1
 
 
-def cascade_body(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
+def cascade_body(
+    lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar]
+) -> tuple[list[Scalar], Truth, tuple[Scalar, ...], tuple[Scalar, ...]]:
     """The array form's vertices: ``(ends, ok, slice_corners, box_corners)``: ``ends`` three
     ``(*b, n, 48)`` arrays (both clipped ends of the 24 edges), ``ok`` ``(*b, n, 48)`` True
     where the edge kept a part; the slices' corners ``(*b, n, 8)`` and the box's
@@ -157,19 +165,23 @@ def cascade_body(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
     return ends, xp.concat([ok, ok], axis=-1), sl, bc
 
 
-def _corners(xp: Any, buffer: Any, m: int) -> Any:
+def _corners(xp: ModuleType, buffer: Row, m: int) -> tuple[Scalar, ...]:
     """``m`` arrays ``(..., 8)``: value ``c`` of the eight corners of a buffer of 8 x m."""
     stacked = xp.stack(xp.broadcast_arrays(*buffer), axis=-1)
     stacked = xp.reshape(stacked, (*stacked.shape[:-1], 8, m))
     return tuple(stacked[..., c] for c in range(m))
 
 
-def _bounds_array(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
+def _bounds_array(
+    lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar]
+) -> tuple[Scalar, ...]:
     """The array form: :func:`cascade_body`'s vertices reduced over the last axis."""
     return body_bounds(cascade_body(lc, gs, boxp, d))
 
 
-def body_bounds(body: Any) -> Any:
+def body_bounds(
+    body: tuple[list[Scalar], Truth, tuple[Scalar, ...], tuple[Scalar, ...]],
+) -> tuple[Scalar, ...]:
     """:func:`cascade_body`'s vertices reduced over the last axis: the bounds of the array
     form (the slice's own where the intersection is empty)."""
     xp = array_api

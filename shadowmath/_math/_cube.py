@@ -38,8 +38,9 @@ from types import ModuleType
 from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import DTypeLike
 
-from shadowmath._boundary._shapes import Float, Int
+from shadowmath._boundary._shapes import Float, Int, Scalar
 from shadowmath._boundary._validate import Array
 
 # api -> (clip depth 0..1 instead of -1..1, NDC +y is the image's first row).
@@ -136,7 +137,7 @@ def _rotation_constant(dtype: np.dtype[Any]) -> np.ndarray:
     return R
 
 
-def _rotations(xp: ModuleType, dtype: Any) -> Array:
+def _rotations(xp: ModuleType, dtype: DTypeLike) -> Float[Array, "6 3 3"]:
     return xp.asarray(_rotation_constant(np.dtype(dtype)))  # (6, 3, 3)
 
 
@@ -226,7 +227,7 @@ def cube_face_projection(
 
 
 def cube_face_projection_scalar(
-    near: Any, far: Any, scale: float, *, zero_to_one: bool, flip_y: bool, reversed_z: bool
+    near: Scalar, far: Scalar, scale: float, *, zero_to_one: bool, flip_y: bool, reversed_z: bool
 ) -> Array:
     """:func:`cube_face_projection` of one light's NumPy scalars, entry by entry."""
     a, b = depth_row(near, far, zero_to_one, reversed_z)

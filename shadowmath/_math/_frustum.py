@@ -20,6 +20,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from shadowmath._boundary._renamed import warn_renamed
+from shadowmath._boundary._shapes import ArrayLike, Bool
 from shadowmath._boundary._validate import Array
 
 from ._specialize import formulas
@@ -181,7 +182,7 @@ def volume(fields: Sequence[Array], directional: bool) -> Frustum | Orthographic
     return OrthographicBox._make(fields) if directional else Frustum._make(fields)
 
 
-def _static_flag(orthographic: Any) -> bool:
+def _static_flag(orthographic: bool | Bool[ArrayLike, "*batch"]) -> bool:
     """The deprecated ``orthographic`` flag as one bool (a batch must not mix kinds)."""
     if isinstance(orthographic, bool | np.bool_):
         return bool(orthographic)
