@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from shadowmath._boundary._renamed import warn_renamed
-from shadowmath._boundary._shapes import ArrayLike, Bool
+from shadowmath._boundary._shapes import ArrayLike, Bool, Float, Scalar
 from shadowmath._boundary._validate import Array
 
 from ._specialize import formulas
@@ -173,7 +173,7 @@ class OrthographicBox(NamedTuple):
         return True
 
 
-def volume(fields: Sequence[Array], directional: bool) -> Frustum | OrthographicBox:
+def volume(fields: Sequence[Scalar], directional: bool) -> Frustum | OrthographicBox:
     """The light's map volume of 8 trusted fields in their common order.
 
     ``(R_x, R_y, near, far, m_x, m_y, c_x, c_y)``: an :class:`OrthographicBox` for a
@@ -195,12 +195,16 @@ def _static_flag(orthographic: bool | Bool[ArrayLike, "*batch"]) -> bool:
     )
 
 
-def blocker_reach(xp: ModuleType, light: Array, verts: Array) -> Array:
+def blocker_reach(
+    xp: ModuleType, light: Float[Array, "*#batch 3"], verts: Float[Array, "*#batch N 3"]
+) -> Float[Array, "*batch"]:
     """``(*batch,)`` the largest coordinate of any ``V - L``: the scale of the rounding noise."""
     return xp.max(xp.abs(verts - light[..., None, :]), axis=(-2, -1))
 
 
-def projection_terms(xp: ModuleType, fr: Frustum | OrthographicBox) -> tuple[Array, ...]:
+def projection_terms(
+    xp: ModuleType, fr: Frustum | OrthographicBox
+) -> tuple[Float[Array, "*batch"], ...]:
     """``(sx, -sx cx, sy, -sy cy, a, b)``: the nonzero entries of the blocker projection."""
     half_x, half_y, near, far, margin_x, margin_y, cx, cy = fr
     sx, sy = margin_x / half_x, margin_y / half_y
@@ -208,7 +212,9 @@ def projection_terms(xp: ModuleType, fr: Frustum | OrthographicBox) -> tuple[Arr
     return terms
 
 
-def projection_entries(xp: ModuleType, fr: Frustum | OrthographicBox) -> tuple[Array, ...]:
+def projection_entries(
+    xp: ModuleType, fr: Frustum | OrthographicBox
+) -> tuple[Float[Array, "*batch"], ...]:
     """The 16 entries of the blocker projection of a trusted frustum or box (by its type)."""
     sx, sxc, sy, syc, a, b = projection_terms(xp, fr)
     zero = xp.zeros_like(sx)

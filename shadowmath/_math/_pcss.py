@@ -97,8 +97,12 @@ FUNCTIONS = ("pcss_across", "pcss_perspective", "pcss_orthographic", "pcss_loop"
 
 
 def kernel_widths(
-    xp: ModuleType, K: Array, near_depth: Array, receiver: Array, blocker: Array
-) -> tuple[Array, Array]:
+    xp: ModuleType,
+    K: Float[Array, "*#b 2"],
+    near_depth: Float[Array, "*#b"],
+    receiver: Float[Array, "*#b"],
+    blocker: Float[Array, "*#b"],
+) -> tuple[Float[Array, "*b 2"], Float[Array, "*b 2"]]:
     """``(search, penumbra)`` in texels, ``(*b, 2)`` each, from the stored depths of the
     receiver and of the (average) blocker, ``(*b,)`` each: the shader's two lines."""
     sign = 1 - 2 * near_depth
