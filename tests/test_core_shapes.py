@@ -24,11 +24,14 @@ from typing import Any
 
 import numpy as np
 import pytest
+from jaxtyping import TypeCheckError
 
 import shadowmath as sm
 from shadowmath._backends import _kernels
 from shadowmath._boundary._shapes import _checking
-from shadowmath._math import _specialize
+from shadowmath._math import _specialize, _vector
+
+from .cameras import perspective
 
 CORE_PACKAGES = ("shadowmath._math", "shadowmath._scene")
 
@@ -113,3 +116,121 @@ def test_any_is_found_where_it_hides():
     assert _has_any(int | Any)
     assert not _has_any(tuple[float, ...])
     assert not _has_any(dict[str, Any])  # a table of values of every kind: not a shape
+
+
+# ---------------------------------------------------------------- the cores checked at run time
+
+
+def _checked_specialize(plain: Callable[..., Any]) -> Callable[..., Any]:
+    """``specialize`` whose per-entry copies check their annotations on every call (the
+    Python and array forms only: a compiled loop, ``wrap`` given, is left alone)."""
+    originals = {
+        name: getattr(module, name)
+        for module, functions in _specialize._MODULES
+        for name in functions
+    }
+
+    def wrap(copy: types.FunctionType) -> Callable[..., Any]:
+        copy.__annotations__ = originals[copy.__name__].__annotations__
+        return _checking(copy)
+
+    def specialize(primitives: Any, wrap_: Any = None, *, loop: bool = True) -> Any:
+        return plain(primitives, wrap if wrap_ is None else wrap_, loop=loop)
+
+    return specialize
+
+
+@pytest.fixture
+def checked_cores(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    """Every core a module of the package holds by name is checked after each call, and the
+    formulas are specialized anew with checked copies (their caches cleared before and
+    after, so no other test sees them)."""
+    formula_names = {n for _, functions in _specialize._MODULES for n in functions}
+    checked: dict[int, Callable[..., Any]] = {}
+    for name in _core_modules():
+        for fname, fn in _functions(importlib.import_module(name)):
+            if fname not in formula_names:  # those are checked through their copies
+                checked[id(fn)] = _checking(fn)
+    checked[id(_specialize.specialize)] = _checked_specialize(_specialize.specialize)
+    for mod_name, module in list(sys.modules.items()):
+        if mod_name.split(".")[0] != "shadowmath" or module is None:
+            continue
+        for attr, value in list(vars(module).items()):
+            if isinstance(value, types.FunctionType) and id(value) in checked:
+                if attr in formula_names and mod_name in _FORMULA_MODULES:
+                    continue  # specialize copies the module's own function
+                monkeypatch.setattr(module, attr, checked[id(value)])
+    caches = _caches()
+    for cache in caches:
+        cache.cache_clear()
+    yield
+    for cache in caches:
+        cache.cache_clear()
+
+
+_FORMULA_MODULES = {module.__name__ for module, _ in _specialize._MODULES}
+
+
+def _caches() -> list[Any]:
+    """The caches that hold specialized formulas."""
+    from shadowmath._fits.shadow import _arrays
+
+    return [_specialize.formulas, _specialize.scalar_formulas, _arrays._namespace]
+
+
+BOX = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], np.float64)
+GROUND = np.array([[-8.0, -8.0, 9.0], [8.0, -8.0, 9.0], [0.0, 8.0, 9.0]])
+
+
+def _fits() -> None:
+    """A representative set of fits: every light kind, receivers, a stable map, cascades."""
+    rng = np.random.default_rng(5)
+    lights = rng.normal(size=(2, 3)) * 0.1
+    for light in (lights[0], lights, sm.PointLight(lights[0])):
+        sm.fit_shadow(light, BOX, 64, receivers=sm.Triangles(GROUND[None]))
+    sm.fit_shadow(sm.DirectionalLight([0.1, 0.2, 1.0]), BOX, (64, 32), stable=True)
+    sm.fit_shadow(sm.SpotLight([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 0.6), BOX, 64)
+    sm.fit_shadow([0.0, 0.0, 0.0], BOX.astype(np.float32), 64, near=1.0, far=20.0)
+    view = np.eye(4)
+    proj = perspective(1.0, 1.5, 0.5, 50.0)
+    sun = sm.DirectionalLight([0.3, -1.0, 0.2])
+    scene = np.array([[-20.0, -5.0, -40.0], [20.0, 5.0, 0.0]])
+    sm.fit_cascades(sun, view, proj, scene, 256, count=3)
+    sm.fit_cascades(sun, view, proj, scene, 256, count=2, stable=True)
+    sm.cube_face_views([[0.0, 1.0, 2.0]])
+    sm.cube_depth_range([0.0, 0.0, 0.0], BOX)
+    frame = sm.light_frame([0.0, 0.0, 0.0], BOX)
+    sm.adaptive_frustum(frame, BOX, 64)
+    sm.smooth_frustum(frame, BOX, 64, temperature=0.01)
+    fit = sm.fit_shadow(lights, BOX, 64)
+    sm.pcss_parameters(fit, light_radius=0.1)
+    points, normals = GROUND[:2], np.array([[0.0, 0.0, -1.0]])
+    M = np.asarray(fit.world_to_texture)[:, None]
+    sm.slope_scaled_bias(M, points, normals, map_size=64)
+    sm.normal_offset(M, points, normals, map_size=64, pcf_radius=1, pcf_filter="bilinear")
+    sm.pcf(np.full((8, 8), 0.5), np.full((3, 2), 0.5), np.full(3, 0.25), pcf_radius=1)
+    sm.area_light_samples(np.zeros(3), np.eye(3)[0], np.eye(3)[1], 4, seed=0)
+
+
+def test_the_cores_keep_their_signatures_on_the_python_loop(checked_cores):
+    with _kernels.disabled():
+        _fits()
+
+
+def test_the_cores_keep_their_signatures_on_whole_arrays(checked_cores):
+    with _kernels.array_path():
+        _fits()
+
+
+def test_the_checked_cores_refuse_what_their_signatures_refuse(checked_cores):
+    """The checking is on: a formula's copy and a topic core each refuse a wrong argument."""
+    F, S = _specialize.formulas(np), _specialize.scalar_formulas()
+    one = np.ones(2)
+    assert np.allclose(F.normalize3(one, one, one)[3], np.sqrt(3))
+    assert S.two_sum(1.0, 2.0**-60) == (1.0, 2.0**-60)
+    with pytest.raises(TypeCheckError, match="two_sum: argument a"):
+        S.two_sum(1j, 2.0)  # a complex number is no real component
+    with pytest.raises(TypeCheckError, match="_numpy_where: argument a"):
+        F.normalize3(np.ones(2, bool), one, one)  # a mask where a component is meant
+    with pytest.raises(TypeCheckError, match="dot: argument a"):
+        _vector.dot(np, np.ones((2, 3), int), np.ones((2, 3)))  # integers: not Float

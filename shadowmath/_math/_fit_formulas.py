@@ -79,7 +79,9 @@ def to_light(
     )
 
 
-def bounds_about(lo: tuple[Scalar, ...], hi: tuple[Scalar, ...], o: tuple[Scalar, ...]) -> Scalar:
+def bounds_about(
+    lo: tuple[Scalar, ...], hi: tuple[Scalar, ...], o: tuple[Scalar, ...]
+) -> tuple[tuple[Scalar, Scalar, Scalar], tuple[Scalar, Scalar, Scalar], Scalar, Scalar]:
     """The bounds of ``p - o`` from the bounds ``lo <= hi`` of the points ``p`` (3 each),
     the reach ``max |p - o|`` over the components and the coordinates' size ``max |p|``.
 

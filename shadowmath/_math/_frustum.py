@@ -173,7 +173,9 @@ class OrthographicBox(NamedTuple):
         return True
 
 
-def volume(fields: Sequence[Scalar], directional: bool) -> Frustum | OrthographicBox:
+def volume(
+    fields: tuple[Scalar, ...] | Float[Array, "8 *batch"], directional: bool
+) -> Frustum | OrthographicBox:
     """The light's map volume of 8 trusted fields in their common order.
 
     ``(R_x, R_y, near, far, m_x, m_y, c_x, c_y)``: an :class:`OrthographicBox` for a

@@ -147,8 +147,9 @@ def _zeros_list(n: int) -> list[float]:
     return [0.0] * n
 
 
-def _scalar_flag(ok: Truth, bit: int) -> int:
-    """A check's status bit on scalars: 0 where ``ok``."""
+def _scalar_flag(ok: Truth | float, bit: int) -> int:
+    """A check's status bit on scalars: 0 where ``ok`` (a bool, or 1.0 and 0.0 from an
+    array's check read per entry)."""
     return 0 if ok else bit
 
 

@@ -157,7 +157,11 @@ def sun_candidates(
 
 
 def inside_box(
-    lo: Float[Array, "N 3"], hi: Float[Array, "N 3"], box: Frustum | OrthographicBox, *, receiver: bool
+    lo: Float[Array, "N 3"],
+    hi: Float[Array, "N 3"],
+    box: Frustum | OrthographicBox,
+    *,
+    receiver: bool,
 ) -> Bool[Array, " N"]:
     """``(N,)`` the objects that leave an orthographic fit unchanged, from their light
     coordinates' intervals (:func:`light_intervals`): a caster's inside the box
