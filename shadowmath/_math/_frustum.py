@@ -13,7 +13,6 @@ call these, are in :mod:`shadowmath._geometry._adaptive_frustum`.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from types import ModuleType
 from typing import Any, NamedTuple
 
@@ -174,7 +173,7 @@ class OrthographicBox(NamedTuple):
 
 
 def volume(
-    fields: tuple[Scalar, ...] | Float[Array, "8 *batch"], directional: bool
+    fields: tuple[Scalar, ...] | Float[Array, " 8 *batch"], directional: bool
 ) -> Frustum | OrthographicBox:
     """The light's map volume of 8 trusted fields in their common order.
 
