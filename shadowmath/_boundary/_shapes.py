@@ -36,6 +36,12 @@ parameters are typed by what they are in both:
 * :data:`Truth`: one boolean component, ``bool`` per entry or a boolean array;
 * :data:`Row`: a flat row of components, a sequence of numbers per entry (a tuple, a list,
   or a 1-D NumPy buffer in the compiled loops) or a tuple of arrays of the batch's shape.
+* :data:`Status`: a fit's status word, an ``int`` of bits per entry, an integer array, or
+  on whole arrays a record of each check by its bit (``_fits/shadow/_arrays.Flags``);
+* :data:`Options`: a fit's static options read by name, a ``NamedTuple`` on arrays, a
+  NumPy record in the compiled loop, a ``SimpleNamespace`` in its Python run;
+* :data:`Vertices`: the casters as a fit's vertex passes read them, per entry
+  ``(flat row, placement's 16 entries, placed)``, on arrays ``(components, status)``.
 
 For mypy they are ``Any``, as :data:`Array` is; at run time (the suite's checked cores)
 each is a marker whose ``isinstance`` accepts exactly those values.
@@ -77,10 +83,13 @@ __all__ = [
     "IntLike",
     "Integer",
     "MapSize",
+    "Options",
     "Real",
     "Row",
     "Scalar",
+    "Status",
     "Truth",
+    "Vertices",
     "shapes_checked",
 ]
 
@@ -97,6 +106,9 @@ if TYPE_CHECKING:
     Scalar: TypeAlias = Any
     Truth: TypeAlias = Any
     Row: TypeAlias = Any
+    Status: TypeAlias = Any
+    Options: TypeAlias = Any
+    Vertices: TypeAlias = Any
 else:
     from numbers import Integral as IntLike
 
@@ -151,6 +163,36 @@ else:
 
     class Row(metaclass=_RowType):
         """Run-time marker of a flat row of components (see the module's docstring)."""
+
+    class _StatusType(type):
+        def __instancecheck__(cls, value: object) -> bool:
+            return _kind(value) in ("i", "u") or hasattr(value, "checks")
+
+    class Status(metaclass=_StatusType):
+        """Run-time marker of a status word (see the module's docstring)."""
+
+    class _OptionsType(type):
+        def __instancecheck__(cls, value: object) -> bool:
+            import types
+
+            named = isinstance(value, tuple) and hasattr(value, "_fields")
+            record = isinstance(value, _np.void) and value.dtype.names is not None
+            return named or record or isinstance(value, types.SimpleNamespace)
+
+    class Options(metaclass=_OptionsType):
+        """Run-time marker of options read by name (see the module's docstring)."""
+
+    class _VerticesType(type):
+        def __instancecheck__(cls, value: object) -> bool:
+            if not isinstance(value, tuple):
+                return False
+            if len(value) == 3:  # per entry: (row, placement, placed)
+                row, placement, placed = value
+                return isinstance(row, Row) and isinstance(placement, Row) and placed in (0, 1)
+            return len(value) == 2 and isinstance(value[0], Row) and isinstance(value[1], Status)
+
+    class Vertices(metaclass=_VerticesType):
+        """Run-time marker of a vertex source (see the module's docstring)."""
 
     class ArrayLike:
         """Run-time marker of an input array type (see the module's docstring)."""
