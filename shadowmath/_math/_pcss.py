@@ -30,8 +30,7 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from shadowmath._boundary._shapes import ArrayLike, Float, Row, Scalar
-from shadowmath._boundary._validate import Array
+from shadowmath._boundary._shapes import Array, ArrayLike, Float, Row, Scalar
 
 from ._formulas import fabs, normalize3, sqrt, where
 
