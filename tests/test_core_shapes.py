@@ -38,18 +38,7 @@ CORE_PACKAGES = ("shadowmath._math", "shadowmath._scene")
 # Cores whose signatures are not yet shaped (being rewritten in parallel); each entry names
 # why. Empty when every core is annotated.
 _REWRITTEN = "its bodies are being rewritten (records for slots, one form per step)"
-PENDING: dict[str, str] = {
-    f"shadowmath._math.{m}": _REWRITTEN
-    for m in (
-        "_ball_support",
-        "_cascade_steps",
-        "_fit_entry",
-        "_loops",
-        "_passes",
-        "_rows",
-        "_vertex_passes",
-    )
-}
+PENDING: dict[str, str] = {f"shadowmath._math.{m}": _REWRITTEN for m in ("_cascade_steps",)}
 
 # The fits' own cores (trusted arrays in, arrays out), checked as the cores of _math are.
 FIT_CORES: dict[str, tuple[str, ...]] = {
@@ -154,12 +143,12 @@ def _checked_specialize(plain: Callable[..., Any]) -> Callable[..., Any]:
         for name in functions
     }
 
-    def wrap(copy: types.FunctionType) -> Callable[..., Any]:
+    def checked(copy: types.FunctionType) -> Callable[..., Any]:
         copy.__annotations__ = originals[copy.__name__].__annotations__
         return _checking(copy)
 
-    def specialize(primitives: Any, wrap_: Any = None, *, loop: bool = True) -> Any:
-        return plain(primitives, wrap if wrap_ is None else wrap_, loop=loop)
+    def specialize(primitives: Any, wrap: Any = None, *, loop: bool = True) -> Any:
+        return plain(primitives, checked if wrap is None else wrap, loop=loop)
 
     return specialize
 
@@ -200,9 +189,14 @@ _FORMULA_MODULES = {module.__name__ for module, _ in _specialize._MODULES}
 
 def _caches() -> list[Any]:
     """The caches that hold specialized formulas."""
-    from shadowmath._fits.shadow import _arrays
+    from shadowmath._fits.shadow import _arrays, _driver
 
-    return [_specialize.formulas, _specialize.scalar_formulas, _arrays._namespace]
+    return [
+        _specialize.formulas,
+        _specialize.scalar_formulas,
+        _arrays._namespace,
+        _driver._jitted_fit,
+    ]
 
 
 BOX = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (4, 6)], np.float64)
@@ -247,6 +241,20 @@ def test_the_cores_keep_their_signatures_on_the_python_loop(checked_cores):
 def test_the_cores_keep_their_signatures_on_whole_arrays(checked_cores):
     with _kernels.array_path():
         _fits()
+
+
+def test_the_cores_keep_their_signatures_around_the_compiled_loop(checked_cores):
+    """With Numba the loops run compiled (unchecked); the doors' cores are still checked."""
+    _fits()
+
+
+def test_the_cores_keep_their_signatures_under_jax(checked_cores):
+    """Traced: the components are tracers, the status a record of checks."""
+    import jax.numpy as jnp
+
+    lights = jnp.asarray([[0.0, 0.0, 0.0], [0.1, 0.0, -0.1]])
+    sm.fit_shadow(lights, jnp.asarray(BOX), 64, receivers=sm.Triangles(jnp.asarray(GROUND[None])))
+    sm.fit_shadow(sm.DirectionalLight(jnp.asarray([0.1, 0.2, 1.0])), jnp.asarray(BOX), 64)
 
 
 def test_the_checked_cores_refuse_what_their_signatures_refuse(checked_cores):

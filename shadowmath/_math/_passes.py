@@ -14,6 +14,7 @@ from __future__ import annotations
 from types import ModuleType
 from typing import NamedTuple
 
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import Array
 
 
@@ -35,7 +36,13 @@ class Extent(NamedTuple):
     ry: Array
 
 
-def spread(xp: ModuleType, light: Array, verts: Array, *, aim: str) -> Spread:
+def spread(
+    xp: ModuleType,
+    light: Float[Array, "*#batch 3"],
+    verts: Float[Array, "*#batch N 3"],
+    *,
+    aim: str,
+) -> Spread:
     """Pass 1 over ``verts`` ``(*batch, N, 3)`` seen from ``light`` ``(*batch, 3)``."""
     offsets = [verts[..., i] - light[..., None, i] for i in range(3)]  # per component: fused
     if aim == "mean":
@@ -51,7 +58,12 @@ def spread(xp: ModuleType, light: Array, verts: Array, *, aim: str) -> Spread:
     return Spread(direction, coords, reach)
 
 
-def extent(xp: ModuleType, light: Array, verts: Array, axes: tuple[Array, Array, Array]) -> Extent:
+def extent(
+    xp: ModuleType,
+    light: Float[Array, "*#batch 3"],
+    verts: Float[Array, "*#batch N 3"],
+    axes: tuple[Float[Array, "*#batch 3"], Float[Array, "*#batch 3"], Float[Array, "*#batch 3"]],
+) -> Extent:
     """Pass 2: light coordinates and projection ratios of every vertex.
 
     ``axes = (X, Y, Z)``: the light frame's ``(*batch, 3)`` axes.
