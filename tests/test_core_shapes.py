@@ -173,8 +173,8 @@ def checked_cores(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
             continue
         for attr, value in list(vars(module).items()):
             if isinstance(value, types.FunctionType) and id(value) in checked:
-                if attr in formula_names and mod_name in _FORMULA_MODULES:
-                    continue  # specialize copies the module's own function
+                if mod_name in _FORMULA_MODULES:
+                    continue  # specialize (and Numba) read these modules' own functions
                 monkeypatch.setattr(module, attr, checked[id(value)])
     caches = _caches()
     for cache in caches:
