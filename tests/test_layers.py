@@ -39,7 +39,8 @@ CLIENTS = ("render", "integrations", "cli", "__main__")
 #: _boundary/_shapes.py included: shapes in signatures), and the warning of a renamed
 #: field of a public type that a core defines (``Frustum``'s and ``OrthographicBox``'s).
 BOUNDARY_TYPES = {"Array", "Context", "ArrayLike", "Bool", "Float", "Int", "IntLike", "Integer"}
-BOUNDARY_TYPES |= {"MapSize", "Real", "warn_renamed"}
+BOUNDARY_TYPES |= {"MapSize", "Real", "warn_renamed", "Row", "Scalar", "Truth"}
+BOUNDARY_TYPES |= {"Options", "Status", "Vertices"}
 
 #: Each fit's package under ``shadowmath/_fits/``: its modules and what each is.
 FITS: dict[str, dict[str, str]] = {

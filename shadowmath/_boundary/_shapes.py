@@ -25,6 +25,27 @@ the annotations are well formed; the shapes and dtypes are checked at run time, 
 tests. (``numpy.typing.ArrayLike`` for inputs would make mypy refuse the cores' use of
 the arguments they receive, which are typed ``Any`` today.)
 
+**The cores' per-entry values.** A per-entry formula (``_math/_formulas.py`` and the
+other modules that :func:`shadowmath._math._specialize.specialize` binds) runs on one
+batch entry (Python or Numba floats) and on whole arrays (NumPy, JAX) alike, so its
+parameters are typed by what they are in both:
+
+* :data:`Scalar`: one real component, a number per entry or an array of the batch's
+  shape (components broadcast: a cascade's ``(*batch, C)`` beside a camera's
+  ``(*batch, 1)``, so the shape is not held to one memo);
+* :data:`Truth`: one boolean component, ``bool`` per entry or a boolean array;
+* :data:`Row`: a flat row of components, a sequence of numbers per entry (a tuple, a list,
+  or a 1-D NumPy buffer in the compiled loops) or a tuple of arrays of the batch's shape.
+* :data:`Status`: a fit's status word, an ``int`` of bits per entry, an integer array, or
+  on whole arrays a record of each check by its bit (``_fits/shadow/_arrays.Flags``);
+* :data:`Options`: a fit's static options read by name, a ``NamedTuple`` on arrays, a
+  NumPy record in the compiled loop, a ``SimpleNamespace`` in its Python run;
+* :data:`Vertices`: the casters as a fit's vertex passes read them, per entry
+  ``(flat row, placement's 16 entries, placed)``, on arrays ``(components, status)``.
+
+For mypy they are ``Any``, as :data:`Array` is; at run time (the suite's checked cores)
+each is a marker whose ``isinstance`` accepts exactly those values.
+
 ``*#batch`` marks leading batch dimensions that broadcast against the other arguments'; a
 named size (``N``) is one size in every argument and result of a call, ``_`` any size (the
 fields of a type that one call may hold twice, such as :class:`Mesh`).
@@ -62,7 +83,13 @@ __all__ = [
     "IntLike",
     "Integer",
     "MapSize",
+    "Options",
     "Real",
+    "Row",
+    "Scalar",
+    "Status",
+    "Truth",
+    "Vertices",
     "shapes_checked",
 ]
 
@@ -76,6 +103,12 @@ if TYPE_CHECKING:
     IntLike: TypeAlias = int
     BoolLike: TypeAlias = bool
     MapSize: TypeAlias = int | tuple[int, int]
+    Scalar: TypeAlias = Any
+    Truth: TypeAlias = Any
+    Row: TypeAlias = Any
+    Status: TypeAlias = Any
+    Options: TypeAlias = Any
+    Vertices: TypeAlias = Any
 else:
     from numbers import Integral as IntLike
 
@@ -93,6 +126,73 @@ else:
 
     class MapSize(metaclass=_MapSizeType):
         """Run-time marker of a map size: an integer or two (see the module's docstring)."""
+
+    def _kind(value: object) -> str:
+        """The dtype kind of a number or an array (``b``, ``i``, ``u``, ``f``...), else ``""``."""
+        if isinstance(value, bool | _np.bool_):
+            return "b"
+        if isinstance(value, int | float):
+            return "f" if isinstance(value, float) else "i"
+        dtype = getattr(value, "dtype", None)
+        if dtype is None or not hasattr(value, "shape"):
+            return ""
+        return str(_np.dtype(dtype).kind)
+
+    class _ComponentType(type):
+        kinds = ""
+
+        def __instancecheck__(cls, value: object) -> bool:
+            kind = _kind(value)
+            return bool(kind) and kind in cls.kinds
+
+    class Scalar(metaclass=_ComponentType):
+        """Run-time marker of a real component: a number or a real array."""
+
+        kinds = "iuf"
+
+    class Truth(metaclass=_ComponentType):
+        """Run-time marker of a boolean component: a ``bool`` or a boolean array."""
+
+        kinds = "b"
+
+    class _RowType(type):
+        def __instancecheck__(cls, value: object) -> bool:
+            if isinstance(value, tuple | list):
+                return all(isinstance(v, Scalar | Truth) for v in value)
+            return getattr(value, "ndim", None) == 1 and isinstance(value, Scalar)
+
+    class Row(metaclass=_RowType):
+        """Run-time marker of a flat row of components (see the module's docstring)."""
+
+    class _StatusType(type):
+        def __instancecheck__(cls, value: object) -> bool:
+            return _kind(value) in ("i", "u") or hasattr(value, "checks")
+
+    class Status(metaclass=_StatusType):
+        """Run-time marker of a status word (see the module's docstring)."""
+
+    class _OptionsType(type):
+        def __instancecheck__(cls, value: object) -> bool:
+            import types
+
+            named = isinstance(value, tuple) and hasattr(value, "_fields")
+            record = isinstance(value, _np.void) and value.dtype.names is not None
+            return named or record or isinstance(value, types.SimpleNamespace)
+
+    class Options(metaclass=_OptionsType):
+        """Run-time marker of options read by name (see the module's docstring)."""
+
+    class _VerticesType(type):
+        def __instancecheck__(cls, value: object) -> bool:
+            if not isinstance(value, tuple):
+                return False
+            if len(value) == 3:  # per entry: (row, placement, placed)
+                row, placement, placed = value
+                return isinstance(row, Row) and isinstance(placement, Row) and placed in (0, 1)
+            return len(value) == 2 and isinstance(value[0], Row) and isinstance(value[1], Status)
+
+    class Vertices(metaclass=_VerticesType):
+        """Run-time marker of a vertex source (see the module's docstring)."""
 
     class ArrayLike:
         """Run-time marker of an input array type (see the module's docstring)."""

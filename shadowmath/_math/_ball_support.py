@@ -25,7 +25,6 @@ agree to rounding. Trusted inputs: float64 ``(count, N, 3)``.
 from __future__ import annotations
 
 import itertools
-from typing import Any
 
 import numpy as np
 
@@ -114,7 +113,9 @@ def _farthest(xyz: np.ndarray, p: np.ndarray) -> np.ndarray:
     return far
 
 
-def _farthest_outside(xyz: np.ndarray, ball: np.ndarray, todo: np.ndarray) -> Any:
+def _farthest_outside(
+    xyz: np.ndarray, ball: np.ndarray, todo: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """The entries of ``todo`` with a point outside their sphere, and that farthest point."""
     p, b = xyz[:, todo], ball[:, todo, None]
     outside = formulas(np)._outside(p, b)
@@ -124,7 +125,9 @@ def _farthest_outside(xyz: np.ndarray, ball: np.ndarray, todo: np.ndarray) -> An
     return todo[going], far[going]
 
 
-def _grow(xyz: np.ndarray, support: np.ndarray, far: np.ndarray) -> Any:
+def _grow(
+    xyz: np.ndarray, support: np.ndarray, far: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Support, sphere ``(4, A)`` and success of ``MB(S + p)`` for entries of one support
     size ``k``, ``p`` their point ``far``."""
     k = int(support[0, 4])

@@ -25,6 +25,7 @@ import math
 from types import ModuleType
 from typing import Literal
 
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import Array
 
 from ._vector import cross, dot, norm
@@ -55,7 +56,9 @@ def kernel_reach(radius: int, filter: PcfFilter) -> float:
 # ---------------------------------------------------------------------------
 
 
-def texture_gradients(xp: ModuleType, M: Array, p: Array) -> tuple[Array, Array, Array]:
+def texture_gradients(
+    xp: ModuleType, M: Float[Array, "*#batch 4 4"], p: Float[Array, "*#batch 3"]
+) -> tuple[Float[Array, "*batch 3"], Float[Array, "*batch 3"], Float[Array, "*batch 3"]]:
     """``(grad s, grad t, grad r)`` at ``p``, each ``(*batch, 3)``; requires ``q > 0``."""
     hom = xp.sum(M[..., :3] * p[..., None, :], axis=-1) + M[..., 3]  # (*batch, 4)
     q = hom[..., 3:]
@@ -64,7 +67,12 @@ def texture_gradients(xp: ModuleType, M: Array, p: Array) -> tuple[Array, Array,
     return grads[..., 0, :], grads[..., 1, :], grads[..., 2, :]
 
 
-def texel_size(xp: ModuleType, M: Array, p: Array, size: tuple[int, int]) -> Array:
+def texel_size(
+    xp: ModuleType,
+    M: Float[Array, "*#batch 4 4"],
+    p: Float[Array, "*#batch 3"],
+    size: tuple[int, int],
+) -> Float[Array, "*batch"]:
     """``sqrt(1 / (W H |grad s x grad t|))``: the width across the ray, ``size = (W, H)``."""
     W, H = size
     gs, gt, _ = texture_gradients(xp, M, p)
@@ -73,8 +81,12 @@ def texel_size(xp: ModuleType, M: Array, p: Array, size: tuple[int, int]) -> Arr
 
 
 def texel_size_on_surface(
-    xp: ModuleType, M: Array, p: Array, n: Array, size: tuple[int, int]
-) -> Array:
+    xp: ModuleType,
+    M: Float[Array, "*#batch 4 4"],
+    p: Float[Array, "*#batch 3"],
+    n: Float[Array, "*#batch 3"],
+    size: tuple[int, int],
+) -> Float[Array, "*batch"]:
     """``sqrt(1 / (W H |(grad s x grad t) . n|))`` with ``n`` unit: the texel on the surface.
 
     ``size = (W, H)``: the map's texels.
@@ -87,7 +99,13 @@ def texel_size_on_surface(
     return xp.where(edge_on, xp.asarray(math.inf, dtype=det.dtype), size)
 
 
-def _depth_slope(xp: ModuleType, M: Array, p: Array, n: Array, size: tuple[int, int]) -> Array:
+def _depth_slope(
+    xp: ModuleType,
+    M: Float[Array, "*#batch 4 4"],
+    p: Float[Array, "*#batch 3"],
+    n: Float[Array, "*#batch 3"],
+    size: tuple[int, int],
+) -> Float[Array, "*batch 2"]:
     """``(*batch, 2)``: ``dr/dx`` and ``dr/dy`` per texel along the surface of normal ``n``.
 
     In the tangent plane the step ``v = (grad t x n) / ((grad s x grad t) . n)`` has
@@ -111,29 +129,29 @@ def _depth_slope(xp: ModuleType, M: Array, p: Array, n: Array, size: tuple[int, 
 
 def slope_scaled_bias(
     xp: ModuleType,
-    M: Array,
-    p: Array,
-    n: Array,
+    M: Float[Array, "*#batch 4 4"],
+    p: Float[Array, "*#batch 3"],
+    n: Float[Array, "*#batch 3"],
     size: tuple[int, int],
     *,
     constant: float,
     slope_factor: float,
     depth_resolution: float,
-) -> Array:
+) -> Float[Array, "*batch"]:
     slope = xp.max(_depth_slope(xp, M, p, n, size), axis=-1)
     return constant * depth_resolution + slope_factor * slope
 
 
 def normal_offset(
     xp: ModuleType,
-    M: Array,
-    p: Array,
-    n: Array,
+    M: Float[Array, "*#batch 4 4"],
+    p: Float[Array, "*#batch 3"],
+    n: Float[Array, "*#batch 3"],
     size: tuple[int, int],
     *,
     reach: float,
     scale: float,
-) -> Array:
+) -> Float[Array, "*batch 3"]:
     """``n * scale * reach * (|grad r . (grad t x n)| / W + |grad r . (n x grad s)| / H)
     / (|D| |grad r . d|)`` with ``n`` unit, ``D = grad s x grad t``, ``d = D / |D|``,
     ``size = (W, H)``."""

@@ -21,9 +21,12 @@ side values and view depth (``boxp = (bl, bg)``, 8 x 3 and 8 x 5) and the slice'
 from __future__ import annotations
 
 import math
+from types import ModuleType
 from typing import Any, NamedTuple
 
 import numpy as np
+
+from shadowmath._boundary._shapes import Row, Scalar, Truth
 
 # Shared formulas and primitives (the mode's buffer and array namespace), rebound by specialize().
 from ._cascade_formulas import (  # noqa: F401
@@ -132,7 +135,7 @@ def points_bounds(pts: Any, m: Any, bl: Any) -> Any:
     return LightBounds(lx, hx_, ly, hy_, min(min(zb, lz), hz), hz, zb, zt)
 
 
-def _outcodes(gs: Any, bg: Any, d: Any) -> Any:
+def _outcodes(gs: Row, bg: Row, d: tuple[Scalar, Scalar]) -> tuple[Row, Row]:
     """The slice's corners' outcodes against the box, the box's against the slice."""
     s0, s1 = d
     cs, cb = alloc(8), alloc(8)
@@ -151,7 +154,9 @@ def _outcodes(gs: Any, bg: Any, d: Any) -> Any:
     return cs, cb
 
 
-def _clip_crossed(gs: Any, bg: Any, d: Any, edge: Any, crossed: int) -> Any:
+def _clip_crossed(
+    gs: Row, bg: Row, d: tuple[Scalar, Scalar], edge: tuple[int, int, int], crossed: int
+) -> tuple[Scalar, Scalar, Truth]:
     """Edge ``edge = (e, k0, k1)`` clipped by the planes an end is outside of (``crossed``;
     the others change nothing): ``(t0, t1, ok)``."""
     e, k0, k1 = edge
@@ -173,7 +178,9 @@ def _clip_crossed(gs: Any, bg: Any, d: Any, edge: Any, crossed: int) -> Any:
     return t0, t1, ok and t0 <= t1
 
 
-def cascade_body(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
+def cascade_body(
+    lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar]
+) -> tuple[list[Scalar], Truth, tuple[Scalar, ...], tuple[Scalar, ...]]:
     """The array form's vertices: ``(ends, ok, slice_corners, box_corners)``: ``ends`` three
     ``(*b, n, 48)`` arrays (both clipped ends of the 24 edges), ``ok`` ``(*b, n, 48)`` True
     where the edge kept a part; the slices' corners ``(*b, n, 8)`` and the box's
@@ -198,19 +205,21 @@ def cascade_body(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
     return ends, xp.concat([ok, ok], axis=-1), sl, bc
 
 
-def _corners(xp: Any, buffer: Any, m: int) -> Any:
+def _corners(xp: ModuleType, buffer: Row, m: int) -> tuple[Scalar, ...]:
     """``m`` arrays ``(..., 8)``: value ``c`` of the eight corners of a buffer of 8 x m."""
     stacked = xp.stack(xp.broadcast_arrays(*buffer), axis=-1)
     stacked = xp.reshape(stacked, (*stacked.shape[:-1], 8, m))
     return tuple(stacked[..., c] for c in range(m))
 
 
-def _bounds_array(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
+def _bounds_array(lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar]) -> LightBounds:
     """The array form: :func:`cascade_body`'s vertices reduced over the last axis."""
     return body_bounds(cascade_body(lc, gs, boxp, d))
 
 
-def body_bounds(body: Any) -> Any:
+def body_bounds(
+    body: tuple[list[Scalar], Truth, tuple[Scalar, ...], tuple[Scalar, ...]],
+) -> LightBounds:
     """:func:`cascade_body`'s vertices reduced over the last axis: the array form's
     :class:`LightBounds`."""
     xp = array_api

@@ -32,6 +32,8 @@ import math
 from typing import Any
 
 # Backend primitives and shared formulas, rebound by specialize().
+from shadowmath._boundary._shapes import Row, Scalar, Truth
+
 from ._fit_formulas import rint, stable_sides  # noqa: F401  (looked up by the specialized copies)
 from ._formulas import fabs, log2, sqrt, where  # noqa: F401
 
@@ -50,7 +52,7 @@ EDGES = (
 )  # fmt: skip
 
 
-def split_depth(near: Any, far: Any, lam: Any, frac: Any) -> Any:
+def split_depth(near: Scalar, far: Scalar, lam: Scalar, frac: Scalar) -> Scalar:
     r"""The practical split at the fraction ``frac = i / N``: ``lam`` log plus ``1 - lam`` uniform.
 
     .. math:: s = \lambda\, n (f / n)^{i/N} + (1 - \lambda) (n + (f - n)\, i / N)
@@ -68,7 +70,7 @@ LADDER_STEPS = 4.0
 HYSTERESIS_STEPS = 1.0
 
 
-def ladder_up(x: Any) -> Any:
+def ladder_up(x: Scalar) -> Scalar:
     r"""The smallest ladder value ``2^(k/4) >= x`` (``k`` whole); ``x <= 0`` unchanged.
 
     .. math:: k = \lceil 4 \log_2 x \rceil
@@ -82,7 +84,7 @@ def ladder_up(x: Any) -> Any:
     return where(x > 0, q, x)
 
 
-def ladder_hold(t: Any, p: Any) -> Any:
+def ladder_hold(t: Scalar, p: Scalar) -> Scalar:
     r"""A value ``>= t`` on the ladder, with hysteresis: ``p`` (the last one) or ``q``.
 
     With ``q`` = :func:`ladder_up` of ``t`` and one step ``s = 2^{1/4}``:
@@ -99,7 +101,9 @@ def ladder_hold(t: Any, p: Any) -> Any:
     return where(keep, p, where(q >= t, q, t))
 
 
-def depth_hysteresis(t_lo: Any, t_hi: Any, p_lo: Any, p_hi: Any) -> tuple[Any, Any]:
+def depth_hysteresis(
+    t_lo: Scalar, t_hi: Scalar, p_lo: Scalar, p_hi: Scalar
+) -> tuple[Scalar, Scalar]:
     r"""The depth range in use: the target ``[t_lo, t_hi]`` widened to the ladder with
     hysteresis, from the last one ``[p_lo, p_hi]`` (NaN: none).
 
@@ -116,7 +120,9 @@ def depth_hysteresis(t_lo: Any, t_hi: Any, p_lo: Any, p_hi: Any) -> tuple[Any, A
     return lo, ladder_hold(t_hi, p_hi)
 
 
-def edge_point(n: tuple[Any, ...], f: tuple[Any, ...], s: Any, d: Any) -> tuple[Any, Any, Any]:
+def edge_point(
+    n: tuple[Scalar, ...], f: tuple[Scalar, ...], s: Scalar, d: Scalar
+) -> tuple[Scalar, Scalar, Scalar]:
     r"""The point at view depth ``d`` on the camera frustum's edge from ``n`` toward ``f``.
 
     ``n = (x, y, z)``: the edge's near corner in view space; ``f = (x, y, z, w)``:
@@ -139,7 +145,7 @@ def edge_point(n: tuple[Any, ...], f: tuple[Any, ...], s: Any, d: Any) -> tuple[
     )
 
 
-def affine(m: tuple[Any, ...], x: Any, y: Any, z: Any) -> tuple[Any, Any, Any]:
+def affine(m: tuple[Scalar, ...], x: Scalar, y: Scalar, z: Scalar) -> tuple[Scalar, Scalar, Scalar]:
     """``m[:3] @ (x, y, z, 1)`` for a 4x4 affine matrix given as 12 row-major entries."""
     return (
         m[0] * x + m[1] * y + m[2] * z + m[3],
@@ -148,7 +154,9 @@ def affine(m: tuple[Any, ...], x: Any, y: Any, z: Any) -> tuple[Any, Any, Any]:
     )
 
 
-def camera_values(pv: tuple[Any, ...], x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any, Any]:
+def camera_values(
+    pv: tuple[Scalar, ...], x: Scalar, y: Scalar, z: Scalar
+) -> tuple[Scalar, Scalar, Scalar, Scalar, Scalar]:
     """The camera's four side values ``w - x, w + x, w - y, w + y`` (clip) and ``w``'s row ``z``.
 
     ``pv``: the 16 row-major entries of ``projection @ view``; the fifth value is
@@ -160,7 +168,9 @@ def camera_values(pv: tuple[Any, ...], x: Any, y: Any, z: Any) -> tuple[Any, Any
     return cw - cx, cw + cx, cw - cy, cw + cy, cw
 
 
-def slice_values(sides: tuple[Any, ...], depth: Any, a: Any, b: Any) -> tuple[Any, ...]:
+def slice_values(
+    sides: tuple[Scalar, ...], depth: Scalar, a: Scalar, b: Scalar
+) -> tuple[Scalar, ...]:
     """The slice's six half-space values at a point, all ``>= 0`` inside.
 
     ``sides``: :func:`camera_values` (its first four); ``depth``: the point's view
@@ -171,12 +181,14 @@ def slice_values(sides: tuple[Any, ...], depth: Any, a: Any, b: Any) -> tuple[An
     return sides[0], sides[1], sides[2], sides[3], depth - a, b - depth
 
 
-def box_values(x: Any, y: Any, z: Any, lo: tuple[Any, ...], hi: tuple[Any, ...]) -> tuple[Any, ...]:
+def box_values(
+    x: Scalar, y: Scalar, z: Scalar, lo: tuple[Scalar, ...], hi: tuple[Scalar, ...]
+) -> tuple[Scalar, ...]:
     """The scene box's six half-space values at a point, all ``>= 0`` inside."""
     return x - lo[0], hi[0] - x, y - lo[1], hi[1] - y, z - lo[2], hi[2] - z
 
 
-def clip_segment(g0: tuple[Any, ...], g1: tuple[Any, ...]) -> tuple[Any, Any, Any]:
+def clip_segment(g0: tuple[Scalar, ...], g1: tuple[Scalar, ...]) -> tuple[Scalar, Scalar, Truth]:
     r"""Liang–Barsky: the part ``[t_0, t_1]`` of a segment inside six half-spaces, and whether any.
 
     ``g0``, ``g1``: the six affine half-space values at the segment's ends, so
@@ -190,7 +202,9 @@ def clip_segment(g0: tuple[Any, ...], g1: tuple[Any, ...]) -> tuple[Any, Any, An
     return t0, t1, ok & (t0 <= t1)
 
 
-def clip_plane(t0: Any, t1: Any, ok: Any, a: Any, b: Any) -> tuple[Any, Any, Any]:
+def clip_plane(
+    t0: Scalar, t1: Scalar, ok: Truth, a: Scalar, b: Scalar
+) -> tuple[Scalar, Scalar, Truth]:
     """One half-space of :func:`clip_segment`, with values ``a``, ``b`` at the ends.
 
     A plane crossed from outside to inside raises ``t_0`` to ``a / (a - b)``, one
@@ -208,8 +222,8 @@ def clip_plane(t0: Any, t1: Any, ok: Any, a: Any, b: Any) -> tuple[Any, Any, Any
 
 
 def slice_sphere(
-    corners: tuple[Any, ...],
-) -> tuple[Any, Any, Any, Any]:
+    corners: tuple[Scalar, ...],
+) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     r"""A sphere around a slice's eight corners (24 numbers, view space): centre and ``r^2``.
 
     With ``m_n``, ``m_f`` the centres of the near and far rectangles and ``r_n``,
@@ -239,7 +253,7 @@ def slice_sphere(
                                    _far2(corners, 0, c), _far2(corners, 4, c))  # fmt: skip
 
 
-def _mean4(corners: tuple[Any, ...], first: int) -> tuple[Any, Any, Any]:
+def _mean4(corners: tuple[Scalar, ...], first: int) -> tuple[Scalar, Scalar, Scalar]:
     """The mean of the four corners from ``first``."""
     k = 3 * first
     return (
@@ -249,7 +263,7 @@ def _mean4(corners: tuple[Any, ...], first: int) -> tuple[Any, Any, Any]:
     )
 
 
-def _far2(corners: tuple[Any, ...], first: int, c: Any) -> Any:
+def _far2(corners: tuple[Scalar, ...], first: int, c: Row) -> Scalar:
     """The largest squared distance from ``c`` to the four corners from ``first``."""
     best = c[0] * 0.0
     for k in range(first, first + 4):
@@ -262,8 +276,8 @@ def _far2(corners: tuple[Any, ...], first: int, c: Any) -> Any:
 
 
 def cascade_box(
-    bounds: tuple[Any, Any, Any, Any, Any, Any],
-) -> tuple[Any, Any, Any, Any, Any, Any]:
+    bounds: tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar],
+) -> tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar]:
     """The map's box ``(h_x, h_y, c_x, c_y, near, far)`` from light-space bounds, origin-free.
 
     ``bounds = (lo_x, hi_x, lo_y, hi_y, z_lo, z_hi)`` in light coordinates about

@@ -39,7 +39,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from shadowmath._boundary._shapes import Float, Int
+from shadowmath._boundary._shapes import Float, Int, Scalar
 from shadowmath._boundary._validate import Array
 
 # api -> (clip depth 0..1 instead of -1..1, NDC +y is the image's first row).
@@ -136,7 +136,7 @@ def _rotation_constant(dtype: np.dtype[Any]) -> np.ndarray:
     return R
 
 
-def _rotations(xp: ModuleType, dtype: Any) -> Array:
+def _rotations(xp: ModuleType, dtype: np.dtype[Any]) -> Float[Array, "6 3 3"]:
     return xp.asarray(_rotation_constant(np.dtype(dtype)))  # (6, 3, 3)
 
 
@@ -160,14 +160,16 @@ def _projection_constants(
     return constants
 
 
-def _select_face(xp: ModuleType, face: Array, candidates: Array) -> Array:
+def _select_face(
+    xp: ModuleType, face: Int[Array, "*#batch"], candidates: Float[Array, "*#batch 6 k"]
+) -> Float[Array, "*batch k"]:
     """``candidates[..., face, :]`` for ``candidates (*batch, 6, k)`` (a where, not a gather)."""
     onehot = face[..., None] == xp.arange(6, dtype=face.dtype)
     zero = xp.zeros((), dtype=candidates.dtype)
     return xp.sum(xp.where(onehot[..., None], candidates, zero), axis=-2)
 
 
-def major_face(xp: ModuleType, d: Array) -> Array:
+def major_face(xp: ModuleType, d: Float[Array, "*batch 3"]) -> Int[Array, "*batch"]:
     """The face index (int32) of ``d``: the major axis, ties by Vulkan's rule (z, then y, then x).
 
     The one face selection of the package: :func:`cube_face` and
@@ -185,14 +187,18 @@ def major_face(xp: ModuleType, d: Array) -> Array:
 # ------------------------------------------------------------------ cores
 
 
-def cube_face_views(xp: ModuleType, light: Array) -> Array:
+def cube_face_views(
+    xp: ModuleType, light: Float[Array, "*batch 3"]
+) -> Float[Array, "*batch 6 4 4"]:
     A, index, sign = _view_constants(light.dtype)
     if xp is not np:
         A, sign = xp.asarray(A), xp.asarray(sign)
     return A + light[..., index] * sign  # (*batch, 6, 4, 4)
 
 
-def depth_row(near: Array, far: Array, zero_to_one: bool, reversed_z: bool) -> tuple[Array, Array]:
+def depth_row(
+    near: Scalar, far: Scalar, zero_to_one: bool, reversed_z: bool
+) -> tuple[Scalar, Scalar]:
     """The depth row ``(0, 0, a, b)`` of the projection: clip ``z = a z_v + b``, ``w = -z_v = D``.
 
     Plain arithmetic: ``near, far`` may be arrays or NumPy scalars.
@@ -210,14 +216,14 @@ def depth_row(near: Array, far: Array, zero_to_one: bool, reversed_z: bool) -> t
 
 def cube_face_projection(
     xp: ModuleType,
-    near: Array,
-    far: Array,
+    near: Float[Array, "*#batch"],
+    far: Float[Array, "*#batch"],
     scale: float,
     *,
     zero_to_one: bool,
     flip_y: bool,
     reversed_z: bool,
-) -> Array:
+) -> Float[Array, "*batch 4 4"]:
     """``(*batch, 4, 4)`` from ``(*batch,)`` arrays ``near, far``."""
     a, b = depth_row(near, far, zero_to_one, reversed_z)
     P0, at_a, at_b = (xp.asarray(c) for c in _projection_constants(a.dtype, scale, flip_y))
@@ -226,8 +232,8 @@ def cube_face_projection(
 
 
 def cube_face_projection_scalar(
-    near: Any, far: Any, scale: float, *, zero_to_one: bool, flip_y: bool, reversed_z: bool
-) -> Array:
+    near: Scalar, far: Scalar, scale: float, *, zero_to_one: bool, flip_y: bool, reversed_z: bool
+) -> Float[Array, "4 4"]:
     """:func:`cube_face_projection` of one light's NumPy scalars, entry by entry."""
     a, b = depth_row(near, far, zero_to_one, reversed_z)
     sy = -scale if flip_y else scale
@@ -235,7 +241,9 @@ def cube_face_projection_scalar(
     return np.array(entries, dtype=a.dtype).reshape(4, 4)
 
 
-def cube_face(xp: ModuleType, d: Array) -> tuple[Array, Array, Array]:
+def cube_face(
+    xp: ModuleType, d: Float[Array, "*batch 3"]
+) -> tuple[Int[Array, "*batch"], Float[Array, "*batch"], Float[Array, "*batch"]]:
     face = major_face(xp, d)
     R = _rotations(xp, d.dtype)
     view = xp.sum(R * d[..., None, None, :], axis=-1)  # (*batch, 6, 3): (s_c, t_c, -|m_a|)
@@ -245,7 +253,12 @@ def cube_face(xp: ModuleType, d: Array) -> tuple[Array, Array, Array]:
     return face, (sc / ma + 1) / 2, (tc / ma + 1) / 2
 
 
-def cube_face_direction(xp: ModuleType, face: Array, s: Array, t: Array) -> Array:
+def cube_face_direction(
+    xp: ModuleType,
+    face: Int[Array, "*#batch"],
+    s: Float[Array, "*#batch"],
+    t: Float[Array, "*#batch"],
+) -> Float[Array, "*batch 3"]:
     sc, tc = 2 * s - 1, 2 * t - 1
     v = xp.stack([sc, tc, -xp.ones_like(sc)], axis=-1)  # view coordinates, |m_a| = 1
     R = _rotations(xp, v.dtype)
@@ -254,7 +267,13 @@ def cube_face_direction(xp: ModuleType, face: Array, s: Array, t: Array) -> Arra
     return _select_face(xp, xp.astype(face, xp.int32), world)
 
 
-def face_depth(xp: ModuleType, D: Array, near: Array, far: Array, reversed_z: bool) -> Array:
+def face_depth(
+    xp: ModuleType,
+    D: Float[Array, "*#batch"],
+    near: Float[Array, "*#batch"],
+    far: Float[Array, "*#batch"],
+    reversed_z: bool,
+) -> Float[Array, "*batch"]:
     span = far - near
     if reversed_z:
         return near * (far - D) / (span * D)

@@ -22,9 +22,12 @@ Trusted inputs: nothing here raises.
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from types import ModuleType
+from typing import NamedTuple
 
 import numpy as np
+
+from shadowmath._boundary._shapes import Array, Bool, Float, Int
 
 __all__ = ["Rectangle", "min_area_rectangle"]
 
@@ -37,15 +40,17 @@ class Rectangle(NamedTuple):
         lo_u, hi_u, lo_v, hi_v: ``(*b,)`` its bounds along ``u`` and ``v``.
     """
 
-    c: Any
-    s: Any
-    lo_u: Any
-    hi_u: Any
-    lo_v: Any
-    hi_v: Any
+    c: Float[Array, "*b"]
+    s: Float[Array, "*b"]
+    lo_u: Float[Array, "*b"]
+    hi_u: Float[Array, "*b"]
+    lo_v: Float[Array, "*b"]
+    hi_v: Float[Array, "*b"]
 
 
-def min_area_rectangle(xp: Any, x: Any, y: Any, ok: Any) -> Rectangle:
+def min_area_rectangle(
+    xp: ModuleType, x: Float[Array, "*b m"], y: Float[Array, "*b m"], ok: Bool[Array, "*b m"]
+) -> Rectangle:
     """The least-area rectangle enclosing the points ``(x, y)`` where ``ok``.
 
     Arguments:
@@ -97,7 +102,7 @@ def min_area_rectangle(xp: Any, x: Any, y: Any, ok: Any) -> Rectangle:
 CHUNK_VALUES = 1 << 22
 
 
-def _pairs(shape: tuple[int, ...]) -> list[tuple[Any, Any]]:
+def _pairs(shape: tuple[int, ...]) -> list[tuple[Int[Array, " k"], Int[Array, " k"]]]:
     """The index pairs ``i < j`` of ``shape[-1]`` points, in chunks of one length (padded
     with ``(0, 0)``: no direction), so that each chunk holds at most about
     :data:`CHUNK_VALUES` values over the batch (and JAX compiles one shape)."""
@@ -112,7 +117,12 @@ def _pairs(shape: tuple[int, ...]) -> list[tuple[Any, Any]]:
     return [(i[k : k + size], j[k : k + size]) for k in range(0, len(i), size)]
 
 
-def _bounds(xp: Any, pts: tuple[Any, Any, Any], c: Any, s: Any) -> tuple[Any, Any, Any, Any]:
+def _bounds(
+    xp: ModuleType,
+    pts: tuple[Float[Array, "..."], Float[Array, "..."], Bool[Array, "..."]],
+    c: Float[Array, "..."],
+    s: Float[Array, "..."],
+) -> tuple[Float[Array, "..."], Float[Array, "..."], Float[Array, "..."], Float[Array, "..."]]:
     """``(min u, max u, min v, max v)`` over the last axis of the ``ok`` points
     ``pts = (x, y, ok)`` in the frame ``(c, s)``."""
     x, y, ok = pts
@@ -126,7 +136,12 @@ def _bounds(xp: Any, pts: tuple[Any, Any, Any], c: Any, s: Any) -> tuple[Any, An
     )
 
 
-def _areas(xp: Any, pts: tuple[Any, Any, Any], c: Any, s: Any) -> Any:
+def _areas(
+    xp: ModuleType,
+    pts: tuple[Float[Array, "..."], Float[Array, "..."], Bool[Array, "..."]],
+    c: Float[Array, "..."],
+    s: Float[Array, "..."],
+) -> Float[Array, "..."]:
     """The bounding box's area in the frame ``(c, s)``."""
     lo_u, hi_u, lo_v, hi_v = _bounds(xp, pts, c, s)
     return (hi_u - lo_u) * (hi_v - lo_v)

@@ -22,10 +22,11 @@ vertex source ``vs`` and the receivers ``R`` are whatever the backend's passes r
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple, TypeAlias
 
 import numpy as np
 
+from shadowmath._boundary._shapes import ArrayLike, Options, Real, Scalar, Status, Truth, Vertices
 from shadowmath._boundary._status import (
     AFFINE_PLACEMENT,
     FORMULA_BITS,
@@ -88,13 +89,26 @@ class FitOptions(NamedTuple):
 class Entry(NamedTuple):
     """One fit's results (per-entry values): what the drivers store or assemble."""
 
-    status: Any
-    origin: tuple[Any, ...]  # 3
-    axes: tuple[Any, ...]  # X, Y, Z: 9
-    box: tuple[Any, ...]  # half_x, half_y, near, far, x_offset, y_offset
-    W: tuple[Any, ...]  # 12
-    clip: tuple[Any, ...]  # 16 (placement not applied)
-    tex: tuple[Any, ...]  # 16
+    status: Status
+    origin: tuple[Scalar, ...]  # 3
+    axes: tuple[Scalar, ...]  # X, Y, Z: 9
+    box: tuple[Scalar, ...]  # half_x, half_y, near, far, x_offset, y_offset
+    W: tuple[Scalar, ...]  # 12
+    clip: tuple[Scalar, ...]  # 16 (placement not applied)
+    tex: tuple[Scalar, ...]  # 16
+
+
+#: One fit's given numbers: the light (3), a spot light's axis, ``tan`` and angle (5), up
+#: (3), the placement (16), the given near and far.
+Given: TypeAlias = tuple[
+    tuple[Scalar, ...], tuple[Scalar, ...], tuple[Scalar, ...], tuple[Scalar, ...],
+    tuple[Scalar, Scalar],
+]  # fmt: skip
+#: A light placed: status, origin (3), axes (9), sides (half-widths, centre), depths (4).
+Placed: TypeAlias = tuple[
+    Status, tuple[Scalar, Scalar, Scalar], tuple[Scalar, ...],
+    tuple[Scalar, Scalar, Scalar, Scalar], tuple[Scalar, Scalar, Scalar, Scalar],
+]  # fmt: skip
 
 
 # A primitive of the backends (specialize binds each backend's own; this is Python's).
@@ -103,7 +117,13 @@ def to_single(x: float) -> float:
     return float(np.float32(x))
 
 
-def fit_entry(given: Any, vs: Any, R: Any, o: Any, api: Any) -> Any:
+def fit_entry(
+    given: Given,
+    vs: Vertices,
+    R: Real[ArrayLike, "... M k"] | None,
+    o: Options,
+    api: tuple[tuple[float, ...], tuple[float, ...]],
+) -> Entry:
     """One entry's fit. ``given = (L, S, U, b, nf)``: the light (3: a position, or a
     direction toward the light), a spot light's axis, ``tan`` and angle (5), up (3),
     the placement (16) and the given near and far; ``vs`` the casters, ``R`` the
@@ -123,7 +143,7 @@ def fit_entry(given: Any, vs: Any, R: Any, o: Any, api: Any) -> Any:
     return Entry(st, origin, a, (hx, hy, n, f, cx, cy), W, clip, tex)
 
 
-def flags(ok: Any, first: int) -> Any:
+def flags(ok: tuple[Truth, ...], first: int) -> Status:
     """Status bits of the formula checks ``ok`` (starting at ``FORMULA_BITS[first]``)."""
     st = 0
     for j in range(len(ok)):
@@ -131,7 +151,7 @@ def flags(ok: Any, first: int) -> Any:
     return st
 
 
-def input_checks(given: Any, o: Any) -> Any:
+def input_checks(given: Given, o: Options) -> Status:
     """The given numbers' checks: finite light (and spot), up and placement; a placement
     that is invertible beyond rounding."""
     L, S, U, b, _ = given
@@ -152,7 +172,9 @@ def input_checks(given: Any, o: Any) -> Any:
     return st
 
 
-def point_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
+def point_entry(
+    given: Given, vs: Vertices, R: Real[ArrayLike, "... M k"] | None, o: Options
+) -> Placed:
     """One point (or spot) light's fit: the article's MDV frame aimed at the casters'
     mean (or box centre), or a spot light's axis with its sides clipped to the cone."""
     L, S, U, _, _ = given
@@ -203,7 +225,9 @@ def point_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
     )
 
 
-def directional_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
+def directional_entry(
+    given: Given, vs: Vertices, R: Real[ArrayLike, "... M k"] | None, o: Options
+) -> Placed:
     """One directional light's fit: the casters' box (or, ``stable``, their minimal
     enclosing sphere snapped to whole texels) across the light's direction."""
     L, _, U, _, _ = given
@@ -235,7 +259,13 @@ def directional_entry(given: Any, vs: Any, R: Any, o: Any) -> Any:
     return st, (ox, oy, oz), a, (half_x, half_y, cx + link, cy), z
 
 
-def receivers_far(R: Any, frame: Any, sides: Any, z_hi: Any, o: Any) -> Any:
+def receivers_far(
+    R: Real[ArrayLike, "... M k"] | None,
+    frame: tuple[tuple[Scalar, ...], tuple[Scalar, ...]],
+    sides: tuple[Scalar, Scalar, Scalar, Scalar],
+    z_hi: Scalar,
+    o: Options,
+) -> tuple[Scalar, Status, Scalar]:
     """``far`` widened over the receivers inside the map's sides (``frame``: the
     frame's origin and axes), the receivers' check bit, and a link.
 

@@ -31,6 +31,8 @@ from typing import Any
 from shadowmath._boundary._messages import MAX_FOV_TAN, WIDE_FOV_TAN
 
 # Backend primitives and the shared formulas, rebound by specialize().
+from shadowmath._boundary._shapes import Scalar, Truth
+
 from ._formulas import (  # noqa: F401  (names the specialized copies look up)
     clip_rows,
     fabs,
@@ -48,7 +50,9 @@ from ._formulas import (  # noqa: F401  (names the specialized copies look up)
 rint: Any = None  # round half to even; bound by specialize()
 
 
-def place(b: tuple[Any, ...], px: Any, py: Any, pz: Any) -> tuple[Any, Any, Any, Any]:
+def place(
+    b: tuple[Scalar, ...], px: Scalar, py: Scalar, pz: Scalar
+) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     """A vertex through the placement ``b`` (16 row-major entries): world ``x, y, z`` and ``w``.
 
     The homogeneous divide uses a safe ``w`` (1 where ``w <= 0``; such a vertex is
@@ -64,7 +68,9 @@ def place(b: tuple[Any, ...], px: Any, py: Any, pz: Any) -> tuple[Any, Any, Any,
     )
 
 
-def to_light(ox: Any, oy: Any, oz: Any, a: tuple[Any, ...]) -> tuple[Any, Any, Any]:
+def to_light(
+    ox: Scalar, oy: Scalar, oz: Scalar, a: tuple[Scalar, ...]
+) -> tuple[Scalar, Scalar, Scalar]:
     """``(X . o, Y . o, Z . o)``: light coordinates of the offset ``o`` from the frame's origin."""
     return (
         ox * a[0] + oy * a[1] + oz * a[2],
@@ -73,7 +79,9 @@ def to_light(ox: Any, oy: Any, oz: Any, a: tuple[Any, ...]) -> tuple[Any, Any, A
     )
 
 
-def bounds_about(lo: tuple[Any, ...], hi: tuple[Any, ...], o: tuple[Any, ...]) -> Any:
+def bounds_about(
+    lo: tuple[Scalar, ...], hi: tuple[Scalar, ...], o: tuple[Scalar, ...]
+) -> tuple[tuple[Scalar, Scalar, Scalar], tuple[Scalar, Scalar, Scalar], Scalar, Scalar]:
     """The bounds of ``p - o`` from the bounds ``lo <= hi`` of the points ``p`` (3 each),
     the reach ``max |p - o|`` over the components and the coordinates' size ``max |p|``.
 
@@ -87,15 +95,19 @@ def bounds_about(lo: tuple[Any, ...], hi: tuple[Any, ...], o: tuple[Any, ...]) -
     return lo_o, hi_o, _largest(lo_o, hi_o), _largest(lo, hi)
 
 
-def _largest(lo: tuple[Any, ...], hi: tuple[Any, ...]) -> Any:
+def _largest(lo: tuple[Scalar, ...], hi: tuple[Scalar, ...]) -> Scalar:
     """``max |v|`` over the boxes ``[lo_j, hi_j]``: ``max_j max(hi_j, -lo_j)``."""
     m = maximum(hi[0], -lo[0])
     return maximum(maximum(m, maximum(hi[1], -lo[1])), maximum(hi[2], -lo[2]))
 
 
 def fit_axes(
-    d: tuple[Any, Any, Any], up: tuple[Any, Any, Any], has_up: bool, coords: Any, eps: float
-) -> tuple[tuple[Any, ...], Any, Any, Any]:
+    d: tuple[Scalar, Scalar, Scalar],
+    up: tuple[Scalar, Scalar, Scalar],
+    has_up: bool,
+    coords: Scalar,
+    eps: float,
+) -> tuple[tuple[Scalar, ...], Truth, Truth, Truth]:
     """The frame of the viewing direction ``d``: axes ``X, Y, Z`` (9) and three checks.
 
     Nagy's helper axis (:func:`._formulas.frame_axes`), or with an up hint the
@@ -122,7 +134,7 @@ def fit_axes(
     return axes, length > 0, length > 32.0 * eps * coords, ok_up
 
 
-def placement_ok(b: tuple[Any, ...], eps: float) -> Any:
+def placement_ok(b: tuple[Scalar, ...], eps: float) -> Truth:
     """The placement ``b`` (16 row-major entries) does not flatten the blocker.
 
     Its linear part ``A`` (the upper-left 3 x 3) is invertible beyond rounding:
@@ -141,7 +153,7 @@ def placement_ok(b: tuple[Any, ...], eps: float) -> Any:
     return fabs(det) > 64.0 * eps * (n0 * n1 * n2)
 
 
-def placement_affine(b: tuple[Any, ...], eps: float) -> Any:
+def placement_affine(b: tuple[Scalar, ...], eps: float) -> Truth:
     """The placement ``b`` (16 row-major entries) has the last row ``(0, 0, 0, 1)`` to rounding.
 
     ``|b_3j - (0, 0, 0, 1)_j| <= 4 eps max |b|`` for every ``j``: rounding only, whatever
@@ -155,12 +167,14 @@ def placement_affine(b: tuple[Any, ...], eps: float) -> Any:
     return off <= 4.0 * eps * big
 
 
-def near_clear(z_min: Any, coords: Any, eps: float) -> Any:
+def near_clear(z_min: Scalar, coords: Scalar, eps: float) -> Truth:
     """The nearest caster clears the rounding of the coordinates (``z > 32 eps coords``)."""
     return z_min > 32.0 * eps * coords
 
 
-def fov_ok(sides: tuple[Any, Any, Any, Any], margins: tuple[float, float]) -> tuple[Any, Any]:
+def fov_ok(
+    sides: tuple[Scalar, Scalar, Scalar, Scalar], margins: tuple[float, float]
+) -> tuple[Truth, Truth]:
     """A perspective map's widest ratio ``|c| + h / m`` within the hard and the warning limit.
 
     The map's edge is at ``u = c +- h / m`` (NDC ``+-1``); ``atan`` of the larger is
@@ -175,8 +189,8 @@ def fov_ok(sides: tuple[Any, Any, Any, Any], margins: tuple[float, float]) -> tu
 
 
 def point_sides(
-    bounds: tuple[Any, Any, Any, Any], z_min: Any, reach: Any, eps: float
-) -> tuple[Any, Any, Any, Any]:
+    bounds: tuple[Scalar, Scalar, Scalar, Scalar], z_min: Scalar, reach: Scalar, eps: float
+) -> tuple[Scalar, Scalar, Truth, Truth]:
     """The article's symmetric frustum: half-widths ``max(hi, -lo)`` of the ratios, two checks.
 
     ``bounds = (hi_x, lo_x, hi_y, lo_y)`` of ``x / z``, ``y / z`` (as :func:`spot_sides`).
@@ -195,8 +209,12 @@ def point_sides(
 
 
 def spot_sides(
-    bounds: tuple[Any, Any, Any, Any], t: Any, z_min: Any, reach: Any, eps: float
-) -> tuple[Any, Any, Any, Any, Any, Any, Any]:
+    bounds: tuple[Scalar, Scalar, Scalar, Scalar],
+    t: Scalar,
+    z_min: Scalar,
+    reach: Scalar,
+    eps: float,
+) -> tuple[Scalar, Scalar, Scalar, Scalar, Truth, Truth, Truth]:
     """A spot light's frustum: the ratios' bounds clipped to its cone's bounding square.
 
     ``bounds = (hi_x, lo_x, hi_y, lo_y)`` of ``x / z``, ``y / z`` in the frame whose
@@ -217,14 +235,14 @@ def spot_sides(
     return half_x, half_y, 0.5 * (hx + lx), 0.5 * (hy + ly), z_min > noise, ok_cone, ok_sil
 
 
-def spot_angle_ok(angle: Any) -> Any:
+def spot_angle_ok(angle: Scalar) -> Truth:
     """A spot light's half-angle lies in ``(0, pi/2)`` (a cone, not a half-space)."""
     return (angle > 0) & (angle < 1.5707963267948966)
 
 
 def box_sides(
-    bounds: tuple[Any, Any, Any, Any], reach: Any, eps: float
-) -> tuple[Any, Any, Any, Any, Any]:
+    bounds: tuple[Scalar, Scalar, Scalar, Scalar], reach: Scalar, eps: float
+) -> tuple[Scalar, Scalar, Scalar, Scalar, Truth]:
     """A directional light's box: half-widths and centre of the light-space bounds, a check.
 
     ``bounds = (hi_x, lo_x, hi_y, lo_y)`` of ``x`` and ``y`` in light coordinates.
@@ -237,12 +255,12 @@ def box_sides(
 
 
 def stable_sides(
-    sphere: tuple[tuple[Any, Any, Any], Any],
-    a: tuple[Any, ...],
-    texels: tuple[Any, Any, Any, Any],
-    reach: Any,
+    sphere: tuple[tuple[Scalar, Scalar, Scalar], Scalar],
+    a: tuple[Scalar, ...],
+    texels: tuple[Scalar, Scalar, Scalar, Scalar],
+    reach: Scalar,
     eps: float,
-) -> tuple[Any, Any, Any, Any, Any]:
+) -> tuple[Scalar, Scalar, Scalar, Scalar, Truth]:
     """A stable map's box: the bounding sphere enlarged by half a texel, centre snapped.
 
     ``sphere = (c, r^2)``, ``texels = (m_x, m_y, width, height)``. The half-width
@@ -267,11 +285,11 @@ def stable_sides(
     return half_x, half_y, cx, cy, (half_x > noise) & (half_y > noise)
 
 
-def _dot(d: tuple[Any, ...], i: int, j: int) -> Any:
+def _dot(d: tuple[Scalar, ...], i: int, j: int) -> Scalar:
     return d[3 * i] * d[3 * j] + d[3 * i + 1] * d[3 * j + 1] + d[3 * i + 2] * d[3 * j + 2]
 
 
-def sphere_through(q: tuple[Any, ...], k: Any) -> tuple[Any, Any, Any, Any]:
+def sphere_through(q: tuple[Scalar, ...], k: Scalar) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     """The smallest sphere with the first ``k`` (1 to 4) of four points on it: centre, ``r^2``.
 
     ``q``: the points ``p_0 .. p_3`` (12 numbers). With ``d_i = p_i - p_0`` the
@@ -318,7 +336,9 @@ def sphere_through(q: tuple[Any, ...], k: Any) -> tuple[Any, Any, Any, Any]:
     return q[0] + ox, q[1] + oy, q[2] + oz, ox * ox + oy * oy + oz * oz
 
 
-def side_values(x: Any, y: Any, z: Any, sides: tuple[Any, Any, Any, Any], directional: bool) -> Any:
+def side_values(
+    x: Scalar, y: Scalar, z: Scalar, sides: tuple[Scalar, Scalar, Scalar, Scalar], directional: bool
+) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     """The map's four side planes at a point: ``(g_0, g_1, g_2, g_3)``, all ``>= 0`` inside.
 
     ``sides = (s_x, s_y, c_x, c_y)``: NDC ``x = s_x (u - c_x)`` with ``u = x / z``
@@ -335,15 +355,15 @@ def side_values(x: Any, y: Any, z: Any, sides: tuple[Any, Any, Any, Any], direct
 
 
 def receiver_counted(
-    x: Any, y: Any, z: Any, sides: tuple[Any, Any, Any, Any], directional: bool
-) -> Any:
+    x: Scalar, y: Scalar, z: Scalar, sides: tuple[Scalar, Scalar, Scalar, Scalar], directional: bool
+) -> Truth:
     """True for a receiver point inside the map's side planes (and, for a point, in front)."""
     g = side_values(x, y, z, sides, directional)
     inside = (g[0] >= 0) & (g[1] >= 0) & (g[2] >= 0) & (g[3] >= 0)
     return inside & ((z > 0) | directional)
 
 
-def _inside_but(g: tuple[Any, Any, Any, Any], k: int, m: int, tau: Any) -> Any:
+def _inside_but(g: tuple[Scalar, Scalar, Scalar, Scalar], k: int, m: int, tau: Scalar) -> Truth:
     """All side values ``>= -tau`` except planes ``k`` and ``m`` (those the point lies on)."""
     ok = (k == 0) | (m == 0) | (g[0] >= -tau)
     ok = ok & ((k == 1) | (m == 1) | (g[1] >= -tau))
@@ -351,13 +371,17 @@ def _inside_but(g: tuple[Any, Any, Any, Any], k: int, m: int, tau: Any) -> Any:
     return ok & ((k == 3) | (m == 3) | (g[3] >= -tau))
 
 
-def _corner_in(g: tuple[Any, ...], z: Any, best: Any, tau: Any, directional: bool) -> Any:
+def _corner_in(
+    g: tuple[Scalar, ...], z: Scalar, best: Scalar, tau: Scalar, directional: bool
+) -> Scalar:
     """``best`` raised to a triangle corner's ``z`` when the corner is inside the sides."""
     ok = _inside_but(g, -1, -1, tau) & ((z > 0) | directional)
     return where(ok & (z > best), z, best)
 
 
-def _lerp4(a: tuple[Any, ...], b: tuple[Any, ...], t: Any) -> tuple[Any, Any, Any, Any]:
+def _lerp4(
+    a: tuple[Scalar, ...], b: tuple[Scalar, ...], t: Scalar
+) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     return (
         a[0] + t * (b[0] - a[0]),
         a[1] + t * (b[1] - a[1]),
@@ -366,7 +390,12 @@ def _lerp4(a: tuple[Any, ...], b: tuple[Any, ...], t: Any) -> tuple[Any, Any, An
     )
 
 
-def _edge_far(g: tuple[Any, Any], z: tuple[Any, Any], best: Any, tau: Any) -> Any:
+def _edge_far(
+    g: tuple[tuple[Scalar, ...], tuple[Scalar, ...]],
+    z: tuple[Scalar, Scalar],
+    best: Scalar,
+    tau: Scalar,
+) -> Scalar:
     """``best`` raised to ``z`` where the edge ``i -> j`` crosses a side plane inside the others.
 
     ``g = (g_i, g_j)``: the ends' side values; ``z = (z_i, z_j)``: their light ``z``.
@@ -384,8 +413,12 @@ def _edge_far(g: tuple[Any, Any], z: tuple[Any, Any], best: Any, tau: Any) -> An
 
 
 def _corner_far(
-    g: Any, z: tuple[Any, Any, Any], planes: tuple[int, int], best: Any, tau: Any
-) -> Any:
+    g: tuple[tuple[Scalar, ...], tuple[Scalar, ...], tuple[Scalar, ...]],
+    z: tuple[Scalar, Scalar, Scalar],
+    planes: tuple[int, int],
+    best: Scalar,
+    tau: Scalar,
+) -> Scalar:
     """``best`` raised to ``z`` where the map's edge (``planes = (k, m)``) pierces the triangle.
 
     Barycentric ``b_i = n_i / det`` (Cramer's rule on ``sum b = 1``,
@@ -413,8 +446,11 @@ def _corner_far(
 
 
 def triangle_far(
-    p: tuple[Any, ...], sides: tuple[Any, Any, Any, Any], directional: bool, eps: float
-) -> Any:
+    p: tuple[Scalar, ...],
+    sides: tuple[Scalar, Scalar, Scalar, Scalar],
+    directional: bool,
+    eps: float,
+) -> Scalar:
     """The largest light ``z`` of a triangle's part inside the map's sides (``-inf``: none).
 
     ``p``: the three corners' light coordinates (9). The part inside is the triangle
@@ -446,8 +482,11 @@ def triangle_far(
 
 
 def directional_origin(
-    z: tuple[Any, Any], half: tuple[Any, Any], c: tuple[Any, Any, Any], a: tuple[Any, ...]
-) -> tuple[Any, Any, Any, Any]:
+    z: tuple[Scalar, Scalar],
+    half: tuple[Scalar, Scalar],
+    c: tuple[Scalar, Scalar, Scalar],
+    a: tuple[Scalar, ...],
+) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     """The directional frame's origin, behind everything counted, and the shift along ``Z``.
 
     ``z = (z_lo, z_hi)``: the counted depth range; ``half = (h_x, h_y)``: the box's half-widths.
@@ -463,11 +502,11 @@ def directional_origin(
 
 
 def depth_range(
-    z: tuple[Any, Any, Any, Any],
-    given: tuple[Any, Any],
+    z: tuple[Scalar, Scalar, Scalar, Scalar],
+    given: tuple[Scalar, Scalar],
     has: tuple[bool, bool],
     slack: float,
-) -> tuple[Any, Any, tuple[Any, ...]]:
+) -> tuple[Scalar, Scalar, tuple[Truth, ...]]:
     """``near`` and ``far``: given, or ``z_lo (1 - slack)`` and ``z_hi (1 + slack)``; checks.
 
     ``z = (z_lo, z_hi, zb_min, zb_max)``: the counted range and the blocker's own.
@@ -491,8 +530,8 @@ def depth_range(
 
 
 def ortho_rows(
-    scale: tuple[Any, Any], centre: tuple[Any, Any], near: Any, far: Any
-) -> tuple[Any, ...]:
+    scale: tuple[Scalar, Scalar], centre: tuple[Scalar, Scalar], near: Scalar, far: Scalar
+) -> tuple[Scalar, ...]:
     """The nonzero entries of an orthographic box's projection (light to OpenGL clip).
 
     ``P = [[sx, 0, 0, -sx cx], [0, sy, 0, -sy cy], [0, 0, a, b], [0, 0, 0, 1]]``,
@@ -504,7 +543,7 @@ def ortho_rows(
     return sx, -sx * cx, sy, -sy * cy, 2.0 * inv, -(far + near) * inv
 
 
-def ortho_clip_rows(w: tuple[Any, ...], p: tuple[Any, ...]) -> tuple[Any, ...]:
+def ortho_clip_rows(w: tuple[Scalar, ...], p: tuple[Scalar, ...]) -> tuple[Scalar, ...]:
     """``P @ world_to_light`` for an orthographic ``P`` (:func:`ortho_rows`), 16 entries."""
     sx, sxc, sy, syc, a, b = p
     zero = fabs(w[0]) * 0.0  # +0.0 in the array's dtype
@@ -516,11 +555,13 @@ def ortho_clip_rows(w: tuple[Any, ...], p: tuple[Any, ...]) -> tuple[Any, ...]:
     )  # fmt: skip
 
 
-def _term(c: float, m: Any) -> Any:
+def _term(c: float, m: Scalar) -> Scalar:
     return m if c == 1.0 else c * m
 
 
-def _crow(c: tuple[float, ...], i: int, m: tuple[Any, ...]) -> tuple[Any, Any, Any, Any]:
+def _crow(
+    c: tuple[float, ...], i: int, m: tuple[Scalar, ...]
+) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     """Row ``i`` of ``C @ M`` for a constant ``C`` (16 floats): exact zeros and ones skipped.
 
     (So the identity costs nothing on whole arrays; the first term is always formed,
@@ -541,7 +582,7 @@ def _crow(c: tuple[float, ...], i: int, m: tuple[Any, ...]) -> tuple[Any, Any, A
     return r0, r1, r2, r3
 
 
-def const_times(c: tuple[float, ...], m: tuple[Any, ...]) -> tuple[Any, ...]:
+def const_times(c: tuple[float, ...], m: tuple[Scalar, ...]) -> tuple[Scalar, ...]:
     """``C @ M`` for a constant ``C`` (16 row-major floats) and 16 row-major entries ``M``."""
     if c == IDENTITY16:  # OpenGL's own clip space: nothing to multiply
         return m
@@ -553,12 +594,12 @@ IDENTITY16 = (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0
 
 
 def fit_rows(
-    frame: tuple[tuple[Any, Any, Any], tuple[Any, ...]],
-    box: tuple[Any, Any, Any, Any, Any, Any],
+    frame: tuple[tuple[Scalar, Scalar, Scalar], tuple[Scalar, ...]],
+    box: tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar],
     margins: tuple[float, float],
     directional: bool,
     api: tuple[tuple[float, ...], tuple[float, ...]],
-) -> tuple[tuple[Any, ...], tuple[Any, ...], tuple[Any, ...]]:
+) -> tuple[tuple[Scalar, ...], tuple[Scalar, ...], tuple[Scalar, ...]]:
     """``world_to_light`` (12), ``blocker_to_clip`` without placement (16), ``world_to_texture``.
 
     ``frame = (origin, axes)``: the light frame's origin (3) and axes ``X, Y, Z`` (9).
@@ -575,7 +616,9 @@ def fit_rows(
     return w, const_times(api[0], gl), const_times(api[1], gl)
 
 
-def safe_box(box: tuple[Any, Any, Any, Any, Any, Any]) -> tuple[Any, Any, Any, Any, Any, Any]:
+def safe_box(
+    box: tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar],
+) -> tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar]:
     """The box ``(h_x, h_y, c_x, c_y, near, far)`` with safe divisors (``h > 0``, ``far > near``).
 
     Invalid entries are poisoned.

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Scalar, Truth
+
 # Placeholders, rebound per backend by specialize(); NumPy's by default.
 where: Callable[..., Any] = np.where
 sqrt: Callable[..., Any] = np.sqrt
@@ -27,12 +29,12 @@ maximum: Callable[..., Any] = np.maximum
 log2: Callable[..., Any] = np.log2
 
 
-def flag(ok: Any, bit: int) -> Any:
+def flag(ok: Truth, bit: int) -> Scalar:
     """``bit`` where the check ``ok`` failed, else 0 (a primitive: each backend binds its own)."""
     return 0 if ok else bit
 
 
-def normalize3(x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any]:
+def normalize3(x: Scalar, y: Scalar, z: Scalar) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     """``(x, y, z) / |(x, y, z)|`` and the length, without overflow; zero gives zero.
 
     Scaled by the largest component first, so float32 vectors of size 1e-25 or
@@ -53,7 +55,7 @@ def normalize3(x: Any, y: Any, z: Any) -> tuple[Any, Any, Any, Any]:
     return bx * inv, by * inv, bz * inv, where(nonzero, m * root, 0.0)
 
 
-def helper_axis3(zx: Any, zy: Any, zz: Any) -> tuple[Any, Any, Any]:
+def helper_axis3(zx: Scalar, zy: Scalar, zz: Scalar) -> tuple[Scalar, Scalar, Scalar]:
     """The world axis at the smallest ``|z_k|`` (ties to the lowest index), as 0/1 floats."""
     ax, ay, az = fabs(zx), fabs(zy), fabs(zz)
     pick_x = (ax <= ay) & (ax <= az)
@@ -64,7 +66,7 @@ def helper_axis3(zx: Any, zy: Any, zz: Any) -> tuple[Any, Any, Any]:
     return where(pick_x, one, zero), where(pick_y, one, zero), where(pick_z, one, zero)
 
 
-def frame_axes(dx: Any, dy: Any, dz: Any) -> tuple[Any, ...]:
+def frame_axes(dx: Scalar, dy: Scalar, dz: Scalar) -> tuple[Scalar, ...]:
     """Nagy's light frame for the viewing direction ``d``: ``X, Y, Z`` (9 components), ``|d|``.
 
     ``Z = d / |d|``, ``X = normalize(Z x V)`` with ``V`` the helper axis of ``Z``,
@@ -74,7 +76,9 @@ def frame_axes(dx: Any, dy: Any, dz: Any) -> tuple[Any, ...]:
     return (*axes_from_z(zx, zy, zz), zx, zy, zz, length)
 
 
-def axes_from_z(zx: Any, zy: Any, zz: Any) -> tuple[Any, Any, Any, Any, Any, Any]:
+def axes_from_z(
+    zx: Scalar, zy: Scalar, zz: Scalar
+) -> tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar]:
     """``X`` and ``Y`` of the frame with unit ``Z`` (the helper axis decided on ``Z`` as given)."""
     vx, vy, vz = helper_axis3(zx, zy, zz)
     xx, xy, xz, _ = normalize3(zy * vz - zz * vy, zz * vx - zx * vz, zx * vy - zy * vx)
@@ -82,8 +86,8 @@ def axes_from_z(zx: Any, zy: Any, zz: Any) -> tuple[Any, Any, Any, Any, Any, Any
 
 
 def rolled_axes(
-    d: tuple[Any, Any, Any], u: tuple[Any, Any, Any], c: Any, s: Any
-) -> tuple[Any, ...]:
+    d: tuple[Scalar, Scalar, Scalar], u: tuple[Scalar, Scalar, Scalar], c: Scalar, s: Scalar
+) -> tuple[Scalar, ...]:
     """The frame of ``Z = d / |d|`` with reference axis ``U``, turned by the angle (``c, s``).
 
     ``X0 = normalize(Z x U)``, ``Y0 = X0 x Z``, ``X = c X0 + s Y0``,
@@ -104,14 +108,14 @@ def rolled_axes(
     )  # fmt: skip
 
 
-def two_sum(a: Any, b: Any) -> tuple[Any, Any]:
+def two_sum(a: Scalar, b: Scalar) -> tuple[Scalar, Scalar]:
     """Knuth's error-free sum: ``s + e == a + b`` exactly, ``s = fl(a + b)``."""
     s = a + b
     bb = s - a
     return s, (a - (s - bb)) + (b - bb)
 
 
-def two_product(a: Any, b: Any, splitter: float) -> tuple[Any, Any]:
+def two_product(a: Scalar, b: Scalar, splitter: float) -> tuple[Scalar, Scalar]:
     """Dekker's error-free product ``p + e == a * b`` (no FMA needed).
 
     Veltkamp's split cuts each factor into halves whose products are exact. A
@@ -125,7 +129,7 @@ def two_product(a: Any, b: Any, splitter: float) -> tuple[Any, Any]:
     return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
 
 
-def dot2(a: tuple[Any, ...], b: tuple[Any, ...], splitter: float) -> Any:
+def dot2(a: tuple[Scalar, ...], b: tuple[Scalar, ...], splitter: float) -> Scalar:
     """``sum(a_i b_i)`` as if computed in twice the working precision.
 
     Ogita, Rump and Oishi's ``Dot2`` ("Accurate sum and dot product", 2005):
@@ -145,7 +149,9 @@ def dot2(a: tuple[Any, ...], b: tuple[Any, ...], splitter: float) -> Any:
     return where(isfinite(compensated), compensated, plain)
 
 
-def planar_entries(pi: tuple[Any, ...], L: tuple[Any, ...], splitter: float) -> tuple[Any, ...]:
+def planar_entries(
+    pi: tuple[Scalar, ...], L: tuple[Scalar, ...], splitter: float
+) -> tuple[Scalar, ...]:
     """Blinn's ``sign(pi.L) ((pi.L) I - L pi^T)`` as 16 entries, then ``pi.L`` and its scale.
 
     ``pi.L`` cancels for a light close to the plane far from the origin; it is
@@ -175,8 +181,8 @@ def planar_entries(pi: tuple[Any, ...], L: tuple[Any, ...], splitter: float) -> 
 
 
 def projection_rows(
-    scale: tuple[Any, Any], centre: tuple[Any, Any], near: Any, far: Any
-) -> tuple[Any, Any, Any, Any, Any, Any]:
+    scale: tuple[Scalar, Scalar], centre: tuple[Scalar, Scalar], near: Scalar, far: Scalar
+) -> tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar]:
     """The nonzero entries of the blocker projection ``P`` (light to OpenGL clip).
 
     ``P = [[sx, 0, -sx cx, 0], [0, sy, -sy cy, 0], [0, 0, a, b], [0, 0, 1, 0]]``
@@ -189,7 +195,9 @@ def projection_rows(
     return sx, -sx * cx, sy, -sy * cy, (far + near) / (far - near), -2.0 * near * ratio
 
 
-def light_rows(origin: tuple[Any, Any, Any], axes: tuple[Any, ...]) -> tuple[Any, ...]:
+def light_rows(
+    origin: tuple[Scalar, Scalar, Scalar], axes: tuple[Scalar, ...]
+) -> tuple[Scalar, ...]:
     """``world_to_light = [[R, -R o], [0, 1]]`` as 12 entries (its first three rows).
 
     ``origin = o`` (3), ``axes``: the rows ``X, Y, Z`` of ``R`` (their first 9 entries).
@@ -203,7 +211,7 @@ def light_rows(origin: tuple[Any, Any, Any], axes: tuple[Any, ...]) -> tuple[Any
     return xx, xy, xz, tx, yx, yy, yz, ty, zx, zy, zz, tz
 
 
-def clip_rows(w: tuple[Any, ...], p: tuple[Any, ...]) -> tuple[Any, ...]:
+def clip_rows(w: tuple[Scalar, ...], p: tuple[Scalar, ...]) -> tuple[Scalar, ...]:
     """``P @ world_to_light`` in closed form (16 entries), ``w`` from :func:`light_rows`.
 
     Row 0 is ``sx (X - cx Z)`` (with its translation), row 1 ``sy (Y - cy Z)``,
@@ -221,7 +229,7 @@ def clip_rows(w: tuple[Any, ...], p: tuple[Any, ...]) -> tuple[Any, ...]:
     )  # fmt: skip
 
 
-def texture_rows(c: tuple[Any, ...]) -> tuple[Any, ...]:
+def texture_rows(c: tuple[Scalar, ...]) -> tuple[Scalar, ...]:
     """OpenGL clip rows to texture rows: ``(s q, t q, r q) = (clip_xyz + w) / 2``, ``q = w``."""
     return (
         0.5 * (c[0] + c[12]), 0.5 * (c[1] + c[13]), 0.5 * (c[2] + c[14]), 0.5 * (c[3] + c[15]),
@@ -231,7 +239,9 @@ def texture_rows(c: tuple[Any, ...]) -> tuple[Any, ...]:
     )  # fmt: skip
 
 
-def _row_times(m: tuple[Any, ...], i: int, b: tuple[Any, ...]) -> tuple[Any, Any, Any, Any]:
+def _row_times(
+    m: tuple[Scalar, ...], i: int, b: tuple[Scalar, ...]
+) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     """Row ``i`` of ``m @ b`` (both 16 row-major entries)."""
     m0, m1, m2, m3 = m[4 * i], m[4 * i + 1], m[4 * i + 2], m[4 * i + 3]
     return (
@@ -242,7 +252,7 @@ def _row_times(m: tuple[Any, ...], i: int, b: tuple[Any, ...]) -> tuple[Any, Any
     )
 
 
-def compose_rows(m: tuple[Any, ...], b: tuple[Any, ...]) -> tuple[Any, ...]:
+def compose_rows(m: tuple[Scalar, ...], b: tuple[Scalar, ...]) -> tuple[Scalar, ...]:
     """The product ``m @ b`` of two 4x4 matrices given as 16 row-major entries each."""
     return (*_row_times(m, 0, b), *_row_times(m, 1, b), *_row_times(m, 2, b), *_row_times(m, 3, b))
 

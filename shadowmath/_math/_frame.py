@@ -17,7 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from shadowmath._boundary._shapes import Float
+from shadowmath._boundary._shapes import Float, Scalar
 from shadowmath._boundary._validate import Array, Context
 
 from ._specialize import formulas
@@ -42,7 +42,7 @@ class LightFrame(NamedTuple):
     z_axis: Float[Array, "*batch 3"]
 
 
-def zero_direction_noise(ctx: Context, coords: Array) -> Array:
+def zero_direction_noise(ctx: Context, coords: Float[Array, "*batch"]) -> Float[Array, "*batch"]:
     """How short a computed viewing direction may be and still be rounding noise.
 
     A light at the blocker's centre computed in floating point (e.g. the mean
@@ -54,7 +54,7 @@ def zero_direction_noise(ctx: Context, coords: Array) -> Array:
     return 32 * ctx.eps * coords
 
 
-def light_entries(xp: ModuleType, frame: LightFrame) -> tuple[Array, ...]:
+def light_entries(xp: ModuleType, frame: LightFrame) -> tuple[Float[Array, "*batch"], ...]:
     """The 12 entries of ``world_to_light``'s first three rows, from a trusted frame."""
     o, x, y, z = frame
     entries: tuple[Array, ...] = formulas(xp).light_rows(
@@ -68,7 +68,7 @@ def light_entries(xp: ModuleType, frame: LightFrame) -> tuple[Array, ...]:
     return entries
 
 
-def stack_matrix(xp: ModuleType, entries: tuple[Array, ...]) -> Array:
+def stack_matrix(xp: ModuleType, entries: tuple[Scalar, ...]) -> Float[Array, "*batch 4 4"]:
     """``(*batch, 4, 4)`` from 16 row-major entries (or 12: the last row is ``(0, 0, 0, 1)``)."""
     if len(entries) == 12:
         zero = xp.zeros_like(entries[0])

@@ -13,13 +13,13 @@ call these, are in :mod:`shadowmath._geometry._adaptive_frustum`.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from types import ModuleType
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from shadowmath._boundary._renamed import warn_renamed
+from shadowmath._boundary._shapes import ArrayLike, Bool, Float, Scalar
 from shadowmath._boundary._validate import Array
 
 from ._specialize import formulas
@@ -172,7 +172,9 @@ class OrthographicBox(NamedTuple):
         return True
 
 
-def volume(fields: Sequence[Array], directional: bool) -> Frustum | OrthographicBox:
+def volume(
+    fields: tuple[Scalar, ...] | Float[Array, " 8 *batch"], directional: bool
+) -> Frustum | OrthographicBox:
     """The light's map volume of 8 trusted fields in their common order.
 
     ``(R_x, R_y, near, far, m_x, m_y, c_x, c_y)``: an :class:`OrthographicBox` for a
@@ -181,7 +183,7 @@ def volume(fields: Sequence[Array], directional: bool) -> Frustum | Orthographic
     return OrthographicBox._make(fields) if directional else Frustum._make(fields)
 
 
-def _static_flag(orthographic: Any) -> bool:
+def _static_flag(orthographic: bool | Bool[ArrayLike, "*batch"]) -> bool:
     """The deprecated ``orthographic`` flag as one bool (a batch must not mix kinds)."""
     if isinstance(orthographic, bool | np.bool_):
         return bool(orthographic)
@@ -194,12 +196,16 @@ def _static_flag(orthographic: Any) -> bool:
     )
 
 
-def blocker_reach(xp: ModuleType, light: Array, verts: Array) -> Array:
+def blocker_reach(
+    xp: ModuleType, light: Float[Array, "*#batch 3"], verts: Float[Array, "*#batch N 3"]
+) -> Float[Array, "*batch"]:
     """``(*batch,)`` the largest coordinate of any ``V - L``: the scale of the rounding noise."""
     return xp.max(xp.abs(verts - light[..., None, :]), axis=(-2, -1))
 
 
-def projection_terms(xp: ModuleType, fr: Frustum | OrthographicBox) -> tuple[Array, ...]:
+def projection_terms(
+    xp: ModuleType, fr: Frustum | OrthographicBox
+) -> tuple[Float[Array, "*batch"], ...]:
     """``(sx, -sx cx, sy, -sy cy, a, b)``: the nonzero entries of the blocker projection."""
     half_x, half_y, near, far, margin_x, margin_y, cx, cy = fr
     sx, sy = margin_x / half_x, margin_y / half_y
@@ -207,7 +213,9 @@ def projection_terms(xp: ModuleType, fr: Frustum | OrthographicBox) -> tuple[Arr
     return terms
 
 
-def projection_entries(xp: ModuleType, fr: Frustum | OrthographicBox) -> tuple[Array, ...]:
+def projection_entries(
+    xp: ModuleType, fr: Frustum | OrthographicBox
+) -> tuple[Float[Array, "*batch"], ...]:
     """The 16 entries of the blocker projection of a trusted frustum or box (by its type)."""
     sx, sxc, sy, syc, a, b = projection_terms(xp, fr)
     zero = xp.zeros_like(sx)

@@ -21,6 +21,10 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
+import numpy as np
+
+from shadowmath._boundary._shapes import Array, ArrayLike, Float, Int, Options, Real, Row
+
 from ._fit_entry import fit_entry
 from ._formulas import compose_rows, planar_entries
 from ._rows import row16
@@ -79,7 +83,7 @@ def planar_loop(plane: Any, light: Any, eps: float, out: Any, status: Any) -> No
             out[i, j] = e[j]
 
 
-def support_loop(verts: Any, out: Any) -> None:
+def support_loop(verts: Real[ArrayLike, "n _"], out: Int[Array, "n 5"]) -> None:
     """The enclosing sphere's support of every entry of ``(count, 3 N)`` world vertices
     (flat rows ``x0, y0, z0, x1, ...``): ``out[i] = (i_0, i_1, i_2, i_3, k)``."""
     none = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -88,11 +92,11 @@ def support_loop(verts: Any, out: Any) -> None:
         out[e, 0], out[e, 1], out[e, 2], out[e, 3], out[e, 4] = sup[0], sup[1], sup[2], sup[3], k
 
 
-def _row(V: Any, i: int) -> Any:
+def _row(V: Real[ArrayLike, "n ..."], i: int) -> Real[ArrayLike, "..."]:
     return V[i % len(V)]
 
 
-def _entries(M: Any, i: int) -> Any:
+def _entries(M: Real[ArrayLike, "n 4 4"], i: int) -> tuple[float, ...]:
     """Batch entry ``i`` of ``(count or 1, 4, 4)`` matrices as 16 floats."""
     m = M[i % len(M)]
     return (
@@ -103,14 +107,18 @@ def _entries(M: Any, i: int) -> Any:
     )  # fmt: skip
 
 
-def _spot(Lr: Any, spot: bool) -> Any:
+def _spot(Lr: Row, spot: bool) -> tuple[float, float, float, float, float]:
     """A spot light's axis, ``tan(angle)`` and angle (columns 3 to 7 of its row), or zeros."""
     if spot:
         return (float(Lr[3]), float(Lr[4]), float(Lr[5]), float(Lr[6]), float(Lr[7]))
     return (0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-def fit_loop(operands: Any, opts: Any, out: Any) -> None:
+def fit_loop(
+    operands: tuple[Real[ArrayLike, "..."], ...],
+    opts: list[Options] | np.ndarray[Any, np.dtype[np.void]],
+    out: tuple[Float[Array, "n r"], Float[Array, "n 4 4 4"], Int[Array, " n"]],
+) -> None:
     """Every batch entry's :func:`fit_entry`.
 
     ``operands = (light, verts, placement, recv, ups, near, far)``, each

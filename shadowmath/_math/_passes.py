@@ -29,6 +29,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._status import OVERFLOW
 from shadowmath._boundary._validate import Array
 
@@ -113,7 +114,12 @@ def spread(xp: ModuleType, light: Array, verts: Array, *, aim: str) -> Spread:
     return Spread(direction, coords, reach)
 
 
-def extent(xp: ModuleType, light: Array, verts: Array, axes: tuple[Array, Array, Array]) -> Extent:
+def extent(
+    xp: ModuleType,
+    light: Float[Array, "*#batch 3"],
+    verts: Float[Array, "*#batch N 3"],
+    axes: tuple[Float[Array, "*#batch 3"], Float[Array, "*#batch 3"], Float[Array, "*#batch 3"]],
+) -> Extent:
     """Pass 2: light coordinates and projection ratios of every vertex.
 
     ``axes = (X, Y, Z)``: the light frame's ``(*batch, 3)`` axes.

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import Array
 
 from ._bias import PcfFilter, kernel_reach
@@ -41,8 +42,12 @@ def border_texels(radius: int, filter: PcfFilter) -> int:
 
 
 def _compare(
-    xp: ModuleType, depths: Array, stored: Array, reversed_z: bool, softness: float
-) -> Array:
+    xp: ModuleType,
+    depths: Float[Array, "..."],
+    stored: Float[Array, "..."],
+    reversed_z: bool,
+    softness: float,
+) -> Float[Array, "..."]:
     """1 where lit (``depth <= stored``, ``>=`` reversed), a C1 smoothstep of width ``softness``."""
     margin = depths - stored if reversed_z else stored - depths
     if softness == 0:
@@ -53,15 +58,15 @@ def _compare(
 
 def pcf(
     xp: ModuleType,
-    depth_map: Array,
-    coords: Array,
-    depths: Array,
+    depth_map: Float[Array, "*#map H W"],
+    coords: Float[Array, "*#batch 2"],
+    depths: Float[Array, "*#batch"],
     *,
     radius: int,
     filter: PcfFilter,
     reversed_z: bool,
     softness: float,
-) -> Array:
+) -> Float[Array, "*batch"]:
     """The lit fraction (trusted inputs; ``shape`` the broadcast batch shape)."""
     H, W = depth_map.shape[-2:]
     map_batch = depth_map.shape[:-2]

@@ -29,14 +29,13 @@ runs them on whole arrays, on Python floats, or compiled by Numba (:func:`pcss_l
 from __future__ import annotations
 
 from types import ModuleType
-from typing import Any
 
-from shadowmath._boundary._validate import Array
+from shadowmath._boundary._shapes import Array, ArrayLike, Float, Row, Scalar
 
 from ._formulas import fabs, normalize3, sqrt, where
 
 
-def pcss_across(m: Any, i: int, Zx: Any, Zy: Any, Zz: Any) -> Any:
+def pcss_across(m: Row, i: int, Zx: Scalar, Zy: Scalar, Zz: Scalar) -> Scalar:
     """``|r x Z|`` of the row ``r = m[i : i + 3]``: its rate across the unit axis ``Z``
     (``|r - (r . Z) Z|`` without its cancellation)."""
     x, y, z = m[i], m[i + 1], m[i + 2]
@@ -44,7 +43,7 @@ def pcss_across(m: Any, i: int, Zx: Any, Zy: Any, Zz: Any) -> Any:
     return sqrt(cx * cx + cy * cy + cz * cz)
 
 
-def pcss_perspective(m: Any, w: Any, h: Any, radius: Any) -> tuple[Any, Any, Any]:
+def pcss_perspective(m: Row, w: Scalar, h: Scalar, radius: Scalar) -> tuple[Scalar, Scalar, Scalar]:
     """``(K_s, K_t, d_near)`` of a perspective map's 16 row-major entries ``m`` (scalars
     or arrays) and texture of ``w x h`` texels, for a light of radius ``radius``;
     ``d_near`` is 0 where depth grows away from the light, else 1."""
@@ -56,8 +55,8 @@ def pcss_perspective(m: Any, w: Any, h: Any, radius: Any) -> tuple[Any, Any, Any
 
 
 def pcss_orthographic(
-    m: Any, w: Any, h: Any, tangent: Any, toward: tuple[Any, Any, Any]
-) -> tuple[Any, Any, Any]:
+    m: Row, w: Scalar, h: Scalar, tangent: Scalar, toward: tuple[Scalar, Scalar, Scalar]
+) -> tuple[Scalar, Scalar, Scalar]:
     """``(K_s, K_t, d_near)`` of an orthographic map's entries ``m`` for a sun of angular
     radius ``atan(tangent)`` whose light travels along ``toward`` (any length); ``d_near``
     is 0 where depth grows along ``toward``, else 1."""
@@ -68,7 +67,13 @@ def pcss_orthographic(
     return s, scale * h * pcss_across(m, 4, Zx, Zy, Zz), where(going < 0, 1.0, 0.0)
 
 
-def pcss_loop(rows: Any, size: Any, spread: Any, toward: Any, out: Any) -> int:
+def pcss_loop(
+    rows: Float[ArrayLike, "n 16"],
+    size: tuple[Scalar, Scalar],
+    spread: Scalar,
+    toward: Float[ArrayLike, "..."],
+    out: Float[Array, "n 3"],
+) -> int:
     """The maps ``rows (n, 16)`` of a texture of ``size = (w, h)`` texels into ``out (n, 3)``
     (``K_s, K_t, d_near``): perspective for ``toward`` of shape ``(0, 3)`` (``spread`` the
     light's radius), else orthographic along ``toward (n, 3)`` (``spread = tan(theta)``).
@@ -91,8 +96,12 @@ FUNCTIONS = ("pcss_across", "pcss_perspective", "pcss_orthographic", "pcss_loop"
 
 
 def kernel_widths(
-    xp: ModuleType, K: Array, near_depth: Array, receiver: Array, blocker: Array
-) -> tuple[Array, Array]:
+    xp: ModuleType,
+    K: Float[Array, "*#b 2"],
+    near_depth: Float[Array, "*#b"],
+    receiver: Float[Array, "*#b"],
+    blocker: Float[Array, "*#b"],
+) -> tuple[Float[Array, "*b 2"], Float[Array, "*b 2"]]:
     """``(search, penumbra)`` in texels, ``(*b, 2)`` each, from the stored depths of the
     receiver and of the (average) blocker, ``(*b,)`` each: the shader's two lines."""
     sign = 1 - 2 * near_depth

@@ -6,12 +6,12 @@ Plain arithmetic on Python or Numba scalars or on arrays (specialized like every
 
 from __future__ import annotations
 
-from typing import Any
+from shadowmath._boundary._shapes import Row, Scalar
 
 from ._formulas import where
 
 
-def row16(v: Any, k: int) -> Any:
+def row16(v: Row, k: int) -> tuple[Scalar, ...]:
     """The 16 entries ``v[k], ..., v[k + 15]`` as a tuple."""
     return (
         v[k], v[k + 1], v[k + 2], v[k + 3], v[k + 4], v[k + 5], v[k + 6], v[k + 7],
@@ -19,7 +19,9 @@ def row16(v: Any, k: int) -> Any:
     )  # fmt: skip
 
 
-def tile_rows(m: Any, rect: Any, total: Any) -> Any:
+def tile_rows(
+    m: Row, rect: tuple[Scalar, Scalar, Scalar, Scalar], total: tuple[Scalar, Scalar]
+) -> tuple[Scalar, ...]:
     r"""Texture rows ``m`` (16 entries) moved into the tile ``rect = (x, y, w, h)`` of a
     texture of ``total = (W, H)`` units.
 
@@ -49,7 +51,7 @@ def tile_rows(m: Any, rect: Any, total: Any) -> Any:
     )  # fmt: skip
 
 
-def inverse4(m: tuple[Any, ...]) -> tuple[tuple[Any, ...], Any]:
+def inverse4(m: tuple[Scalar, ...]) -> tuple[tuple[Scalar, ...], Scalar]:
     """The inverse of a 4x4 matrix (16 row-major entries) by 2x2 minors, and its determinant."""
     s0 = m[0] * m[5] - m[4] * m[1]
     s1 = m[0] * m[6] - m[4] * m[2]
@@ -86,7 +88,7 @@ def inverse4(m: tuple[Any, ...]) -> tuple[tuple[Any, ...], Any]:
     return inv, det
 
 
-def _mul16(a: Any, b: Any) -> Any:
+def _mul16(a: Row, b: Row) -> tuple[Scalar, ...]:
     """``a @ b`` for 16 row-major entries each."""
     return (
         a[0] * b[0] + a[1] * b[4] + a[2] * b[8] + a[3] * b[12],

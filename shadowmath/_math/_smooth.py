@@ -20,10 +20,16 @@ from __future__ import annotations
 
 from types import ModuleType
 
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import Array
 
 
-def smooth_max(xp: ModuleType, x: Array, temperature: Array, weights: Array | None = None) -> Array:
+def smooth_max(
+    xp: ModuleType,
+    x: Float[Array, "*#batch n"],
+    temperature: Float[Array, "*#batch"],
+    weights: Float[Array, "*#batch n"] | None = None,
+) -> Float[Array, "*batch"]:
     """``T log sum_i w_i exp(x_i / T)`` over the last axis, shifted by the hard max for range.
 
     The shift ``m = max x`` cancels mathematically (its derivative is
@@ -40,13 +46,15 @@ def smooth_max(xp: ModuleType, x: Array, temperature: Array, weights: Array | No
 
 def soft_bounds(
     xp: ModuleType,
-    rx: Array,
-    ry: Array,
-    T: Array,
+    rx: Float[Array, "*#batch n"],
+    ry: Float[Array, "*#batch n"],
+    T: Float[Array, "*#batch"],
     *,
     symmetric: bool,
-    weights: Array | None = None,
-) -> tuple[Array, Array, Array, Array]:
+    weights: Float[Array, "*#batch n"] | None = None,
+) -> tuple[
+    Float[Array, "*batch"], Float[Array, "*batch"], Float[Array, "*batch"], Float[Array, "*batch"]
+]:
     """``(hi_x, lo_x, hi_y, lo_y)``: soft outer bounds of the ratios at temperature ``T``.
 
     ``weights`` (0 or 1 per vertex) drop padded entries.

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from types import ModuleType
 
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import Array
 
 from ._vector import cross, dot
@@ -30,14 +31,25 @@ DEGENERATE = (
 # ------------------------------------------------------------------ cores
 
 
-def _row(xp: ModuleType, normal: Array, point: Array, denominator: Array) -> Array:
+def _row(
+    xp: ModuleType,
+    normal: Float[Array, "*#batch 3"],
+    point: Float[Array, "*#batch 3"],
+    denominator: Float[Array, "*#batch"],
+) -> Float[Array, "*batch 4"]:
     """The matrix row ``(n, -n . point) / denominator``: ``n . (p - point) / denominator``."""
     offset = -dot(xp, normal, point)[..., None]
     normal = xp.broadcast_to(normal, (*offset.shape[:-1], 3))
     return xp.concat([normal, offset], axis=-1) / denominator[..., None]
 
 
-def pyramid_to_unit_cube(xp: ModuleType, a: Array, b: Array, eu: Array, ev: Array) -> Array:
+def pyramid_to_unit_cube(
+    xp: ModuleType,
+    a: Float[Array, "*#batch 3"],
+    b: Float[Array, "*#batch 3"],
+    eu: Float[Array, "*#batch 3"],
+    ev: Float[Array, "*#batch 3"],
+) -> Float[Array, "*batch 4 4"]:
     ew = b - a  # apex to the base corner
     n_x = cross(xp, ew, ev)  # normal of the side through a, b, b + ev   (x = 0)
     n_y = cross(xp, eu, ew)  # normal of the side through a, b, b + eu   (y = 0)
@@ -57,8 +69,14 @@ def grid(count: int) -> tuple[int, int]:
 
 
 def area_light_samples(
-    xp: ModuleType, corner: Array, eu: Array, ev: Array, jitter: Array, *, grid: tuple[int, int]
-) -> Array:
+    xp: ModuleType,
+    corner: Float[Array, "*#batch 3"],
+    eu: Float[Array, "*#batch 3"],
+    ev: Float[Array, "*#batch 3"],
+    jitter: Float[Array, "*#batch count 2"],
+    *,
+    grid: tuple[int, int],
+) -> Float[Array, "*batch count 3"]:
     rows, cols = grid
     k = xp.arange(rows * cols)
     col = xp.astype(k % cols, jitter.dtype)

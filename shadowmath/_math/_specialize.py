@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Array, Float, Real, Row, Scalar, Truth
+
 from . import (
     _cascade_bounds,
     _cascade_formulas,
@@ -138,7 +140,7 @@ def scalar_primitives() -> dict[str, Any]:
     }
 
 
-def _same(x: Any) -> Any:
+def _same(x: Scalar) -> Scalar:
     return x
 
 
@@ -147,22 +149,25 @@ def _zeros_list(n: int) -> list[float]:
     return [0.0] * n
 
 
-def _scalar_flag(ok: Any, bit: int) -> int:
-    """A check's status bit on scalars: 0 where ``ok``."""
+def _scalar_flag(ok: Truth | float, bit: int) -> int:
+    """A check's status bit on scalars: 0 where ``ok`` (a bool, or 1.0 and 0.0 from an
+    array's check read per entry)."""
     return 0 if ok else bit
 
 
-def _array_flag(xp: ModuleType, ok: Any, bit: int) -> Any:
+def _array_flag(xp: ModuleType, ok: Truth, bit: int) -> Scalar:
     """A check's status bit on arrays: 0 where ``ok``."""
     return xp.where(ok, 0, bit)
 
 
-def _scalar_take(row: Any, k: int) -> Any:
+def _scalar_take(row: Row, k: int) -> Scalar:
     """Entry ``k`` of one entry's row."""
     return row[k]
 
 
-def _take_last(row: Any, k: Any) -> Any:
+def _take_last(
+    row: Float[Array, "*batch m"], k: int | Real[Array, " n"]
+) -> Float[Array, "*batch _"]:
     """Entry ``k`` of each entry's row ``(*batch, m)``: ``(*batch, 1)`` for an int ``k``,
     ``(*batch, n)`` for ``n`` indices (whole numbers of any dtype)."""
     if isinstance(k, int):
@@ -170,7 +175,7 @@ def _take_last(row: Any, k: Any) -> Any:
     return row[..., k.astype(int)]
 
 
-def _scalar_where(c: Any, a: Any, b: Any) -> Any:
+def _scalar_where(c: Truth, a: Scalar, b: Scalar) -> Scalar:
     return a if c else b
 
 
@@ -178,12 +183,12 @@ def _rint(x: float) -> float:
     return float(np.rint(x))  # half to even, as NumPy's round (and Numba's np.rint)
 
 
-def _numpy_where(c: Any, a: Any, b: Any) -> Any:
+def _numpy_where(c: Truth, a: Scalar, b: Scalar) -> Scalar:
     """``np.where`` keeping the arrays' dtype: a Python float is weak, as in JAX.
 
     (``np.where`` turns a Python float into a float64 array, which would
     promote float32 work to float64.)
     """
     dtypes = [v.dtype for v in (a, b) if isinstance(v, np.ndarray | np.generic)]
-    out = np.where(c, a, b)
+    out: Scalar = np.where(c, a, b)
     return out.astype(np.result_type(*dtypes), copy=False) if dtypes else out

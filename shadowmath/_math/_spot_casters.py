@@ -70,6 +70,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Bool, Float, Int
 from shadowmath._boundary._validate import Array
 from shadowmath._math._vector import matmul
 
@@ -87,11 +88,16 @@ class Selection(NamedTuple):
         kept: ``(*batch,)`` integer: the points or triangles kept; 0 means the empty fit.
     """
 
-    points: Array
-    kept: Array
+    points: Float[Array, "*batch K 3"]
+    kept: Int[Array, "*batch"]
 
 
-def pyramid_planes(xp: ModuleType, position: Array, axes: Array, t: Array) -> Array:
+def pyramid_planes(
+    xp: ModuleType,
+    position: Float[Array, "*#batch 3"],
+    axes: Float[Array, "*#batch 3 3"],
+    t: Float[Array, "*#batch"],
+) -> Float[Array, "*batch 5 4"]:
     """``(*batch, 5, 4)`` the pyramid ``|x|, |y| <= t z``'s side planes and the light's plane.
 
     ``position`` ``(*batch, 3)``; ``axes`` ``(*batch, 3, 3)`` rows ``X, Y, Z``;
@@ -105,22 +111,30 @@ def pyramid_planes(xp: ModuleType, position: Array, axes: Array, t: Array) -> Ar
     return xp.concatenate([n, d[..., None]], axis=-1)
 
 
-def local_planes(xp: ModuleType, planes: Array, B: Array | None) -> Array:
+def local_planes(
+    xp: ModuleType, planes: Float[Array, "*#batch P 4"], B: Float[Array, "*#batch 4 4"] | None
+) -> Float[Array, "*batch P 4"]:
     """Planes acting on local points: ``B^T pi`` per plane (rows ``pi^T B``)."""
     return planes if B is None else matmul(xp, planes, B)
 
 
-def plane_values(xp: ModuleType, planes: Array, q: Array) -> Array:
+def plane_values(
+    xp: ModuleType, planes: Float[Array, "*#batch P 4"], q: Float[Array, "*#batch N 3"]
+) -> Float[Array, "*batch N P"]:
     """``(*batch, N, P)`` the planes' values at points ``q`` ``(*batch, N, 3)``."""
     n = xp.matrix_transpose(planes[..., :3])
     return matmul(xp, q, n) + planes[..., None, :, 3]
 
 
-def _tolerance(xp: ModuleType, g: Array, axes: tuple[int, ...], eps: float) -> Array:
+def _tolerance(
+    xp: ModuleType, g: Float[Array, "..."], axes: tuple[int, ...], eps: float
+) -> Float[Array, "..."]:
     return 64.0 * eps * xp.sum(xp.abs(g), axis=axes)
 
 
-def points_kept(xp: ModuleType, planes: Array, q: Array, eps: float) -> Array:
+def points_kept(
+    xp: ModuleType, planes: Float[Array, "*#batch P 4"], q: Float[Array, "*#batch N 3"], eps: float
+) -> Bool[Array, "*batch N"]:
     """``(*batch, N)`` the points ``q`` a spot's fit keeps (``planes`` of :func:`pyramid_planes`).
 
     A point set is kept as the fit has always read it, the blocker's vertices (whose
@@ -142,7 +156,11 @@ def points_kept(xp: ModuleType, planes: Array, q: Array, eps: float) -> Array:
 
 
 def select_points(
-    xp: ModuleType, planes: Array, points: Array, square: Array, eps: float
+    xp: ModuleType,
+    planes: Float[Array, "*#batch P 4"],
+    points: Float[Array, "*#batch N 3"],
+    square: Float[Array, "*#batch 4 3"],
+    eps: float,
 ) -> Selection:
     """Points ``(*batch, N, 3)`` selected by :func:`points_kept` (non-finite ones kept),
     the others replaced; ``square`` ``(*batch, 4, 3)`` for an empty entry."""
@@ -151,7 +169,7 @@ def select_points(
     return _filled(xp, points, keep, xp.sum(keep, axis=-1), square)
 
 
-def _finite_planes(xp: ModuleType, planes: Array) -> Array:
+def _finite_planes(xp: ModuleType, planes: Float[Array, "*batch P 4"]) -> Bool[Array, "*batch"]:
     """``(*batch,)`` the planes are finite: else (a non-finite light, ``up`` or placement,
     which the fit reports) nothing is dropped, so the fit's first check names the cause."""
     return xp.all(xp.isfinite(planes), axis=(-2, -1))
@@ -162,7 +180,9 @@ _EDGES = ((0, 1), (1, 2), (2, 0))
 _LATERAL = ((0, 2), (0, 3), (1, 2), (1, 3))
 
 
-def _weights(xp: ModuleType, g: Array) -> tuple[Array, Array]:
+def _weights(
+    xp: ModuleType, g: Float[Array, "... 3 4"]
+) -> tuple[Float[Array, "... 19 3"], Bool[Array, "... 19"]]:
     """Barycentric weights ``(..., 19, 3)`` of the candidates of triangles whose corners'
     plane values are ``g`` ``(..., 3, 4)``, and whether each exists ``(..., 19)``."""
     one, zero = xp.ones_like(g[..., 0, 0]), xp.zeros_like(g[..., 0, 0])
@@ -192,7 +212,9 @@ def _weights(xp: ModuleType, g: Array) -> tuple[Array, Array]:
     return weights, xp.stack(ok, axis=-1)
 
 
-def candidates(xp: ModuleType, g: Array, corners: Array, eps: float) -> tuple[Array, Array]:
+def candidates(
+    xp: ModuleType, g: Float[Array, "... 3 4"], corners: Float[Array, "... 3 3"], eps: float
+) -> tuple[Float[Array, "... 19 3"], Bool[Array, "... 19"]]:
     """Triangles' 19 candidates ``(..., 19, 3)`` and which are kept ``(..., 19)``: valid
     (they exist and their four values ``w . g_k >= -tau``) or not finite.
 
@@ -207,7 +229,9 @@ def candidates(xp: ModuleType, g: Array, corners: Array, eps: float) -> tuple[Ar
     return points, inside | ~xp.all(xp.isfinite(points), axis=-1)
 
 
-def corner_values(planes: Array, corners: Array) -> Array:
+def corner_values(
+    planes: Float[Array, "*#batch P 4"], corners: Float[Array, "*#batch M 3 3"]
+) -> Float[Array, "*batch 3 4 M"]:
     """NumPy: ``(*batch, 3, 4, M)`` the side planes' values ``g_ik`` at the corners of
     triangles ``(*batch, M, 3, 3)`` (triangles on the last axis: the reductions over a
     triangle's 12 values run along whole rows).
@@ -225,7 +249,9 @@ def corner_values(planes: Array, corners: Array) -> Array:
     return np.reshape(G, (*G.shape[:-2], 3, 4, G.shape[-1]))
 
 
-def classify(G: Array, eps: float) -> tuple[Array, Array]:
+def classify(
+    G: Float[Array, "*batch 3 4 M"], eps: float
+) -> tuple[Bool[Array, "*batch M"], Bool[Array, "*batch M"]]:
     """NumPy: which triangles lie inside the sides and which straddle them ``(*batch, M)``
     each, from their corners' side values ``G`` ``(*batch, 3, 4, M)``
     (:func:`corner_values`); the rest are dropped.
@@ -268,7 +294,10 @@ BLOCK = 2048
 
 
 def select_triangles(
-    planes: Array, corners: Array, square: Callable[[], Array], eps: float
+    planes: Float[Array, "*#batch P 4"],
+    corners: Float[Array, "*#batch M 3 3"],
+    square: Callable[[], Float[Array, "*#batch 4 3"]],
+    eps: float,
 ) -> Selection:
     """NumPy: triangles ``(*batch, M, 3, 3)`` clipped by the planes, only the straddling
     ones through the 19 candidates (:func:`classify`): ``(*batch, K, 3)`` points.
@@ -315,7 +344,12 @@ def select_triangles(
     return Selection(_padded(ids, found, shape, square), kept)
 
 
-def _padded(ids: Array, found: Array, shape: tuple[int, ...], square: Callable[[], Array]) -> Array:
+def _padded(
+    ids: Int[Array, " n"],
+    found: Float[Array, "n 3"],
+    shape: tuple[int, ...],
+    square: Callable[[], Float[Array, "*#batch 4 3"]],
+) -> Float[Array, "*batch K 3"]:
     """Points ``found`` ``(n, 3)`` of entries ``ids`` as ``(*batch, K, 3)``: each entry's
     points, then its first repeated; an entry with none, the square's corners."""
     size = math.prod(shape)
@@ -337,7 +371,11 @@ def _padded(ids: Array, found: Array, shape: tuple[int, ...], square: Callable[[
 
 
 def clip_triangles(
-    xp: ModuleType, planes: Array, corners: Array, square: Array, eps: float
+    xp: ModuleType,
+    planes: Float[Array, "*#batch P 4"],
+    corners: Float[Array, "*#batch M 3 3"],
+    square: Float[Array, "*#batch 4 3"],
+    eps: float,
 ) -> Selection:
     """Triangles ``(*batch, M, 3, 3)`` clipped by the planes: ``19 M + 4`` points (module).
 
@@ -360,7 +398,13 @@ def clip_triangles(
     return _filled(xp, flat, xp.reshape(keep, flat.shape[:-1]), kept, square)
 
 
-def _filled(xp: ModuleType, points: Array, keep: Array, kept: Array, square: Array) -> Selection:
+def _filled(
+    xp: ModuleType,
+    points: Float[Array, "*#batch K 3"],
+    keep: Bool[Array, "*#batch K"],
+    kept: Int[Array, "*#batch"],
+    square: Float[Array, "*#batch 4 3"],
+) -> Selection:
     """Every point not kept replaced by the first kept one (the square's first corner when
     none is); the square's four corners appended, kept only when nothing else is."""
     shape = xp.broadcast_shapes(points.shape[:-2], keep.shape[:-1], square.shape[:-2])
@@ -381,11 +425,11 @@ def _filled(xp: ModuleType, points: Array, keep: Array, kept: Array, square: Arr
 
 def empty_square(
     xp: ModuleType,
-    position: Array,
-    axes: Array,
-    t: Array,
-    depth: Array,
-) -> Array:
+    position: Float[Array, "*#batch 3"],
+    axes: Float[Array, "*#batch 3 3"],
+    t: Float[Array, "*#batch"],
+    depth: Float[Array, "*#batch"],
+) -> Float[Array, "*batch 4 3"]:
     """``(*batch, 4, 3)`` world corners ``L + z0 (+-s X +- s Y + Z)``, ``s = min(t, 1)``.
 
     The empty fit's casters: a square inside the pyramid (``s <= t``) and at most 90
@@ -398,7 +442,12 @@ def empty_square(
     return position[..., None, :] + depth[..., None, None] * offset
 
 
-def caster_depth(xp: ModuleType, planes: Array, B: Array | None, q: Array) -> Array:
+def caster_depth(
+    xp: ModuleType,
+    planes: Float[Array, "*#batch P 4"],
+    B: Float[Array, "*#batch 4 4"] | None,
+    q: Float[Array, "*#batch N 3"],
+) -> Float[Array, "*batch"]:
     """``(*batch,)`` the casters' largest ``|z|`` (1 if none or zero): the depth of the
     empty fit's square. ``planes`` of :func:`pyramid_planes` on local points
     ``q`` ``(*batch, N, 3)`` (the last is ``z``; ``B``'s last row gives ``w``)."""
@@ -411,7 +460,9 @@ def caster_depth(xp: ModuleType, planes: Array, B: Array | None, q: Array) -> Ar
     return xp.where(xp.isfinite(depth) & (depth > 0), depth, 1.0)
 
 
-def to_local(xp: ModuleType, B: Array | None, p: Array) -> Array:
+def to_local(
+    xp: ModuleType, B: Float[Array, "*#batch 4 4"] | None, p: Float[Array, "*#batch K 3"]
+) -> Float[Array, "*batch K 3"]:
     """World points ``(*batch, K, 3)`` in the placement's local coordinates (``B^-1``).
 
     A singular or non-finite ``B`` is replaced by the identity (the fit refuses it).

@@ -28,10 +28,11 @@ computed in float64 whatever the input dtype.
 from __future__ import annotations
 
 import math
-from typing import Any
+
+from shadowmath._boundary._shapes import Array, Float
 
 
-def _spot_sides(P: Any) -> tuple[float, ...]:
+def _spot_sides(P: Float[Array, "_ 4"]) -> tuple[float, ...]:
     """The four side planes ``(n_k, d_k)`` of ``P`` (rows of 4) as 16 floats."""
     return (
         float(P[0][0]), float(P[0][1]), float(P[0][2]), float(P[0][3]),
@@ -41,7 +42,9 @@ def _spot_sides(P: Any) -> tuple[float, ...]:
     )  # fmt: skip
 
 
-def _spot_values(x: float, y: float, z: float, S: Any) -> tuple[float, float, float, float]:
+def _spot_values(
+    x: float, y: float, z: float, S: tuple[float, ...]
+) -> tuple[float, float, float, float]:
     """The four side planes' values ``n_k . p + d_k`` at ``p = (x, y, z)``."""
     return (
         x * S[0] + y * S[1] + z * S[2] + S[3],
@@ -51,13 +54,19 @@ def _spot_values(x: float, y: float, z: float, S: Any) -> tuple[float, float, fl
     )
 
 
-def _spot_put(out: Any, at: int, x: float, y: float, z: float) -> int:
+def _spot_put(out: Float[Array, "_ 3"], at: int, x: float, y: float, z: float) -> int:
     """Point ``(x, y, z)`` stored in row ``at`` of ``out``; the next row."""
     out[at, 0], out[at, 1], out[at, 2] = x, y, z
     return at + 1
 
 
-def _spot_candidate(w: Any, ok: bool, tri: Any, out: Any, at: int) -> int:
+def _spot_candidate(
+    w: tuple[float, float, float],
+    ok: bool,
+    tri: tuple[tuple[float, ...], tuple[tuple[float, ...], ...], float],
+    out: Float[Array, "_ 3"],
+    at: int,
+) -> int:
     """One candidate of barycentric weights ``w`` (3), which exists when ``ok``, of the
     triangle ``tri = (c, g, tau)`` (corners, values, tolerance): stored when valid (its
     four values ``sum_i w_i g_ik >= -tau``) or not finite; the next row."""
@@ -83,7 +92,9 @@ def _spot_edge(gi: float, gj: float) -> tuple[float, bool]:
     return s, den != 0 and s >= 0 and s <= 1
 
 
-def _spot_lateral(g: Any, k: int, m: int) -> tuple[float, float, float, bool]:
+def _spot_lateral(
+    g: tuple[tuple[float, ...], ...], k: int, m: int
+) -> tuple[float, float, float, bool]:
     """Where the pyramid's edge on planes ``k``, ``m`` pierces the triangle: barycentric
     ``n_i / det`` (Cramer), and whether it does (every ``n_i`` of ``det``'s sign)."""
     a0, a1, a2 = g[0][k], g[1][k], g[2][k]
@@ -97,7 +108,13 @@ def _spot_lateral(g: Any, k: int, m: int) -> tuple[float, float, float, bool]:
     return n0 * inv, n1 * inv, n2 * inv, ok
 
 
-def _spot_clip(c: Any, g: Any, tau: float, out: Any, at: int) -> int:
+def _spot_clip(
+    c: tuple[float, ...],
+    g: tuple[tuple[float, ...], ...],
+    tau: float,
+    out: Float[Array, "_ 3"],
+    at: int,
+) -> int:
     """A straddling triangle's 19 candidates (corners ``c``, 9 floats; values ``g``, three
     4-tuples), the kept ones stored from row ``at``; the next row."""
     tri = (c, g, tau)
@@ -119,7 +136,7 @@ def _spot_clip(c: Any, g: Any, tau: float, out: Any, at: int) -> int:
     return at
 
 
-def _spot_dropped(g: Any, tau: float) -> bool:
+def _spot_dropped(g: tuple[tuple[float, ...], ...], tau: float) -> bool:
     """Every corner outside one side plane by ``2 tau``, or behind the light (the sides'
     sum, ``4 t z``, below ``-8 tau`` at every corner)."""
     g0, g1, g2 = g[0], g[1], g[2]
@@ -133,7 +150,13 @@ def _spot_dropped(g: Any, tau: float) -> bool:
     return s0 < behind and s1 < behind and s2 < behind
 
 
-def spot_clip_loop(T: Any, P: Any, eps: float, out: Any, cursor: Any) -> Any:
+def spot_clip_loop(
+    T: Float[Array, " t"],
+    P: Float[Array, "_ 4"],
+    eps: float,
+    out: Float[Array, "_ 3"],
+    cursor: tuple[int, int],
+) -> tuple[int, int, int]:
     """Triangles ``start, start + 1, ...`` of ``T`` (a flat row of ``9 M`` numbers:
     corners ``x0, y0, z0, x1, ...`` per triangle) clipped by the side planes ``P``
     (rows ``(n_k, d_k)``, the first four used), their kept points stored in

@@ -4,10 +4,13 @@ from __future__ import annotations
 
 from types import ModuleType
 
+from shadowmath._boundary._shapes import Bool, Float
 from shadowmath._boundary._validate import Array
 
 
-def matmul(xp: ModuleType, a: Array, b: Array) -> Array:
+def matmul(
+    xp: ModuleType, a: Float[Array, "*#batch n k"], b: Float[Array, "*#batch k m"]
+) -> Float[Array, "*batch n m"]:
     """``a @ b``, under JAX at full float32 precision (``Precision.HIGHEST``).
 
     JAX's default precision lets NVIDIA GPUs (and TPUs) multiply float32 matrices in
@@ -22,19 +25,25 @@ def matmul(xp: ModuleType, a: Array, b: Array) -> Array:
     return xp.matmul(a, b, precision=jax.lax.Precision.HIGHEST)
 
 
-def dot(xp: ModuleType, a: Array, b: Array) -> Array:
+def dot(
+    xp: ModuleType, a: Float[Array, "*#batch k"], b: Float[Array, "*#batch k"]
+) -> Float[Array, "*batch"]:
     """``sum(a * b, axis=-1)`` with broadcasting."""
     return xp.sum(a * b, axis=-1)
 
 
-def cross(xp: ModuleType, a: Array, b: Array) -> Array:
+def cross(
+    xp: ModuleType, a: Float[Array, "*#batch 3"], b: Float[Array, "*#batch 3"]
+) -> Float[Array, "*batch 3"]:
     """The cross product of ``(..., 3)`` vectors (stacked, so it traces under jit)."""
     ax, ay, az = a[..., 0], a[..., 1], a[..., 2]
     bx, by, bz = b[..., 0], b[..., 1], b[..., 2]
     return xp.stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx], axis=-1)
 
 
-def _max_abs(xp: ModuleType, a: Array) -> tuple[Array, Array, Array]:
+def _max_abs(
+    xp: ModuleType, a: Float[Array, "*batch k"]
+) -> tuple[Float[Array, "*batch"], Float[Array, "*batch k"], Bool[Array, "*batch"]]:
     """``(m, a / m, m > 0)`` with ``m = max |a_i|`` (1 in place of a zero ``m``)."""
     m = xp.max(xp.abs(a), axis=-1)
     nonzero = m > 0
@@ -42,7 +51,7 @@ def _max_abs(xp: ModuleType, a: Array) -> tuple[Array, Array, Array]:
     return safe_m, a / safe_m[..., None], nonzero
 
 
-def norm(xp: ModuleType, a: Array) -> Array:
+def norm(xp: ModuleType, a: Float[Array, "*batch k"]) -> Float[Array, "*batch"]:
     """``|a|`` without overflow or underflow of the squares.
 
     The vector is first scaled by its largest component, so a float32 vector of

@@ -28,6 +28,7 @@ import operator
 from collections.abc import Callable
 from typing import Any
 
+from shadowmath._boundary._shapes import Array, ArrayLike, Float, Options, Real, Row, Scalar, Truth
 from shadowmath._boundary._status import OVERFLOW, PROJECTIVE, VERTICES
 
 from ._fit_formulas import place, receiver_counted, sphere_through, to_light, triangle_far
@@ -39,7 +40,7 @@ upper: Callable[[Any, Any], Any] = max
 accumulate: Callable[[Any, Any], Any] = operator.add
 
 
-def _vertex(V: Any, k: int, b: Any, has_b: bool) -> Any:
+def _vertex(V: Row, k: int, b: tuple[float, ...], has_b: bool) -> tuple[float, float, float, float]:
     """Vertex ``k`` of a flat row in world coordinates and its ``w`` (1 without a placement)."""
     vx, vy, vz = float(V[3 * k]), float(V[3 * k + 1]), float(V[3 * k + 2])
     if has_b:
@@ -47,12 +48,16 @@ def _vertex(V: Any, k: int, b: Any, has_b: bool) -> Any:
     return vx, vy, vz, 1.0
 
 
-def count(V: Any) -> int:
+def count(V: Row) -> int:
     """The number of vertices in a flat row of ``3 N`` numbers."""
     return len(V) // 3
 
 
-def spread(vs: Any, o: Any) -> tuple[Any, ...]:
+def spread(
+    vs: tuple[Row, tuple[float, ...], bool], o: tuple[float, float, float]
+) -> tuple[
+    tuple[float, float, float], tuple[float, float, float], tuple[float, float, float], int, int
+]:
     """Pass 1 about the point ``o``: sums of ``p - o``, bounds of the world points ``p``
     (:func:`._fit_formulas.bounds_about` turns them into the bounds of ``p - o``, the
     reach and the coordinates' size), status (non-finite, projective, overflow), count."""
@@ -76,7 +81,12 @@ def spread(vs: Any, o: Any) -> tuple[Any, ...]:
     return (sx, sy, sz), (lo_x, lo_y, lo_z), (hi_x, hi_y, hi_z), st, n
 
 
-def light_pass(vs: Any, o: Any, a: Any, ratios: bool) -> Any:
+def light_pass(
+    vs: tuple[Row, tuple[float, ...], bool],
+    o: tuple[float, float, float],
+    a: tuple[float, ...],
+    ratios: bool,
+) -> tuple[float, float, float, float, float, float]:
     """Pass 2: bounds ``(hi_x, lo_x, hi_y, lo_y, hi_z, lo_z)`` of ``x, y`` (or ``x / z,
     y / z``) and ``z`` in the frame ``a`` about ``o``."""
     V, b, has_b = vs
@@ -93,7 +103,13 @@ def light_pass(vs: Any, o: Any, a: Any, ratios: bool) -> Any:
     return hx, lx, hy, ly, hz, lz
 
 
-def receiver_far(R: Any, o: Any, a: Any, sides: Any, opts: Any) -> Any:
+def receiver_far(
+    R: Real[ArrayLike, "M k"],
+    o: tuple[float, float, float],
+    a: tuple[float, ...],
+    sides: tuple[float, float, float, float],
+    opts: Options,
+) -> tuple[float, bool, float]:
     """The farthest receiver depth inside the sides (``-inf`` if none), their finite
     flag, and the link of :func:`._fit_entry.receivers_far` (0: the loop's fit raises).
 
@@ -130,14 +146,18 @@ def receiver_far(R: Any, o: Any, a: Any, sides: Any, opts: Any) -> Any:
 _STRIDE = 1000003
 
 
-def _nth(V: Any, b: Any, has_b: bool, k: int, stride: int) -> Any:
+def _nth(
+    V: Row, b: tuple[float, ...], has_b: bool, k: int, stride: int
+) -> tuple[int, tuple[float, float, float]]:
     """The ``k``-th vertex in Welzl's order: its index and world coordinates."""
     i = (k * stride) % count(V)
     p = _vertex(V, i, b, has_b)
     return i, (p[0], p[1], p[2])
 
 
-def _ball(V: Any, b: Any, has_b: bool, sup: Any, k: int) -> Any:
+def _ball(
+    V: Row, b: tuple[float, ...], has_b: bool, sup: tuple[int, int, int, int], k: int
+) -> tuple[float, float, float, float]:
     """:func:`sphere_through` the support vertices ``sup`` (indices), ``k`` of them."""
     p0, p1 = _vertex(V, sup[0], b, has_b), _vertex(V, sup[1], b, has_b)
     p2, p3 = _vertex(V, sup[2], b, has_b), _vertex(V, sup[3], b, has_b)
@@ -145,7 +165,10 @@ def _ball(V: Any, b: Any, has_b: bool, sup: Any, k: int) -> Any:
     return sphere_through(q, k)
 
 
-def _outside(p: Any, ball: Any) -> Any:
+def _outside(
+    p: tuple[Scalar, ...] | Float[Array, " 3 ..."],
+    ball: tuple[Scalar, ...] | Float[Array, " 4 ..."],
+) -> Truth:
     """``p`` outside the ball by more than the rounding of its coordinates (float64).
 
     (A point within rounding of the sphere, such as a repeated vertex far from the
@@ -158,14 +181,16 @@ def _outside(p: Any, ball: Any) -> Any:
     return sqrt(dx * dx + dy * dy + dz * dz) > sqrt(ball[3]) * (1.0 + 1e-14) + tau
 
 
-def enclosing_ball(vs: Any) -> Any:
+def enclosing_ball(vs: tuple[Row, tuple[float, ...], bool]) -> tuple[float, float, float, float]:
     """The minimal enclosing sphere of the vertices: centre (3) and squared radius."""
     V, b, has_b = vs
     sup, k = enclosing_support(V, b, has_b)
     return _ball(V, b, has_b, sup, k)
 
 
-def enclosing_support(V: Any, b: Any, has_b: bool) -> Any:
+def enclosing_support(
+    V: Row, b: tuple[float, ...], has_b: bool
+) -> tuple[tuple[int, int, int, int], int]:
     """The minimal enclosing sphere's support: vertex indices (4, repeated) and their count.
 
     Welzl's algorithm (1991) in its iterative form: a vertex outside the current

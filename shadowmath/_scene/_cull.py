@@ -41,12 +41,12 @@ Depth is not tested: what the near and far planes clip is drawn by neither.
 from __future__ import annotations
 
 from types import ModuleType
-from typing import Any
 
 import numpy as np
 
-from shadowmath._boundary._shapes import Bool, Float
+from shadowmath._boundary._shapes import Bool, Float, Scalar
 from shadowmath._boundary._validate import Array
+from shadowmath._math._frustum import Frustum, OrthographicBox
 
 
 def world_spheres(
@@ -64,7 +64,7 @@ def world_spheres(
 def spot_visible(
     position: Float[Array, "3"],
     axis: Float[Array, "3"],
-    angle: Any,
+    angle: Scalar,
     center: Float[Array, "N 3"],
     radius: Float[Array, " N"],
     *,
@@ -157,13 +157,18 @@ def sun_candidates(
 
 
 def inside_box(
-    lo: Float[Array, "N 3"], hi: Float[Array, "N 3"], box: Any, *, receiver: bool
+    lo: Float[Array, "N 3"],
+    hi: Float[Array, "N 3"],
+    box: Frustum | OrthographicBox,
+    *,
+    receiver: bool,
 ) -> Bool[Array, " N"]:
     """``(N,)`` the objects that leave an orthographic fit unchanged, from their light
     coordinates' intervals (:func:`light_intervals`): a caster's inside the box
     ``|x - c_x| <= R_x``, ``|y - c_y| <= R_y``, ``near <= z <= far``; a receiver's
     outside the window or on the light's side of ``far`` (receivers only push ``far``,
-    and only where the map covers them)."""
+    and only where the map covers them). ``box``: a directional light's fit, a box."""
+    assert isinstance(box, OrthographicBox), "a sun's fit is an orthographic box"
     cx, cy, Rx, Ry = (float(v) for v in (box.center_x, box.center_y, box.half_width,
                                           box.half_height))  # fmt: skip
     before_far = hi[:, 2] <= float(box.far)

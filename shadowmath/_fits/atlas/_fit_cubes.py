@@ -7,11 +7,12 @@ depth range of :func:`cube_depth_range`.
 
 from __future__ import annotations
 
-from typing import Any
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
 
+from shadowmath._boundary._shapes import Float
 from shadowmath._boundary._validate import Array, Context, non_finite
 from shadowmath._fits.cube._driver import AT_LIGHT, cube_depth_core
 from shadowmath._math._conventions import texture_from_clip as _texture_from_clip
@@ -71,7 +72,13 @@ def _cube_message(finite: bool, clear: bool) -> str:
     return "near and far must be finite with 0 < near < far"
 
 
-def _face_projections(xp: Any, kx: Array, ky: Array, a: Array, b: Array) -> Array:
+def _face_projections(
+    xp: ModuleType,
+    kx: Float[Array, " C"],
+    ky: Float[Array, " C"],
+    a: Float[Array, " C"],
+    b: Float[Array, " C"],
+) -> Float[Array, "C 4 4"]:
     """``(C, 4, 4)`` :func:`cube_face_projection` matrices, one per light (written in place
     for NumPy: sixteen broadcasts cost more than the fit)."""
     if xp is not np:

@@ -17,6 +17,7 @@ the window's sides are the frustum's in light ``X`` and ``Y``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from types import ModuleType
 from typing import Any, Literal, NamedTuple, TypeAlias
 
@@ -258,7 +259,7 @@ def _converted(
     return ctx, checks, out
 
 
-def _frustum(fields: Any, fr: Volume) -> Volume:
+def _frustum(fields: Sequence[Float[Array, "*batch"]], fr: Volume) -> Volume:
     """The frustum or box of converted fields (the same type as ``fr``)."""
     return type(fr)._make(fields)
 

@@ -9,10 +9,11 @@ core fits the cube lights of :func:`fit_atlas`.
 
 from __future__ import annotations
 
-from typing import Any
+from types import ModuleType
 
 import numpy as np
 
+from shadowmath._boundary._shapes import Bool, Float, Int, Scalar
 from shadowmath._boundary._validate import Array
 from shadowmath._math._frustum import NEAR_FAR_SLACK
 
@@ -30,15 +31,15 @@ AT_LIGHT = (
 
 
 def cube_depth_core(
-    xp: Any,
-    light: Array,
-    vertices_t: Array,
-    corners: Array | None,
+    xp: ModuleType,
+    light: Float[Array, "*#b 3"],
+    vertices_t: Float[Array, "*#b 3 N"],
+    corners: Float[Array, "*#b M 3"] | None,
     *,
-    k: Any,
+    k: Scalar,
     eps: float,
-    triangles: Array | None = None,
-) -> tuple[Array, Array, Array]:
+    triangles: Float[Array, "*#b T 3 3"] | None = None,
+) -> tuple[Float[Array, "*b"], Float[Array, "*b"], Bool[Array, "*b"]]:
     """``(near, far, ok)`` for trusted arrays: ``light (*b, 3)``, the casters' points
     ``vertices_t (*b, 3, N)`` (components first: NumPy reduces a trailing axis of 3
     slowly), receiver points ``corners (*b, M, 3)`` or None, the window scale ``k`` of the
@@ -57,7 +58,9 @@ def cube_depth_core(
     return k * d_min * (1 - NEAR_FAR_SLACK), d_max * (1 + NEAR_FAR_SLACK), ok
 
 
-def nearest_triangle(xp: Any, triangles: Array, light: Array, eps: float) -> Array:
+def nearest_triangle(
+    xp: ModuleType, triangles: Float[Array, "*#b T 3 3"], light: Float[Array, "*#b 3"], eps: float
+) -> Float[Array, "*b"]:
     """``min D`` over all the triangles ``(*b, T, 3, 3)`` of each batch entry, ``(*b,)``.
 
     The triangles relative to the light go components first, ``(3 corners, 3 components,
@@ -81,7 +84,9 @@ def nearest_triangle(xp: Any, triangles: Array, light: Array, eps: float) -> Arr
     return upper.reshape(shape[2:-1])
 
 
-def _candidates(R: Array, eps: float) -> tuple[Array, Array, Array]:
+def _candidates(
+    R: Float[Array, "3 3 e T"], eps: float
+) -> tuple[Float[Array, " e"], Int[Array, " n"], Int[Array, " n"]]:
     """``(upper, rows, cols)``: the corners' smallest ``D`` of each entry (an upper bound of
     the answer) and the (entry, triangle) pairs whose bounding box comes nearer than it,
     ``D`` of the box being ``max_i max(lo_i, -hi_i, 0)`` (a box exactly at the bound cannot
@@ -102,11 +107,15 @@ def _candidates(R: Array, eps: float) -> tuple[Array, Array, Array]:
     return upper, rows, cols
 
 
-def _chebyshev(xp: Any, x: Array, y: Array, z: Array) -> Array:
+def _chebyshev(
+    xp: ModuleType, x: Float[Array, "..."], y: Float[Array, "..."], z: Float[Array, "..."]
+) -> Float[Array, "..."]:
     return xp.maximum(xp.maximum(xp.abs(x), xp.abs(y)), xp.abs(z))
 
 
-def _safe_divide(xp: Any, num: Array, den: Array, ok: Array) -> Array:
+def _safe_divide(
+    xp: ModuleType, num: Float[Array, "..."], den: Float[Array, "..."], ok: Bool[Array, "..."]
+) -> Float[Array, "..."]:
     """``num / den`` where ``ok``, 0 elsewhere, with finite gradients on both sides."""
     return xp.where(ok, num / xp.where(ok, den, xp.ones_like(den)), xp.zeros_like(num))
 
@@ -120,7 +129,7 @@ _DIAGONALS = np.array(
 ).T
 
 
-def triangle_min_chebyshev(xp: Any, R: Array) -> Array:
+def triangle_min_chebyshev(xp: ModuleType, R: Float[Array, "3 3 ..."]) -> Float[Array, "..."]:
     r"""``min D`` over each triangle of ``R (3 corners, 3 components, ...)`` (corners
     relative to the light, components first so that NumPy reads contiguous arrays), with
     ``D(r) = max(|r_x|, |r_y|, |r_z|)``; shape ``(...)``.
