@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import html
 import json
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -21,6 +21,7 @@ from shadowmath.integrations.threejs import (
     MODULE_PATH,
     THREE_PATH,
     JsonValue,
+    cascade_shadow_data,
     point_shadow_data,
     shadow_data,
 )
@@ -33,7 +34,7 @@ except ImportError as err:  # pragma: no cover - the extra is part of `dev`
         "shadowmath.integrations.threejs.widget needs anywidget: pip install 'shadowmath[widget]'"
     ) from err
 
-__all__ = ["ShadowWidget", "StaticView"]
+__all__ = ["ShadowWidget", "StaticView", "ViewCamera", "view_camera"]
 
 _ESM = (MODULE_PATH.parent / "widget.js").read_text(encoding="utf-8")
 
@@ -92,14 +93,21 @@ class ShadowWidget(anywidget.AnyWidget):
         light: ``{"kind": "directional" | "spot" | "point", "position": [x, y, z],
             "target": [x, y, z], "angle": radians (spot)}``; a sun shines from
             ``position`` toward ``target``.
-        camera: ``{"position": [...], "target": [...]}`` of the viewer.
+        camera: ``{"position": [...], "target": [...]}`` of the viewer (z up), optionally
+            ``"fov"`` (vertical, degrees; 45), ``"near"`` (0.05), ``"far"`` (500) and
+            ``"aspect"`` (width / height; the page sends its own back).
         map_size: the shadow map's texels per side.
+        cascades: for a sun, ``N > 0`` fits ``N`` cascades (:func:`shadowmath.fit_cascades`)
+            to the camera's view and refits each time the camera moves; the page draws them
+            as ``N`` directional lights sharing the sun's direction, one per cascade, each
+            with ``1 / N`` of the sun's intensity. ``0`` (the default): one fitted camera.
 
     Traits synced with the page: ``light`` (written back when the light is dragged),
-    ``camera``, ``shadow`` (the fitted data, refitted on each change of ``light`` or
-    ``meshes``), ``fit_error`` (why a fit failed, else ""), ``show_frustum`` (the shadow
-    camera's box), ``show_map`` (a picture of the shadow map) and ``fitted`` (False: three.js's
-    default shadow camera, to compare).
+    ``camera`` (written back when an orbit ends), ``shadow`` (the fitted data, refitted on
+    each change of ``light`` or ``meshes``, and of ``camera`` in cascades mode),
+    ``fit_error`` (why a fit failed, else ""), ``show_frustum`` (the shadow camera's box),
+    ``show_map`` (a picture of the shadow map) and ``fitted`` (False: three.js's default
+    shadow camera, to compare).
 
     Example:
         >>> import numpy as np
@@ -124,6 +132,7 @@ class ShadowWidget(anywidget.AnyWidget):
     show_map = traitlets.Bool(False).tag(sync=True)
     fitted = traitlets.Bool(True).tag(sync=True)
     height = traitlets.Int(400).tag(sync=True)
+    cascades = traitlets.Int(0).tag(sync=True)
 
     def __init__(
         self,
@@ -132,6 +141,7 @@ class ShadowWidget(anywidget.AnyWidget):
         light: dict[str, Any],
         camera: dict[str, Any] | None = None,
         map_size: int = 1024,
+        cascades: int = 0,
         **kwargs: Any,
     ) -> None:
         colors = ["#d8d8d8", "#e07a5f", "#3d85c6", "#81b29a", "#f2cc8f"]
@@ -142,15 +152,21 @@ class ShadowWidget(anywidget.AnyWidget):
             light=dict(light),
             camera=view,
             map_size=map_size,
+            cascades=cascades,
             three_source=THREE_PATH.read_text(encoding="utf-8"),
             module_source=MODULE_PATH.read_text(encoding="utf-8"),
             **kwargs,
         )
         self.refit()
 
-    @traitlets.observe("light", "meshes", "map_size")
+    @traitlets.observe("light", "meshes", "map_size", "cascades")
     def _changed(self, change: Any) -> None:
         self.refit()
+
+    @traitlets.observe("camera")
+    def _camera_changed(self, change: Any) -> None:
+        if self.cascades > 0:  # only cascades follow the viewer
+            self.refit()
 
     def to_html(self) -> str:
         """A standalone HTML page of the widget as it is now (three.js, ``shadowmath.js``,
@@ -173,7 +189,14 @@ class ShadowWidget(anywidget.AnyWidget):
     def refit(self) -> None:
         """Fit the light's shadow to the meshes and send the three.js data to the page."""
         try:
-            self.shadow = fit_light(self.light, self.meshes, self.map_size)
+            if self.cascades < 0:
+                raise ValueError(f"cascades: expected 0 or more, got {self.cascades}")
+            if self.cascades > 0:
+                self.shadow = fit_sun_cascades(
+                    self.light, self.meshes, self.camera, self.map_size, self.cascades
+                )
+            else:
+                self.shadow = fit_light(self.light, self.meshes, self.map_size)
             self.fit_error = ""
         except ValueError as err:
             self.shadow, self.fit_error = {}, str(err)
@@ -192,15 +215,78 @@ class StaticView:
         )
 
 
-def fit_light(
-    light: dict[str, Any], meshes: list[dict[str, Any]], map_size: int
-) -> dict[str, JsonValue]:
-    """The three.js data of ``light``'s fit to ``meshes`` (the widget's JSON forms)."""
+def _scene(meshes: list[dict[str, Any]]) -> sm.Mesh:
     parts = [
         (sm.Mesh(np.reshape(m["positions"], (-1, 3)), np.reshape(m["indices"], (-1, 3))), np.eye(4))
         for m in meshes
     ]
-    scene = sm.gather_meshes(parts)
+    return sm.gather_meshes(parts)
+
+
+class ViewCamera(NamedTuple):
+    """The widget's viewer as matrices: ``view`` (world to eye) and ``projection`` (OpenGL)."""
+
+    view: np.ndarray
+    projection: np.ndarray
+
+
+def view_camera(camera: dict[str, Any]) -> ViewCamera:
+    r"""The matrices of the widget's camera dict, as three.js builds them.
+
+    ``view`` is ``lookAt`` from ``position`` to ``target`` with ``z`` up (rows: right, up,
+    back; :math:`V = [R \mid -R e]`); ``projection`` three.js's ``PerspectiveCamera``
+    (``fov`` vertical degrees, ``aspect``, ``near``, ``far``; depth -1..1).
+
+    Raises:
+        ValueError: the camera looks straight along ``z`` or ``position`` is ``target``.
+    """
+    eye = np.asarray(camera["position"], dtype=np.float64)
+    forward = np.asarray(camera.get("target", [0.0, 0.0, 0.0]), dtype=np.float64) - eye
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    if np.linalg.norm(right) <= 1e-9 * max(np.linalg.norm(forward), 1e-300):
+        raise ValueError("camera: position and target must differ and not be along z")
+    forward /= np.linalg.norm(forward)
+    right /= np.linalg.norm(right)
+    view = np.eye(4)
+    view[:3, :3] = np.stack([right, np.cross(right, forward), -forward])
+    view[:3, 3] = -view[:3, :3] @ eye
+    f = 1.0 / np.tan(np.radians(float(camera.get("fov", 45.0))) / 2)
+    near, far = float(camera.get("near", 0.05)), float(camera.get("far", 500.0))
+    projection = np.zeros((4, 4))
+    projection[0, 0], projection[1, 1] = f / float(camera.get("aspect", 1.6)), f
+    projection[2, 2:] = -(far + near) / (far - near), -2 * far * near / (far - near)
+    projection[3, 2] = -1.0
+    return ViewCamera(view, projection)
+
+
+def fit_sun_cascades(
+    light: dict[str, Any],
+    meshes: list[dict[str, Any]],
+    camera: dict[str, Any],
+    map_size: int,
+    count: int,
+) -> dict[str, JsonValue]:
+    """The three.js data of ``count`` cascades of the sun ``light`` over ``meshes``' bounds
+    seen by ``camera`` (:func:`shadowmath.fit_cascades`, :func:`view_camera`)."""
+    if light.get("kind") != "directional":
+        raise ValueError(
+            f"cascades: only a directional light has cascades, got {light.get('kind')!r}"
+        )
+    direction = np.asarray(light["position"], float) - np.asarray(
+        light.get("target", [0.0] * 3), float
+    )
+    vertices = np.asarray(_scene(meshes).vertices)
+    bounds = np.stack([vertices.min(axis=0), vertices.max(axis=0)])
+    view, projection = view_camera(camera)
+    fit = sm.fit_cascades(direction, view, projection, bounds, map_size, count=count)
+    return cascade_shadow_data(fit)
+
+
+def fit_light(
+    light: dict[str, Any], meshes: list[dict[str, Any]], map_size: int
+) -> dict[str, JsonValue]:
+    """The three.js data of ``light``'s fit to ``meshes`` (the widget's JSON forms)."""
+    scene = _scene(meshes)
     position = np.asarray(light["position"], dtype=np.float64)
     target = np.asarray(light.get("target", [0.0, 0.0, 0.0]), dtype=np.float64)
     kind = light.get("kind")
