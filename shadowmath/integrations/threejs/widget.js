@@ -19,6 +19,7 @@ function buildLight(THREE, spec) {
 	light.position.fromArray(spec.position);
 	if (light.target) light.target.position.fromArray(spec.target || [0, 0, 0]);
 	light.castShadow = true;
+	light.userData.intensity = light.intensity; // shared among a sun's cascades
 	light.shadow.normalBias = 0.02; // the floor casts and receives: no acne on it
 	return light;
 }
@@ -52,21 +53,27 @@ async function render({ model, el }) {
 	const scene = new THREE.Scene();
 	scene.background = new THREE.Color(0xf4f4f4);
 	scene.add(new THREE.AmbientLight(0xffffff, 0.35));
-	const camera = new THREE.PerspectiveCamera(45, width / height, 0.05, 500);
-	camera.up.set(0, 0, 1);
 	const view = model.get('camera');
+	const camera = new THREE.PerspectiveCamera(view.fov ?? 45, width / height, view.near ?? 0.05, view.far ?? 500);
+	camera.up.set(0, 0, 1);
 	camera.position.fromArray(view.position);
 	const orbit = new THREE.OrbitControls(camera, renderer.domElement);
 	orbit.target.fromArray(view.target);
 	orbit.update();
-	orbit.addEventListener('end', () => { // the viewer's camera, back to Python
-		model.set('camera', { position: camera.position.toArray(), target: orbit.target.toArray() });
+	function sendCamera() { // the viewer's camera, back to Python (cascades are refitted to it)
+		const { fov, aspect, near, far } = camera;
+		model.set('camera', { position: camera.position.toArray(), target: orbit.target.toArray(), fov, aspect, near, far });
 		model.save_changes();
-	});
+	}
+	orbit.addEventListener('end', sendCamera);
+	if (view.aspect !== camera.aspect) sendCamera();
 
 	let meshes = [];
-	let light = null;
-	let helper = null;
+	let light = null; // the dragged light; with cascades, cascade 0's
+	let extra = []; // cascades 1..N-1: lights like `light`
+	let helpers = [];
+	let frozen = false; // set by the test hook `readback`
+	const lights = () => [light, ...extra];
 	let gizmo = null;
 	const mapView = new THREE.Mesh(new THREE.PlaneGeometry(1, 1), new THREE.MeshBasicMaterial());
 	const hud = new THREE.Scene();
@@ -79,7 +86,23 @@ async function render({ model, el }) {
 		meshes.forEach((m) => scene.add(m));
 	}
 
+	function setLightCount(n) {
+		while (extra.length > n - 1) {
+			const l = extra.pop();
+			sm.removeShadow(l);
+			scene.remove(l, l.target);
+			l.dispose();
+		}
+		while (extra.length < n - 1) {
+			const l = buildLight(THREE, model.get('light'));
+			l.position.copy(light.position);
+			scene.add(l, l.target);
+			extra.push(l);
+		}
+	}
+
 	function rebuildLight() {
+		setLightCount(1);
 		if (light) { scene.remove(light); if (light.target) scene.remove(light.target); light.dispose(); }
 		if (gizmo) { scene.remove(gizmo.getHelper()); gizmo.dispose(); }
 		light = buildLight(THREE, model.get('light'));
@@ -100,20 +123,27 @@ async function render({ model, el }) {
 
 	function applyFit() {
 		const data = model.get('shadow');
-		sm.removeShadow(light);
-		if (model.get('fitted') && data && data.type) sm.applyShadow(light, data);
-		if (helper) { scene.remove(helper); helper.dispose(); helper = null; }
+		const fitted = model.get('fitted') && data && data.type;
+		const cascades = fitted && data.type === 'cascades' && light.isDirectionalLight;
+		const n = cascades ? data.cascades.length : 1;
+		setLightCount(n);
+		lights().forEach((l) => { sm.removeShadow(l); l.intensity = l.userData.intensity / n; });
+		if (cascades) sm.applyCascades(lights(), data);
+		else if (fitted && data.type !== 'cascades') sm.applyShadow(light, data);
+		helpers.forEach((h) => { scene.remove(h); h.dispose(); });
+		helpers = [];
 		if (model.get('show_frustum') && !light.isPointLight) {
-			helper = new THREE.CameraHelper(light.shadow.camera);
-			scene.add(helper);
+			helpers = lights().map((l) => new THREE.CameraHelper(l.shadow.camera));
+			helpers.forEach((h) => scene.add(h));
 		}
 		status.textContent = model.get('fit_error') || (model.get('fitted') ? 'fitted shadow camera' : "three.js's default shadow camera");
 	}
 
 	function frame() {
-		if (!el.isConnected && renderer.domElement.parentNode !== el) return;
+		if (frozen || (!el.isConnected && renderer.domElement.parentNode !== el)) return;
 		orbit.update();
-		if (helper) helper.update();
+		extra.forEach((l) => l.position.copy(light.position));
+		helpers.forEach((h) => h.update());
 		renderer.autoClear = true;
 		renderer.render(scene, camera);
 		const map = light && light.shadow.map;
@@ -139,9 +169,36 @@ async function render({ model, el }) {
 	model.on('change:light', () => {
 		const spec = model.get('light');
 		if (spec.kind !== (light.isDirectionalLight ? 'directional' : light.isSpotLight ? 'spot' : 'point')) rebuildLight();
-		else light.position.fromArray(spec.position);
+		else lights().forEach((l) => l.position.fromArray(spec.position));
 	});
-	window.__shadowmathWidget = { renderer, scene, camera, get light() { return light; } };
+
+	// Test hook (the browser tests read the widget's pixels): stop the interactive loop and
+	// draw once on a `size` [w, h] canvas through an orthographic camera looking down -z
+	// onto `view` [left, right, bottom, top]; meshes whose index is not in `receivers` are
+	// drawn into the shadow maps only; no helpers, gizmo or map picture; with `solo` i, only
+	// cascade i lights the scene (at the sun's intensity). Returns the red channel, bottom
+	// row first.
+	function readback({ size, view: v, receivers, solo }) {
+		frozen = true;
+		const [w, h] = size;
+		renderer.setSize(w, h);
+		const top = new THREE.OrthographicCamera(v[0], v[1], v[3], v[2], 0.1, 100);
+		top.position.set(0, 0, 50);
+		top.lookAt(0, 0, 0);
+		meshes.forEach((m, i) => { if (!receivers.includes(i)) m.layers.set(1); });
+		[gizmo.getHelper(), ...helpers].forEach((o) => { o.visible = false; });
+		lights().forEach((l, i) => {
+			l.shadow.camera.layers.enable(1);
+			if (solo !== undefined) l.intensity = i === solo ? l.userData.intensity : 0;
+		});
+		renderer.render(scene, top);
+		renderer.render(scene, top);
+		const gl = renderer.getContext();
+		const pixels = new Uint8Array(w * h * 4);
+		gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
+		return Array.from({ length: w * h }, (_, i) => pixels[4 * i]);
+	}
+	window.__shadowmathWidget = { renderer, scene, camera, readback, get light() { return light; }, get lights() { return lights(); } };
 	requestAnimationFrame(frame);
 	return () => { renderer.dispose(); };
 }
