@@ -367,7 +367,7 @@ CASCADE_BOXES = [
 ]
 
 
-def widget_case(name: str) -> tuple[Any, list[Any], Truth]:
+def widget_case(name: str) -> tuple[Any, Truth]:
     """The widget (ground first, then the case's boxes) and the ray caster's truth."""
     from shadowmath.integrations.threejs.widget import ShadowWidget
 
@@ -392,7 +392,7 @@ def widget_case(name: str) -> tuple[Any, list[Any], Truth]:
         show_map=True,
     )
     assert w.fit_error == ""
-    return w, boxes, truth(truth_light, boxes, cone)
+    return w, truth(truth_light, boxes, cone)
 
 
 def cascade_slices(w: Any) -> list[np.ndarray]:
@@ -417,7 +417,7 @@ def test_the_widget_draws_the_fitted_shadow(chromium, name):
     cascade's light alone, compared on the ground the camera sees in its slice, each holding
     shadow."""
     pytest.importorskip("anywidget", reason="the widget extra: pip install 'shadowmath[widget]'")
-    w, boxes, t = widget_case(name)
+    w, t = widget_case(name)
     server = serve({"/": (w.to_html().encode(), "text/html")})
     try:
         tab = chromium.new_page(viewport={"width": 320, "height": 240})

@@ -243,7 +243,7 @@ def view_camera(camera: dict[str, Any]) -> ViewCamera:
     eye = np.asarray(camera["position"], dtype=np.float64)
     forward = np.asarray(camera.get("target", [0.0, 0.0, 0.0]), dtype=np.float64) - eye
     right = np.cross(forward, [0.0, 0.0, 1.0])
-    if np.linalg.norm(right) <= 1e-9 * max(np.linalg.norm(forward), 1e-300):
+    if np.linalg.norm(right) <= 1e-9 * max(float(np.linalg.norm(forward)), 1e-300):
         raise ValueError("camera: position and target must differ and not be along z")
     forward /= np.linalg.norm(forward)
     right /= np.linalg.norm(right)
