@@ -37,8 +37,7 @@ CORE_PACKAGES = ("shadowmath._math", "shadowmath._scene")
 
 # Cores whose signatures are not yet shaped (being rewritten in parallel); each entry names
 # why. Empty when every core is annotated.
-_REWRITTEN = "its bodies are being rewritten (records for slots, one form per step)"
-PENDING: dict[str, str] = {f"shadowmath._math.{m}": _REWRITTEN for m in ("_cascade_steps",)}
+PENDING: dict[str, str] = {}
 
 # The fits' own cores (trusted arrays in, arrays out), checked as the cores of _math are.
 FIT_CORES: dict[str, tuple[str, ...]] = {
