@@ -50,6 +50,14 @@ FIT_CORES: dict[str, tuple[str, ...]] = {
         "triangle_min_chebyshev",
     ),
     "shadowmath._fits.atlas._fit_cubes": ("_face_projections",),
+    "shadowmath._fits.cascades._driver": ("_compiled", "_arrays", "_warp", "_result"),
+    "shadowmath._fits.shadow._arrays": (
+        "driver",
+        "fit_arrays",
+        "_report",
+        "_components",
+        "_vertex_source",
+    ),
 }
 
 # (module, function, parameter): typed Any by design, with the reason.
