@@ -225,6 +225,13 @@ def _fits() -> None:
     scene = np.array([[-20.0, -5.0, -40.0], [20.0, 5.0, 0.0]])
     sm.fit_cascades(sun, view, proj, scene, 256, count=3)
     sm.fit_cascades(sun, view, proj, scene, 256, count=2, stable=True)
+    # The loop form's fitted orientation, the visible range with a state, given splits, up.
+    sm.fit_cascades(sun, view, proj, scene, 256, count=2, orientation="fitted")
+    seen = sm.fit_cascades(sun, view, proj, scene, 256, count=2, depth_range="visible", stable=True)
+    sm.fit_cascades(
+        sun, view, proj, scene, 256, count=2, depth_range="visible", stable=True, state=seen.state
+    )
+    sm.fit_cascades(sun, view, proj, scene, 256, splits=[0.5, 5.0, 50.0], up=[0.0, 1.0, 0.0])
     sm.cube_face_views([[0.0, 1.0, 2.0]])
     sm.cube_depth_range([0.0, 0.0, 0.0], BOX)
     frame = sm.light_frame([0.0, 0.0, 0.0], BOX)
