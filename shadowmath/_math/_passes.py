@@ -37,8 +37,6 @@ from ._ball_support import support_arrays
 from ._fit_formulas import to_light
 from ._specialize import formulas, scalar_formulas
 
-Components = tuple[Array, Array, Array]
-
 
 class Spread(NamedTuple):
     """Pass 1: where the blocker lies from the light, and the scales of the thresholds."""

@@ -40,9 +40,6 @@ from shadowmath._math._specialize import (
     specialize,
 )
 
-Components = tuple[Array, Array, Array]
-
-
 #: A fit's per-entry results (the status, then component arrays of the batch shape, or
 #: scalars): the :class:`Entry` of the per-entry code, which every driver reads.
 FitEntries = Entry
