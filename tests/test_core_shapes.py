@@ -37,8 +37,7 @@ CORE_PACKAGES = ("shadowmath._math", "shadowmath._scene")
 
 # Cores whose signatures are not yet shaped (being rewritten in parallel); each entry names
 # why. Empty when every core is annotated.
-_REWRITTEN = "its bodies are being rewritten (records for slots, one form per step)"
-PENDING: dict[str, str] = {f"shadowmath._math.{m}": _REWRITTEN for m in ("_cascade_steps",)}
+PENDING: dict[str, str] = {}
 
 # The fits' own cores (trusted arrays in, arrays out), checked as the cores of _math are.
 FIT_CORES: dict[str, tuple[str, ...]] = {
@@ -51,6 +50,14 @@ FIT_CORES: dict[str, tuple[str, ...]] = {
         "triangle_min_chebyshev",
     ),
     "shadowmath._fits.atlas._fit_cubes": ("_face_projections",),
+    "shadowmath._fits.cascades._driver": ("_compiled", "_arrays", "_warp", "_result"),
+    "shadowmath._fits.shadow._arrays": (
+        "driver",
+        "fit_arrays",
+        "_report",
+        "_components",
+        "_vertex_source",
+    ),
 }
 
 # (module, function, parameter): typed Any by design, with the reason.
@@ -218,6 +225,13 @@ def _fits() -> None:
     scene = np.array([[-20.0, -5.0, -40.0], [20.0, 5.0, 0.0]])
     sm.fit_cascades(sun, view, proj, scene, 256, count=3)
     sm.fit_cascades(sun, view, proj, scene, 256, count=2, stable=True)
+    # The loop form's fitted orientation, the visible range with a state, given splits, up.
+    sm.fit_cascades(sun, view, proj, scene, 256, count=2, orientation="fitted")
+    seen = sm.fit_cascades(sun, view, proj, scene, 256, count=2, depth_range="visible", stable=True)
+    sm.fit_cascades(
+        sun, view, proj, scene, 256, count=2, depth_range="visible", stable=True, state=seen.state
+    )
+    sm.fit_cascades(sun, view, proj, scene, 256, splits=[0.5, 5.0, 50.0], up=[0.0, 1.0, 0.0])
     sm.cube_face_views([[0.0, 1.0, 2.0]])
     sm.cube_depth_range([0.0, 0.0, 0.0], BOX)
     frame = sm.light_frame([0.0, 0.0, 0.0], BOX)

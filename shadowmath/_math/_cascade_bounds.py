@@ -66,13 +66,13 @@ BODY_VERTICES = 48
 FORMS = {"cascade_bounds": ("_bounds_loop", "_bounds_array")}
 
 
-def _bounds_loop(lc: Any, gs: Any, boxp: Any, d: Any) -> Any:
+def _bounds_loop(lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar]) -> LightBounds:
     """The loop form: :func:`body_loop`'s vertices reduced (:func:`points_bounds`)."""
     pts = alloc(3 * BODY_VERTICES)
     return points_bounds(pts, body_loop(lc, gs, boxp, d, pts), boxp[0])
 
 
-def body_loop(lc: Any, gs: Any, boxp: Any, d: Any, pts: Any) -> Any:
+def body_loop(lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar], pts: Row) -> int:
     """The loop form's vertices of the intersection: the clipped ends of the edges into
     ``pts`` (``x, y, z`` each, at most :data:`BODY_VERTICES`), or the slice's own corners
     where the intersection is empty or the whole slice; returns their count.
@@ -109,7 +109,7 @@ def body_loop(lc: Any, gs: Any, boxp: Any, d: Any, pts: Any) -> Any:
     return m
 
 
-def points_bounds(pts: Any, m: Any, bl: Any) -> Any:
+def points_bounds(pts: Row, m: int, bl: Row) -> LightBounds:
     """The :class:`LightBounds` of ``m`` vertices ``pts`` (:func:`body_loop`) and the box's
     corners ``bl`` (8 x 3)."""
     inf = math.inf

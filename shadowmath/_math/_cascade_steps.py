@@ -25,6 +25,17 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from shadowmath._boundary._shapes import (
+    Array,
+    ArrayLike,
+    Float,
+    Int,
+    Options,
+    Real,
+    Row,
+    Scalar,
+    Status,
+)
 from shadowmath._boundary._status import (
     C_BOUNDS_FINITE,
     C_BOUNDS_ORDER,
@@ -46,7 +57,7 @@ from shadowmath._boundary._status import (
 )
 
 # Shared formulas and primitives, rebound by specialize().
-from ._cascade_bounds import BODY_VERTICES, body_loop, points_bounds
+from ._cascade_bounds import BODY_VERTICES, LightBounds, body_loop, points_bounds
 from ._cascade_formulas import (  # noqa: F401
     EDGES,
     affine,
@@ -65,6 +76,7 @@ from ._cascade_formulas import (  # noqa: F401
     split_depth,
     take_last,
 )
+from ._enclosing_rectangle import Rectangle
 from ._fit_formulas import fit_axes, fit_rows, placement_ok, safe_box, stable_sides, to_light
 from ._formulas import fabs, flag, isfinite, sqrt, where
 from ._rectangle_loop import rectangle_loop
@@ -209,24 +221,26 @@ def options_dtype() -> np.dtype[Any]:
     return np.dtype(fields)
 
 
-def options_record(o: CascadeOptions) -> Any:
+def options_record(o: CascadeOptions) -> np.ndarray[Any, np.dtype[Any]]:
     """``o`` as a read-only 1-element structured array (read as ``opts[0].stable``)."""
     record = np.array([tuple(o)], dtype=options_dtype())
     record.setflags(write=False)
     return record
 
 
-def lesser(a: Any, b: Any) -> Any:
+def lesser(a: Scalar, b: Scalar) -> Scalar:
     """``min(a, b)`` with the ``where`` primitive."""
     return where(a <= b, a, b)
 
 
-def greater(a: Any, b: Any) -> Any:
+def greater(a: Scalar, b: Scalar) -> Scalar:
     """``max(a, b)`` with the ``where`` primitive."""
     return where(a >= b, a, b)
 
 
-def cascade_camera(V: Any, P: Any, o: Any, nc: Any, fc: Any) -> Any:
+def cascade_camera(
+    V: Row, P: Row, o: Options, nc: Row, fc: Row
+) -> tuple[Scalar, Scalar, Scalar, Status]:
     """The camera's frustum edges: near corners ``nc`` (4 x 3), far corners ``fc`` (4 x 4,
     homogeneous, ``w >= 0``), both ``i + 2 j``. Returns the view depth's sign, the near and
     far depths (``inf``: an infinite far plane) and the status bits."""
@@ -274,7 +288,7 @@ def cascade_camera(V: Any, P: Any, o: Any, nc: Any, fc: Any) -> Any:
     return sign, sign * nz, far, st
 
 
-def cascade_checks(inputs: Any, o: Any) -> Any:
+def cascade_checks(inputs: CascadeInputs, o: Options) -> Status:
     """The finiteness, affinity and order checks of one entry's inputs (status bits)."""
     L, V, P, box, U = inputs.light, inputs.view_matrix, inputs.projection, inputs.box, inputs.up
     tv, tp = V[0], P[0]
@@ -293,7 +307,13 @@ def cascade_checks(inputs: Any, o: Any) -> Any:
     return st | flag(order, C_BOUNDS_ORDER)
 
 
-def cascade_range(near: Any, far: Any, sc: Any, G: Any, o: Any) -> Any:
+def cascade_range(
+    near: Scalar,
+    far: Scalar,
+    sc: CascadeScalars,
+    G: Row | Float[Array, "*#batch m"] | None,
+    o: Options,
+) -> tuple[Scalar, Status]:
     """The last split of the scheme (``near + 1`` where invalid) and the checks of the
     splits: given (``G``, ``n + 1`` increasing within the camera's range, to ``o.tol``
     relative) or of the scheme (``sc``: :class:`CascadeScalars`)."""
@@ -318,7 +338,12 @@ def cascade_range(near: Any, far: Any, sc: Any, G: Any, o: Any) -> Any:
     return where(isfinite(end) & (end > near), end, near + 1.0), st
 
 
-def cascade_split(G: Any, k: Any, rng: Any, o: Any) -> Any:
+def cascade_split(
+    G: Row | Float[Array, "*#batch m"] | None,
+    k: Scalar,
+    rng: tuple[Scalar, Scalar, Scalar, Scalar],
+    o: Options,
+) -> Scalar:
     """Split ``k`` (an int, or the cascades' indices in the array mode): given, or the
     scheme's over ``rng = (near, end, lam, overlap)`` with exact ends.
 
@@ -339,7 +364,7 @@ def cascade_split(G: Any, k: Any, rng: Any, o: Any) -> Any:
     return where(k == 0, near, where(k == n, end, s))
 
 
-def box_pass(VP: Any, box: Any, a_sign: Any, bl: Any, bg: Any) -> None:
+def box_pass(VP: tuple[Row, Row], box: Row, a_sign: tuple[Row, Scalar], bl: Row, bg: Row) -> None:
     """The scene box's corners (``box``: min then max, 6 numbers): light coordinates
     (``bl``, 8 x 3), camera side values and view depth (``bg``, 8 x 5)."""
     V, P = VP
@@ -355,7 +380,12 @@ def box_pass(VP: Any, box: Any, a_sign: Any, bl: Any, bg: Any) -> None:
         bg[5 * k + 4] = sign * (V[8] * x + V[9] * y + V[10] * z + V[11])
 
 
-def cascade_entry(inputs: Any, sc: Any, GW: Any, o: Any) -> Any:
+def cascade_entry(
+    inputs: CascadeInputs,
+    sc: CascadeScalars,
+    GW: tuple[Row | Float[Array, "*#batch m"] | None, Row | Float[Array, "*#batch n"] | None],
+    o: Options,
+) -> CascadeEntry:
     """One camera's steps before its cascades (a :class:`CascadeEntry`): frustum, checks,
     split range, light frame and scene box. ``inputs``: :class:`CascadeInputs`; ``sc``:
     :class:`CascadeScalars`; ``GW``: the given splits and the previous stable half-widths
@@ -376,7 +406,13 @@ def cascade_entry(inputs: Any, sc: Any, GW: Any, o: Any) -> Any:
     return CascadeEntry(cam, lo, hi, sc.lam, sc.overlap, W, bl, bg, st)
 
 
-def split_range(cam: Any, scene: Any, ne: Any, sc: Any, o: Any) -> Any:
+def split_range(
+    cam: CascadeCamera,
+    scene: tuple[Row, Row],
+    ne: tuple[Scalar, Scalar],
+    sc: CascadeScalars,
+    o: Options,
+) -> tuple[Scalar, Scalar]:
     """The view depths the splits span: the camera's ``ne = (near, end)``, or the visible
     range (:func:`visible_range`) or a measured one (``sc.measured_*``) within it; with the
     previous range (``sc.previous_*``), widened to the ladder with hysteresis
@@ -395,7 +431,9 @@ def split_range(cam: Any, scene: Any, ne: Any, sc: Any, o: Any) -> Any:
     return lo, hi
 
 
-def visible_range(cam: Any, scene: Any, ne: Any) -> Any:
+def visible_range(
+    cam: CascadeCamera, scene: tuple[Row, Row], ne: tuple[Scalar, Scalar]
+) -> tuple[Scalar, Scalar]:
     """The nearest and farthest view depth of the camera's slice ``ne = (near, end)``
     intersected with the scene box: the bounds pass (:data:`cascade_bounds`) with each
     vertex's view depth as its first coordinate (depth is affine in the point, so its
@@ -412,7 +450,9 @@ def visible_range(cam: Any, scene: Any, ne: Any) -> Any:
     return b.lo_x, b.hi_x
 
 
-def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
+def cascade_slice(
+    e: CascadeEntry, box: Row, Z: Row | Float[Array, "*#batch m"], j: Scalar, o: Options
+) -> CascadeSlice:
     """Cascade ``j``'s :class:`CascadeSlice`: its depths ``s0 <= s1`` (with its band;
     ``Z``: the ``n + 1`` splits) and its slice's corners."""
     s0, s1 = take_last(Z, j), take_last(Z, j + 1)
@@ -421,7 +461,7 @@ def cascade_slice(e: Any, box: Any, Z: Any, j: Any, o: Any) -> Any:
     return CascadeSlice(s0, s1, vc, lc, gs)
 
 
-def slice_corners(cam: Any, box: Any, s0: Any, s1: Any) -> Any:
+def slice_corners(cam: CascadeCamera, box: Row, s0: Scalar, s1: Scalar) -> tuple[Row, Row, Row]:
     """The corners of the camera's slice between view depths ``s0`` and ``s1``: view
     (``vc``, 8 x 3), light (``lc``) and the box's half-space values at them (``gs``, 8 x 6).
     ``cam``: :class:`CascadeCamera`."""
@@ -443,7 +483,7 @@ def slice_corners(cam: Any, box: Any, s0: Any, s1: Any) -> Any:
     return vc, lc, gs
 
 
-def cascade_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
+def cascade_fit(e: CascadeEntry, sl: CascadeSlice, j: Scalar, o: Options, row: Row) -> None:
     """Cascade ``j``'s map into ``row`` (:data:`ROW` entries, parts at :data:`ROW_AT`) from
     its :class:`CascadeSlice` ``sl`` and the camera's :class:`CascadeEntry` ``e``."""
     a = e.camera.axes
@@ -461,7 +501,7 @@ def cascade_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
     row[ROW_AT.band_end] = sl.s1
 
 
-def fitted_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
+def fitted_fit(e: CascadeEntry, sl: CascadeSlice, j: Scalar, o: Options, row: Row) -> None:
     """The loop form of ``orientation="fitted"`` (in place of :func:`cascade_fit`; the
     array form is :func:`shadowmath._fits._orientation.fitted_cascade`): cascade ``j``'s
     map turned about the light's ``Z`` to the least-area rectangle enclosing its body's
@@ -473,7 +513,13 @@ def fitted_fit(e: Any, sl: Any, j: Any, o: Any, row: Any) -> None:
     store_turned(e.camera.axes, rectangle_loop(pts, m), b, (sl, j, o), row)
 
 
-def store_turned(a: Any, r: Any, b: Any, slo: Any, row: Any) -> None:
+def store_turned(
+    a: Row,
+    r: Rectangle,
+    b: LightBounds,
+    slo: tuple[CascadeSlice, Scalar, Options],
+    row: Row,
+) -> None:
     """A fitted cascade's row from the light frame ``a``, the least-area rectangle ``r``
     (:class:`._enclosing_rectangle.Rectangle`: the turn ``(c, s)`` and its bounds) and the
     :class:`LightBounds` ``b`` (its depths); ``slo = (slice, j, o)``. With ``(c, s)`` the
@@ -488,7 +534,13 @@ def store_turned(a: Any, r: Any, b: Any, slo: Any, row: Any) -> None:
     row[ROW_AT.band_end], row[ROW_AT.half_width] = sl.s1, math.nan
 
 
-def stable_box(cam: Any, b: Any, W: Any, j: Any, o: Any) -> Any:
+def stable_box(
+    cam: tuple[Row, Row, Row],
+    b: LightBounds,
+    W: Row | Float[Array, "*#batch n"] | None,
+    j: Scalar,
+    o: Options,
+) -> StableBox:
     """The :class:`StableBox` of one cascade: a square of half-width ``r`` plus half a
     texel, its centre snapped to whole texels (:func:`._fit_formulas.stable_sides`), its
     depth range (``b``: the :class:`LightBounds`, with the box's own ``z``) and ``r``.
@@ -524,7 +576,7 @@ def stable_box(cam: Any, b: Any, W: Any, j: Any, o: Any) -> Any:
     return StableBox(hx, hy, cx, cy, lesser(b.box_z_lo, z_hi - r), z_hi, held)
 
 
-def cascade_tile(tex: Any, j: Any, o: Any) -> Any:
+def cascade_tile(tex: tuple[Scalar, ...], j: Scalar, o: Options) -> tuple[Scalar, ...]:
     """Texture rows of cascade ``j`` moved into its atlas tile (:func:`._rows.tile_rows`;
     with texture layers, ``o.cols == 0``, unchanged)."""
     if o.cols > 0:
@@ -532,7 +584,13 @@ def cascade_tile(tex: Any, j: Any, o: Any) -> Any:
     return tex
 
 
-def store_cascade(a: Any, box6: Any, z_lo: Any, jo: Any, row: Any) -> None:
+def store_cascade(
+    a: Row,
+    box6: tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar],
+    z_lo: Scalar,
+    jo: tuple[Scalar, Options],
+    row: Row,
+) -> None:
     """The cascade's matrices, frustum and texel size into ``row`` (parts at :data:`ROW_AT`)."""
     j, o = jo
     hx, hy, cx, cy, near, far = box6
@@ -557,7 +615,13 @@ def store_cascade(a: Any, box6: Any, z_lo: Any, jo: Any, row: Any) -> None:
     row[ROW_AT.texel_size + 1] = 2.0 * hy / (o.my * o.height)
 
 
-def cascade_loop(inputs: Any, opts: Any, out: Any, splits: Any, status: Any) -> None:
+def cascade_loop(
+    inputs: tuple[Real[ArrayLike, "_ _"], ...],
+    opts: tuple[Options] | np.ndarray[Any, np.dtype[Any]],
+    out: Float[ArrayLike, "m n r"],
+    splits: Float[ArrayLike, "m _"],
+    status: Int[ArrayLike, " m"],
+) -> None:
     """The loop mode's driver: every camera's cascades, one camera at a time.
 
     ``inputs``: light ``(m, 3)``, views and projections ``(m, 16)``, boxes ``(m, 6)``

@@ -38,14 +38,16 @@ class Rectangle(NamedTuple):
     Attributes:
         c, s: ``(*b,)`` the turn's cosine and sine (``c > 0``, ``|s| <= c``).
         lo_u, hi_u, lo_v, hi_v: ``(*b,)`` its bounds along ``u`` and ``v``.
+
+    Each a float in the loop form (:func:`._rectangle_loop.rectangle_loop`, one entry).
     """
 
-    c: Float[Array, "*b"]
-    s: Float[Array, "*b"]
-    lo_u: Float[Array, "*b"]
-    hi_u: Float[Array, "*b"]
-    lo_v: Float[Array, "*b"]
-    hi_v: Float[Array, "*b"]
+    c: Float[Array, "*b"] | float
+    s: Float[Array, "*b"] | float
+    lo_u: Float[Array, "*b"] | float
+    hi_u: Float[Array, "*b"] | float
+    lo_v: Float[Array, "*b"] | float
+    hi_v: Float[Array, "*b"] | float
 
 
 def min_area_rectangle(

@@ -23,9 +23,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from shadowmath._boundary._shapes import Array, ArrayLike, Float, Int, Options, Real, Row
+from shadowmath._boundary._shapes import Array, ArrayLike, Float, Int, Options, Real, Row, Scalar
 
-from ._fit_entry import fit_entry
+from ._fit_entry import Entry, fit_entry
 from ._formulas import compose_rows, planar_entries
 from ._rows import row16
 from ._vertex_passes import enclosing_support
@@ -58,7 +58,13 @@ class FitMatrices(NamedTuple):
 FIT_MATRIX = FitMatrices(0, 1, 2, 3)
 
 
-def planar_loop(plane: Any, light: Any, eps: float, out: Any, status: Any) -> None:
+def planar_loop(
+    plane: Real[ArrayLike, "_ 4"],
+    light: Real[ArrayLike, "_ 4"],
+    eps: float,
+    out: Float[Array, "n 16"],
+    status: Int[Array, " n"],
+) -> None:
     splitter = 134217729.0  # 2^27 + 1: the loop computes in float64
     for i in range(len(out)):
         P, L = plane[i % len(plane)], light[i % len(light)]
@@ -145,7 +151,13 @@ def fit_loop(
         _store(rows[i], mats[i], e, (e.W, clip, e.tex, b), (o.margin_x, o.margin_y))
 
 
-def _store(row: Any, mat: Any, e: Any, matrices: Any, margins: Any) -> None:
+def _store(
+    row: Float[Array, " r"],
+    mat: Float[Array, "4 4 4"],
+    e: Entry,
+    matrices: tuple[tuple[Scalar, ...], ...],
+    margins: tuple[float, float],
+) -> None:
     """One entry's output row (frame, frustum: parts at :data:`FIT_ROW_AT`) and its four
     matrices (at :data:`FIT_MATRIX`)."""
     W, clip, tex, b = matrices

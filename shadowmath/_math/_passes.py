@@ -29,15 +29,13 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from shadowmath._boundary._shapes import Float
+from shadowmath._boundary._shapes import Float, Int, Scalar
 from shadowmath._boundary._status import OVERFLOW
 from shadowmath._boundary._validate import Array
 
 from ._ball_support import support_arrays
 from ._fit_formulas import to_light
 from ._specialize import formulas, scalar_formulas
-
-Components = tuple[Array, Array, Array]
 
 
 class Spread(NamedTuple):
@@ -58,7 +56,15 @@ class Extent(NamedTuple):
     ry: Array
 
 
-def sums_and_bounds(xp: ModuleType, world: Components, o: Components) -> Any:
+def sums_and_bounds(
+    xp: ModuleType,
+    world: tuple[Float[Array, "*#batch N"], Float[Array, "*#batch N"], Float[Array, "*#batch N"]],
+    o: tuple[Scalar, Scalar, Scalar],
+) -> tuple[
+    tuple[Float[Array, "*#batch"], Float[Array, "*#batch"], Float[Array, "*#batch"]],
+    tuple[Float[Array, "*#batch"], Float[Array, "*#batch"], Float[Array, "*#batch"]],
+    tuple[Float[Array, "*#batch"], Float[Array, "*#batch"], Float[Array, "*#batch"]],
+]:
     """The spread's reductions: the sums of ``p - o`` and the bounds ``lo, hi`` of ``p``
     (three each, over the last axis of the ``(*batch, N)`` components ``world``; ``o``
     broadcasts against them). The differences before the sum: full precision far from
@@ -69,7 +75,11 @@ def sums_and_bounds(xp: ModuleType, world: Components, o: Components) -> Any:
     return sums, lo, hi
 
 
-def in_light(o: Components, world: Components, a: tuple[Array, ...]) -> Components:
+def in_light(
+    o: tuple[Scalar, Scalar, Scalar],
+    world: tuple[Float[Array, "*#batch N"], Float[Array, "*#batch N"], Float[Array, "*#batch N"]],
+    a: tuple[Scalar, ...],
+) -> tuple[Float[Array, "*#batch N"], Float[Array, "*#batch N"], Float[Array, "*#batch N"]]:
     """Light coordinates ``(x, y, z)`` of every point of ``world`` in the frame ``a``
     (its 9 axis components) about ``o``.
 
@@ -82,7 +92,12 @@ def in_light(o: Components, world: Components, a: tuple[Array, ...]) -> Componen
     return x, y, z
 
 
-def projected(xp: ModuleType, x: Array, y: Array, z: Array) -> tuple[Array, Array]:
+def projected(
+    xp: ModuleType,
+    x: Float[Array, "*#batch N"],
+    y: Float[Array, "*#batch N"],
+    z: Float[Array, "*#batch N"],
+) -> tuple[Float[Array, "*#batch N"], Float[Array, "*#batch N"]]:
     """``x / z, y / z`` with one reciprocal per vertex, as the loop form computes them.
 
     A safe ``z`` (1 where ``z <= 0``), so that invalid entries never produce inf/NaN
@@ -92,13 +107,24 @@ def projected(xp: ModuleType, x: Array, y: Array, z: Array) -> tuple[Array, Arra
     return x * inv_z, y * inv_z
 
 
-def _world(light: Array, verts: Array) -> tuple[Components, Components]:
+def _world(
+    light: Float[Array, "*#batch 3"], verts: Float[Array, "*#batch N 3"]
+) -> tuple[
+    tuple[Float[Array, "*#batch N"], Float[Array, "*#batch N"], Float[Array, "*#batch N"]],
+    tuple[Float[Array, "*#batch 1"], Float[Array, "*#batch 1"], Float[Array, "*#batch 1"]],
+]:
     """The vertices' components ``(*batch, N)`` and the light's, broadcast against them."""
     world = (verts[..., 0], verts[..., 1], verts[..., 2])
     return world, (light[..., None, 0], light[..., None, 1], light[..., None, 2])
 
 
-def spread(xp: ModuleType, light: Array, verts: Array, *, aim: str) -> Spread:
+def spread(
+    xp: ModuleType,
+    light: Float[Array, "*#batch 3"],
+    verts: Float[Array, "*#batch N 3"],
+    *,
+    aim: str,
+) -> Spread:
     """Pass 1 over ``verts`` ``(*batch, N, 3)`` seen from ``light`` ``(*batch, 3)``:
     :func:`sums_and_bounds` and :func:`._fit_formulas.bounds_about`, as the fit reads them."""
     world, o = _world(light, verts)
@@ -136,7 +162,7 @@ def extent(
 Support = Callable[[Any], Any]
 
 
-def array_support(points: Any) -> Any:
+def array_support(points: Float[Array, "*batch N 3"]) -> Int[Array, "*batch 5"]:
     """:data:`Support` by :func:`._ball_support.support_arrays` (every entry at once)."""
     p = np.asarray(points, dtype=np.float64)
     flat = np.ascontiguousarray(p.reshape(-1, *p.shape[-2:]))

@@ -15,14 +15,14 @@ Trusted inputs: nothing here raises.
 
 from __future__ import annotations
 
-from typing import Any
+from shadowmath._boundary._shapes import Row, Scalar, Truth
 
 from ._cascade_formulas import alloc
 from ._enclosing_rectangle import Rectangle
 from ._formulas import sqrt
 
 
-def rectangle_loop(pts: Any, m: Any) -> Any:
+def rectangle_loop(pts: Row, m: int) -> Rectangle:
     """The least-area :class:`._enclosing_rectangle.Rectangle` enclosing the first ``m``
     points of ``pts`` (rows ``x, y, z``: ``z`` is ignored; ``m >= 1``)."""
     hull = alloc(2 * m + 1)
@@ -41,7 +41,7 @@ def rectangle_loop(pts: Any, m: Any) -> Any:
     return Rectangle(best_c, best_s, lo_u, hi_u, lo_v, hi_v)
 
 
-def _folded(dx: Any, dy: Any) -> Any:
+def _folded(dx: Scalar, dy: Scalar) -> tuple[Scalar, Scalar]:
     """The direction ``(dx, dy)`` as ``(c, s)``, folded into ``[-45°, 45°]`` (``c > 0``,
     ``|s| <= c``; a quarter turn gives the same rectangle): the array form's rule."""
     if abs(dx) >= abs(dy):
@@ -53,7 +53,7 @@ def _folded(dx: Any, dy: Any) -> Any:
     return sign * fx / length, sign * fy / length
 
 
-def _frame_area(pts: Any, hull: Any, c: Any, s: Any) -> Any:
+def _frame_area(pts: Row, hull: tuple[Row, int], c: Scalar, s: Scalar) -> Scalar:
     """The bounding box's area of the hull's vertices (``hull = (indices, count)``) in the
     frame ``(c, s)``."""
     idx, h = hull
@@ -70,7 +70,7 @@ def _frame_area(pts: Any, hull: Any, c: Any, s: Any) -> Any:
     return (hi_u - lo_u) * (hi_v - lo_v)
 
 
-def _frame_bounds(pts: Any, m: Any, c: Any, s: Any) -> Any:
+def _frame_bounds(pts: Row, m: int, c: Scalar, s: Scalar) -> tuple[Scalar, Scalar, Scalar, Scalar]:
     """``(min u, max u, min v, max v)`` over the first ``m`` points in the frame ``(c, s)``."""
     u = c * pts[0] + s * pts[1]
     v = c * pts[1] - s * pts[0]
@@ -83,7 +83,7 @@ def _frame_bounds(pts: Any, m: Any, c: Any, s: Any) -> Any:
     return lo_u, hi_u, lo_v, hi_v
 
 
-def _hull_loop(pts: Any, m: Any, hull: Any) -> Any:
+def _hull_loop(pts: Row, m: int, hull: Row) -> int:
     """Andrew's monotone chain: the indices of the convex hull's vertices of the first
     ``m`` points (counter-clockwise, collinear ones dropped) into ``hull`` (``2 m + 1``
     entries); returns their count (1 where every point is the same)."""
@@ -108,12 +108,12 @@ def _hull_loop(pts: Any, m: Any, hull: Any) -> Any:
     return h - 1 if h > 1 else 1
 
 
-def _after(pts: Any, i: int, x: Any, y: Any) -> Any:
+def _after(pts: Row, i: int, x: Scalar, y: Scalar) -> Truth:
     """Point ``i`` sorts after ``(x, y)`` (by ``x``, then ``y``)."""
     return pts[3 * i] > x or (pts[3 * i] == x and pts[3 * i + 1] > y)
 
 
-def _turn(pts: Any, i: int, j: int, k: int) -> Any:
+def _turn(pts: Row, i: int, j: int, k: int) -> Scalar:
     """The cross product ``(p_j - p_i) x (p_k - p_i)``: positive for a left turn."""
     ax, ay = pts[3 * j] - pts[3 * i], pts[3 * j + 1] - pts[3 * i + 1]
     bx, by = pts[3 * k] - pts[3 * i], pts[3 * k + 1] - pts[3 * i + 1]

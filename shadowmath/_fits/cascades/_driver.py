@@ -18,11 +18,12 @@ driver raises the first failing check's message (NumPy) or makes the entry NaN (
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, TypeAlias
 
 import numpy as np
 
 from shadowmath._backends import _kernels
+from shadowmath._boundary._shapes import Float, Scalar
 from shadowmath._boundary._status import cascade_messages
 from shadowmath._boundary._validate import Array, Checks, Context, flat_batch, raise_status
 from shadowmath._fits._spec import ShadowMapSpec
@@ -44,6 +45,22 @@ from ._lispsm import warp_cascades
 from ._orientation import fitted_cascade
 from ._result import Cascades, CascadeState, _texture, _tiles
 
+#: The door's arrays: light, view, projection, scene bounds, up, splits, max distance, lam,
+#: overlap, the measured and previous ranges' ends (or None), the previous half-widths.
+CascadeArrays: TypeAlias = """tuple[
+    Float[Array, "*#batch 3"],
+    Float[Array, "*#batch 4 4"],
+    Float[Array, "*#batch 4 4"],
+    Float[Array, "*#batch 2 3"],
+    Float[Array, "*#batch 3"] | None,
+    Float[Array, "*#batch m"] | None,
+    Scalar | None,
+    Scalar,
+    Scalar,
+    tuple[Scalar, Scalar, Scalar, Scalar] | None,
+    Float[Array, "*#batch n"] | None,
+]"""
+
 
 class _Call(NamedTuple):
     """One call's context: backend, map, layout, batch shape and options record."""
@@ -55,7 +72,9 @@ class _Call(NamedTuple):
     o: CascadeOptions
 
 
-def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
+def _compiled(
+    call: _Call, arrays: CascadeArrays, record: np.ndarray[Any, np.dtype[Any]] | None
+) -> Cascades:
     """The loop mode: :func:`shadowmath._math._cascade_steps.cascade_loop` compiled by
     Numba (``fast`` extra, ``record`` its options), or, ``record`` None, run by Python on
     lists (a few cameras without Numba)."""
@@ -97,7 +116,7 @@ def _compiled(call: _Call, arrays: tuple[Any, ...], record: Any) -> Cascades:
     return _result(call, out.reshape(*shape, n, ROW), splits.reshape(*shape, n + 1))
 
 
-def _arrays(call: _Call, checks: Checks, arrays: tuple[Any, ...], warp: str | None) -> Cascades:
+def _arrays(call: _Call, checks: Checks, arrays: CascadeArrays, warp: str | None) -> Cascades:
     """The array mode: the same steps once on whole arrays (NumPy or JAX), per-entry
     values ``(*batch, 1)`` and the cascades on the last axis (``(*batch, n)``);
     ``warp``: the warp's name (or None); ``o.fitted``: the maps turned
@@ -146,9 +165,9 @@ class _WarpCamera(NamedTuple):
 
 def _warp(
     call: _Call,
-    steps: tuple[CascadeEntry, CascadeSlice, Any],
-    VP: tuple[Array, Array],
-    row: list[Any],
+    steps: tuple[CascadeEntry, CascadeSlice, Float[Array, " n"]],
+    VP: tuple[Float[Array, "*#batch 4 4"], Float[Array, "*#batch 4 4"]],
+    row: list[Scalar],
 ) -> None:
     """The LiSPSM hook (:mod:`._lispsm`): the warp replaces clip, texture rows and size."""
     xp, F, o = call.ctx.xp, formulas(call.ctx.xp), call.o
@@ -173,7 +192,9 @@ def _warp(
     row[size_at] = size[..., 0], size[..., 1]
 
 
-def _result(call: _Call, rows: Array, splits: Array) -> Cascades:
+def _result(
+    call: _Call, rows: Float[Array, "*batch n r"], splits: Float[Array, "*batch m"]
+) -> Cascades:
     """The result from each cascade's row ``(*batch, n, ROW)`` and the splits."""
     xp, n, spec = call.ctx.xp, call.o.cascades, call.spec
     m = xp.reshape(rows[..., : ROW_AT.frustum], (*call.shape, n, 3, 4, 4))  # the three matrices

@@ -22,6 +22,7 @@ import numpy as np
 
 from shadowmath._backends import _kernels
 from shadowmath._boundary import _messages as msg
+from shadowmath._boundary._shapes import Float, Scalar, Vertices
 from shadowmath._boundary._status import (
     PROJECTIVE,
     VERTICES,
@@ -38,9 +39,6 @@ from shadowmath._math._specialize import (
     scalar_primitives,
     specialize,
 )
-
-Components = tuple[Array, Array, Array]
-
 
 #: A fit's per-entry results (the status, then component arrays of the batch shape, or
 #: scalars): the :class:`Entry` of the per-entry code, which every driver reads.
@@ -155,11 +153,13 @@ def _report(ctx: Context, checks: Checks, status: Flags | int) -> None:
         msg.warn_wide()
 
 
-def _components(d: Driver, v: Array, n: int) -> tuple[Array, ...]:
+def _components(d: Driver, v: Float[Array, "*batch k"], n: int) -> tuple[Scalar, ...]:
     return tuple(d.entry(v[..., i]) for i in range(n))
 
 
-def _vertex_source(d: Driver, verts: Array, B: Array | None) -> tuple[Components, Any]:
+def _vertex_source(
+    d: Driver, verts: Float[Array, "*#batch N 3"], B: Float[Array, "*#batch 4 4"] | None
+) -> Vertices:
     """The vertices' world components (through the placement) and their status bits."""
     xp, F = d.xp, d.F
     px, py, pz = verts[..., 0], verts[..., 1], verts[..., 2]
