@@ -400,6 +400,27 @@ def test_compiled_loop_equals_array_path(options: dict[str, Any]) -> None:
                                        atol=1e-12)  # fmt: skip
 
 
+@pytest.mark.parametrize("depth_range", ["visible", "camera"])
+def test_a_batch_of_views_over_one_scene_is_each_views_fit(depth_range: str) -> None:
+    """Cameras batched in ``view`` alone (one sun, projection and scene box): on every path
+    each entry is that camera's own fit (the visible range's depths are one per camera while
+    the box is shared: the array form broadcasts the two)."""
+    from shadowmath._backends import _kernels
+
+    sun, _, proj, box = scene(10)
+    views = np.stack([scene(s)[1] for s in range(10, 14)])  # 4 cameras
+    paths = [contextlib.nullcontext, _kernels.array_path, _kernels.disabled]
+    for path in paths:
+        with path():
+            batch = sm.fit_cascades(sun, views, proj, box, 256, depth_range=depth_range)
+        for i, view in enumerate(views):
+            with path():
+                one = sm.fit_cascades(sun, view, proj, box, 256, depth_range=depth_range)
+            np.testing.assert_allclose(batch.splits[i], one.splits, rtol=1e-12)
+            np.testing.assert_allclose(batch.world_to_clip[i], one.world_to_clip, rtol=1e-9,
+                                       atol=1e-12)  # fmt: skip
+
+
 def test_inverse4_is_the_inverse() -> None:
     from shadowmath._math._specialize import scalar_formulas
 

@@ -198,7 +198,10 @@ def cascade_body(
     t0, t1, ok = clip_segment(tuple(g0), tuple(g1))
     ends = []
     for p_s, p_b in zip(sl, bc, strict=True):
-        p_b = xp.broadcast_to(p_b, p_s.shape)
+        # The slice may be one for the batch (a visible range's camera-wide depths) while
+        # the box is per camera, or the other way round: both to their common shape.
+        shape = xp.broadcast_shapes(p_s.shape, p_b.shape)
+        p_s, p_b = xp.broadcast_to(p_s, shape), xp.broadcast_to(p_b, shape)
         p0 = xp.concat([p_s[..., _EDGE_0], p_b[..., _EDGE_0]], axis=-1)
         p1 = xp.concat([p_s[..., _EDGE_1], p_b[..., _EDGE_1]], axis=-1)
         ends.append(xp.concat([p0 + t0 * (p1 - p0), p0 + t1 * (p1 - p0)], axis=-1))
