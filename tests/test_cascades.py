@@ -427,6 +427,24 @@ def test_compiled_warp_equals_array_path(options: dict[str, Any]) -> None:
                                    atol=1e-12)  # fmt: skip
 
 
+def test_warp_loop_form_run_by_python_equals_compiled(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The warp's loop form gives the same cascades run by Python on lists and floats as
+    compiled by Numba (NumPy alone keeps the array form, faster there: this runs the Python
+    loop on purpose)."""
+    pytest.importorskip("numba")
+    from shadowmath._fits.cascades import _fit
+
+    scenes = [scene(s) for s in range(10, 13)]
+    sun, view, proj, box = (np.stack(v) for v in zip(*scenes, strict=True))
+    fast = sm.fit_cascades(sun, view, proj, box, 256, warp="lispsm", layout="atlas")
+    compiled = _fit._compiled
+    monkeypatch.setattr(_fit, "_compiled", lambda c, a, _: compiled(c, a, None))
+    python = sm.fit_cascades(sun, view, proj, box, 256, warp="lispsm", layout="atlas")
+    for name in ("world_to_clip", "world_to_texture", "texel_size"):
+        np.testing.assert_allclose(getattr(python, name), getattr(fast, name), rtol=1e-9,
+                                   atol=1e-12)  # fmt: skip
+
+
 def test_inverse4_is_the_inverse() -> None:
     from shadowmath._math._specialize import scalar_formulas
 

@@ -156,33 +156,36 @@ def warp_samples(lc: Any, bl: Any, a: Any, out: Any) -> Any:
 def _row_samples(frame: Any, ab: Any, fb: Any, out: Any, m: Any) -> Any:
     """The samples of one row of rays (``ab``: its ``A, B``; ``frame = (lc, fr)``) after
     the first ``m``; returns the new count. Along axis ``k`` a ray leaves the box through
-    the face its end moves toward, at ``g_0 / |p_1 - p_0|`` (``g_0``: that face's
-    half-space value at ``p_0``), and enters through the other, at ``-g_i / |p_1 - p_0|``;
-    it misses where it enters after it leaves."""
+    the face its end moves toward, at ``g_k / D_k`` (``g_k``: that face's half-space value
+    at ``p_0``, ``D_k = |p_1 - p_0|``), and enters through the other, at ``-e_k / D_k``; it
+    misses where it enters after it leaves (compared by products: one division a ray)."""
     lc, fr = frame
-    r = WARP_SAMPLE_RAMP
+    inv_r = 1.0 / WARP_SAMPLE_RAMP
     for col in range(WARP_RAYS):
         fa = (col + 0.5) / WARP_RAYS
-        t_out, k_out, g_out, t_in, miss = math.inf, 0, 0.0, -math.inf, False
-        for k in range(3):
+        g_out, d_out, k_out, miss = 1.0, 0.0, -1, False
+        for k in range(3):  # the first face it leaves: least g / D, by g D' < g' D
             p0, lo, hi = ab[k] + fa * ab[6 + k], fr[24 + 2 * k], fr[25 + 2 * k]
             d = p0 - (ab[3 + k] + fa * ab[9 + k])
-            g0, gi = (p0 - lo, hi - p0) if d > 0 else (hi - p0, p0 - lo)
-            ad = abs(d)
-            miss = miss or (ad == 0 and (g0 < 0 or gi < 0))
-            q = 1.0 / ad if ad > 0 else math.inf
-            if g0 * q < t_out:
-                t_out, k_out, g_out = g0 * q, k, ad
-            t_in = max(t_in, -gi * q)
-        if miss or t_in > t_out or t_out == math.inf:
+            g = p0 - lo if d > 0 else hi - p0
+            miss = miss or (d == 0 and (p0 - lo < 0 or hi - p0 < 0))
+            if d != 0 and (k_out < 0 or g * d_out < g_out * abs(d)):
+                g_out, d_out, k_out = g, abs(d), k
+        for k in range(3):  # entering after leaving: -e / D > g_out / d_out
+            p0, lo, hi = ab[k] + fa * ab[6 + k], fr[24 + 2 * k], fr[25 + 2 * k]
+            d = p0 - (ab[3 + k] + fa * ab[9 + k])
+            e = hi - p0 if d > 0 else p0 - lo
+            miss = miss or (d != 0 and -e * d_out > g_out * abs(d))
+        if miss or k_out < 0:
             continue
-        ramp = min(max((t_out + 0.5 * r) / r, 0.0), 1.0)
-        ramp = ramp * min(max((1.0 + 0.5 * r - t_out) / r, 0.0), 1.0)
-        d = ab[k_out] - ab[3 + k_out] + fa * (ab[6 + k_out] - ab[9 + k_out])
-        face = fr[30 + 2 * k_out + (0 if d > 0 else 1)]  # toward the low face: its weight
+        t_out = g_out / d_out
+        ramp = min(max((t_out + 0.5 * WARP_SAMPLE_RAMP) * inv_r, 0.0), 1.0)
+        ramp = ramp * min(max((1.0 + 0.5 * WARP_SAMPLE_RAMP - t_out) * inv_r, 0.0), 1.0)
+        side = 0 if ab[k_out] + fa * ab[6 + k_out] > ab[3 + k_out] + fa * ab[9 + k_out] else 1
+        face = fr[30 + 2 * k_out + side]  # toward the low face (side 0) or the high one
         if ramp * face > 0:
             cos = fr[36 + k_out]
-            _store_sample(lc, (fa, fb, t_out), (ramp * face, g_out / (cos if cos > 0 else 1.0)),
+            _store_sample(lc, (fa, fb, t_out), (ramp * face, d_out / (cos if cos > 0 else 1.0)),
                           out, m)  # fmt: skip
             m += 1
     return m
@@ -271,8 +274,7 @@ def _check_loop(sx: Any, k: Any, lam: Any) -> Any:
         for i in range(k):
             v = ((1.0 + lv * sa[4 * i]) * sa[4 * i + 3] / cb - 1.0) / lv
             a[i], wa[i] = min(max(v, 0.0), 1.0), sa[4 * i + 1]
-        _sort_pairs(a, wa, k)
-        out = max(out, _quantile_loop(a, wa, k, min(WARP_SHARES[c] + WARP_SHARE_MARGIN, 1.0)))
+        out = max(out, _quantile_loop((a, wa), k, min(WARP_SHARES[c] + WARP_SHARE_MARGIN, 1.0)))
     return out
 
 
@@ -289,10 +291,9 @@ def _reference(sa: Any, k: Any) -> Any:
     for i in range(k):
         rho = sa[4 * i + 2]
         xs[i], ws[i] = rho / (rho + ref), sa[4 * i + 1]
-    _sort_pairs(xs, ws, k)
     out = alloc(len(WARP_SHARES))
     for c in range(len(WARP_SHARES)):
-        x = _quantile_loop(xs, ws, k, WARP_SHARES[c])
+        x = _quantile_loop((xs, ws), k, WARP_SHARES[c])
         out[c] = ref * x / (1.0 - x) if x < 1 else ref * 1e30
     return out
 
@@ -322,22 +323,41 @@ def _sift(a: Any, w: Any, i: Any, k: Any) -> None:
         i = c
 
 
-def _quantile_loop(a: Any, w: Any, k: Any, share: Any) -> Any:
-    """The ``share`` quantile of ``k`` sorted samples ``a`` of weights ``w`` with the prior
-    (:func:`._lispsm._quantile`)."""
-    total = 0.0
+#: The buckets that :func:`_quantile_loop` spreads the samples over (a power of 2: a
+#: sample's bucket ``floor(a B)`` is exact).
+QUANTILE_BUCKETS = 32
+
+
+def _quantile_loop(aw: Any, k: Any, share: Any) -> Any:
+    """The ``share`` quantile of ``k`` samples ``aw = (a, w)`` (values in ``[0, 1]`` and
+    weights, any order) with the prior (:func:`._lispsm._quantile`): ``k*``, where
+    ``C(k) + m k`` (``C(k)``: the weight of the samples ``<= k``, ``m = WARP_PRIOR``)
+    first reaches ``share T``. The samples are counted into buckets of width ``1 / B``; the
+    bucket where it is reached is sorted and walked."""
+    a, w = aw
+    nb = QUANTILE_BUCKETS
+    bw, total = alloc(nb), 0.0
     for i in range(k):
+        bw[min(int(a[i] * nb), nb - 1)] += w[i]
         total += w[i]
-    total += 2.0 * WARP_PRIOR
-    out, c, lo = 0.0, 0.0, 0.0
-    for i in range(k + 1):
-        hi = a[i] if i < k else 1.0
-        kk = (share * total - c) / WARP_PRIOR
-        out += min(max(kk - lo, 0.0), hi - lo)
-        if i < k:
-            c += w[i]
-            lo = a[i]
-    return out
+    target = share * (total + 2.0 * WARP_PRIOR)
+    c, b = 0.0, 0
+    while b < nb - 1 and c + bw[b] + WARP_PRIOR * ((b + 1) / nb) < target:
+        c += bw[b]
+        b += 1
+    ga, gw = alloc(k + 1), alloc(k + 1)
+    n = 0
+    for i in range(k):
+        if min(int(a[i] * nb), nb - 1) == b:
+            ga[n], gw[n], n = a[i], w[i], n + 1
+    _sort_pairs(ga, gw, n)
+    lo = b / nb
+    for i in range(n):
+        kk = (target - c) / WARP_PRIOR
+        if kk < ga[i]:
+            return max(kk, lo)
+        c, lo = c + gw[i], ga[i]
+    return max(min((target - c) / WARP_PRIOR, 1.0), lo)
 
 
 def _area_loop(sv: Any, lam: Any, check: Any) -> Any:
