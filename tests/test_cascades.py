@@ -376,6 +376,7 @@ def test_errors_name_the_argument(change: dict[str, Any], message: str, path: st
      {"overlap": 0.0, "pcf_radius": 3}, {"depth_range": "visible"},
      {"orientation": "fitted"}, {"orientation": "fitted", "layout": "atlas", "api": "webgpu",
                                  "depth_range": "visible"},
+     {"warp": "lispsm"}, {"warp": "lispsm", "layout": "atlas", "depth_range": "visible"},
      {"depth_range": np.array([[2.0, 50.0], [1.0, 30.0], [0.7, 200.0]]), "stable": True},
      {"depth_range": "visible", "stable": True,
       "state": sm.CascadeState(np.array([2.0, np.nan, 0.6]), np.array([60.0, np.nan, 99.0]),
@@ -419,6 +420,50 @@ def test_a_batch_of_views_over_one_scene_is_each_views_fit(depth_range: str) -> 
             np.testing.assert_allclose(batch.splits[i], one.splits, rtol=1e-12)
             np.testing.assert_allclose(batch.world_to_clip[i], one.world_to_clip, rtol=1e-9,
                                        atol=1e-12)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "options",
+    [{}, {"layout": "atlas", "api": "webgpu", "depth_range": "visible"},
+     {"count": 2, "pcf_radius": 3, "max_distance": 60.0}],
+)  # fmt: skip
+def test_compiled_warp_equals_array_path(options: dict[str, Any]) -> None:
+    """``warp="lispsm"``'s loop form (compiled) gives the array form's matrices and texel
+    sizes to rounding, on cameras where the warp applies and on an orthographic camera
+    (where it falls back to the orthographic cascade)."""
+    pytest.importorskip("numba")
+    from shadowmath._backends import _kernels
+
+    scenes = [scene(s) for s in range(10, 16)]
+    sun, view, proj, box = (np.stack(v) for v in zip(*scenes, strict=True))
+    proj[-1] = orthographic(20, 15, 1, 120)
+    fast = sm.fit_cascades(sun, view, proj, box, 256, warp="lispsm", **options)
+    with _kernels.array_path():
+        slow = sm.fit_cascades(sun, view, proj, box, 256, warp="lispsm", **options)
+    plain = sm.fit_cascades(sun, view, proj, box, 256, **options)
+    warped = np.any(np.abs(slow.world_to_clip - plain.world_to_clip) > 1e-6, axis=(-2, -1))
+    assert warped[:-1].sum() >= warped[:-1].size // 2 and not warped[-1].any()
+    for name in ("world_to_clip", "world_to_texture", "texel_size", "world_to_light", "splits"):
+        np.testing.assert_allclose(getattr(fast, name), getattr(slow, name), rtol=1e-9,
+                                   atol=1e-12)  # fmt: skip
+
+
+def test_warp_loop_form_run_by_python_equals_compiled(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The warp's loop form gives the same cascades run by Python on lists and floats as
+    compiled by Numba (NumPy alone keeps the array form, faster there: this runs the Python
+    loop on purpose)."""
+    pytest.importorskip("numba")
+    from shadowmath._fits.cascades import _door
+
+    scenes = [scene(s) for s in range(10, 13)]
+    sun, view, proj, box = (np.stack(v) for v in zip(*scenes, strict=True))
+    fast = sm.fit_cascades(sun, view, proj, box, 256, warp="lispsm", layout="atlas")
+    compiled = _door._compiled
+    monkeypatch.setattr(_door, "_compiled", lambda c, a, _: compiled(c, a, None))
+    python = sm.fit_cascades(sun, view, proj, box, 256, warp="lispsm", layout="atlas")
+    for name in ("world_to_clip", "world_to_texture", "texel_size"):
+        np.testing.assert_allclose(getattr(python, name), getattr(fast, name), rtol=1e-9,
+                                   atol=1e-12)  # fmt: skip
 
 
 def test_inverse4_is_the_inverse() -> None:

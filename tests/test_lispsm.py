@@ -317,3 +317,24 @@ def test_jax_gradient_wrt_the_light_matches_central_differences() -> None:
         for e in np.eye(3)
     ]
     np.testing.assert_allclose(grad, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
+
+
+def test_quantile_loop_form_equals_the_array_form() -> None:
+    """The compiled loop's weighted quantile (buckets, the crossing one sorted) is the
+    array form's (every sample sorted) on samples with ties, values at 0, 1 and the
+    buckets' edges, and zero weights."""
+    from shadowmath._fits.cascades._lispsm import _quantile
+    from shadowmath._math._specialize import scalar_formulas
+
+    loop = scalar_formulas()._quantile_loop
+    rng = np.random.default_rng(1)
+    for trial in range(600):
+        k = int(rng.integers(1, 60))
+        a = rng.uniform(-0.3, 1.3, k).clip(0, 1)
+        if trial % 3 == 0:
+            a = np.round(a * 8) / 8  # ties, on the buckets' edges
+        w = rng.uniform(0, 2, k) * (rng.uniform(size=k) < 0.8)
+        share = float(rng.choice([0.01, 0.5, 0.9, 0.95, 1.0]))
+        expected = float(_quantile(np, a[None], w[None], share)[0])
+        got = loop(([*a.tolist(), 0.0], [*w.tolist(), 0.0]), k, share)
+        assert got == pytest.approx(expected, rel=0, abs=1e-12)

@@ -69,13 +69,16 @@ FORMS = {"cascade_bounds": ("_bounds_loop", "_bounds_array")}
 def _bounds_loop(lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar]) -> LightBounds:
     """The loop form: :func:`body_loop`'s vertices reduced (:func:`points_bounds`)."""
     pts = alloc(3 * BODY_VERTICES)
-    return points_bounds(pts, body_loop(lc, gs, boxp, d, pts), boxp[0])
+    return points_bounds(pts, body_loop(lc, gs, boxp, d, pts)[0], boxp[0])
 
 
-def body_loop(lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar], pts: Row) -> int:
+def body_loop(
+    lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar], pts: Row
+) -> tuple[int, bool]:
     """The loop form's vertices of the intersection: the clipped ends of the edges into
     ``pts`` (``x, y, z`` each, at most :data:`BODY_VERTICES`), or the slice's own corners
-    where the intersection is empty or the whole slice; returns their count.
+    where the intersection is empty or the whole slice; returns their count and whether
+    the intersection is not empty.
 
     Each corner's outcode (bit ``j``: outside half-space ``j``, Cohen and Sutherland)
     settles most edges: a common bit puts the edge outside, no bit at either end inside;
@@ -102,11 +105,12 @@ def body_loop(lc: Row, gs: Row, boxp: tuple[Row, Row], d: tuple[Scalar, Scalar],
                 pts[3 * m], pts[3 * m + 1] = p0[0] + t * dx, p0[1] + t * dy
                 pts[3 * m + 2] = p0[2] + t * dz
                 m += 1
+    seen = whole or m > 0
     if m == 0:
         for k in range(8):
             pts[3 * k], pts[3 * k + 1], pts[3 * k + 2] = lc[3 * k], lc[3 * k + 1], lc[3 * k + 2]
         m = 8
-    return m
+    return m, seen
 
 
 def points_bounds(pts: Row, m: int, bl: Row) -> LightBounds:

@@ -81,6 +81,7 @@ from ._fit_formulas import fit_axes, fit_rows, placement_ok, safe_box, stable_si
 from ._formulas import fabs, flag, isfinite, sqrt, where
 from ._rectangle_loop import rectangle_loop
 from ._rows import _mul16, inverse4, row16, tile_rows
+from ._warp_loop import warp_frustum, warp_rows, warp_samples, warp_view, warp_world
 
 #: The bounds pass of the mode (:data:`FORMS`).
 cascade_bounds: Any = None
@@ -207,6 +208,7 @@ class CascadeOptions(NamedTuple):
     has_state: bool  # the last range and sizes in use (CascadeScalars.previous_*, W): the ladder
     inside: bool = False  # each cascade's band ends at its practical split (stable "auto")
     fitted: bool = False  # orientation="fitted": each map turned to its least-area rectangle
+    warp: bool = False  # warp="lispsm": each map warped (:func:`warp_fit`)
 
 
 _KINDS = {"bool": np.bool_, "float": np.float64, "int": np.int64}
@@ -486,8 +488,16 @@ def slice_corners(cam: CascadeCamera, box: Row, s0: Scalar, s1: Scalar) -> tuple
 def cascade_fit(e: CascadeEntry, sl: CascadeSlice, j: Scalar, o: Options, row: Row) -> None:
     """Cascade ``j``'s map into ``row`` (:data:`ROW` entries, parts at :data:`ROW_AT`) from
     its :class:`CascadeSlice` ``sl`` and the camera's :class:`CascadeEntry` ``e``."""
-    a = e.camera.axes
     b = cascade_bounds(sl.light_corners, sl.box_values, (e.box_light, e.box_camera), (sl.s0, sl.s1))
+    bounds_fit(e, sl, b, (j, o), row)
+
+
+def bounds_fit(
+    e: CascadeEntry, sl: CascadeSlice, b: LightBounds, jo: tuple[Scalar, Options], row: Row
+) -> None:
+    """:func:`cascade_fit` from the slice's :class:`LightBounds` ``b`` (``jo = (j, o)``)."""
+    j, o = jo
+    a = e.camera.axes
     if o.stable:
         sb = stable_box((sl.view_corners, e.camera.view_to_world, a), b, e.sizes, j, o)
         depth = sb.z_hi - sb.z_lo
@@ -507,8 +517,8 @@ def fitted_fit(e: CascadeEntry, sl: CascadeSlice, j: Scalar, o: Options, row: Ro
     map turned about the light's ``Z`` to the least-area rectangle enclosing its body's
     vertices (:func:`._cascade_bounds.body_loop`, :func:`._rectangle_loop.rectangle_loop`)."""
     pts = alloc(3 * BODY_VERTICES)
-    m = body_loop(sl.light_corners, sl.box_values, (e.box_light, e.box_camera), (sl.s0, sl.s1),
-                  pts)  # fmt: skip
+    m, _ = body_loop(sl.light_corners, sl.box_values, (e.box_light, e.box_camera),
+                     (sl.s0, sl.s1), pts)  # fmt: skip
     b = points_bounds(pts, m, e.box_light)
     store_turned(e.camera.axes, rectangle_loop(pts, m), b, (sl, j, o), row)
 
@@ -532,6 +542,46 @@ def store_turned(
     box = cascade_box((r.lo_u, r.hi_u, r.lo_v, r.hi_v, b.z_lo, b.z_hi))
     store_cascade(turned, box, b.z_lo, (j, o), row)
     row[ROW_AT.band_end], row[ROW_AT.half_width] = sl.s1, math.nan
+
+
+def warp_fit(
+    e: CascadeEntry,
+    sl: CascadeSlice,
+    VP: tuple[Row, Row],
+    jo: tuple[Scalar, Options],
+    row: Row,
+) -> None:
+    """The loop form of ``warp="lispsm"`` (the array form is
+    :func:`shadowmath._fits.cascades._lispsm.warp_cascades`): cascade ``j``'s orthographic
+    row (:func:`cascade_fit`) with its clip and texture rows and texel size replaced by the
+    warped ones (:mod:`._warp_loop`) where the warp applies; ``VP``: the camera's view and
+    projection (16 each), ``jo = (j, o)``."""
+    j, o = jo
+    pts, buf = alloc(3 * BODY_VERTICES), alloc(5 * 256)
+    m, seen = body_loop(sl.light_corners, sl.box_values, (e.box_light, e.box_camera),
+                        (sl.s0, sl.s1), pts)  # fmt: skip
+    bounds_fit(e, sl, points_bounds(pts, m, e.box_light), jo, row)
+    a, at = e.camera.axes, ROW_AT.texel_size
+    vw = warp_view(e.camera.view_to_world, e.camera.sign, VP, a)
+    if not vw.ok:
+        return
+    k = warp_samples(sl.light_corners, e.box_light, a, buf)
+    texels = o.mx * o.my * o.width * o.height
+    wp = warp_frustum(vw, (pts, m if seen else 0, e.box_light), (buf, k),
+                      (row[at] * row[at + 1] * texels, texels))  # fmt: skip
+    if not wp.ok:
+        return
+    rows, h, ok = warp_rows(vw, wp, (pts, m), (o.mx, o.my, o.slack))
+    if not ok:
+        return
+    gl = warp_world(rows, a)
+    clip = _mul16(row16(o.map_clip, 0), gl)
+    tex = cascade_tile(_mul16(row16(o.map_texture, 0), gl), j, o)
+    for q in range(16):
+        row[ROW_AT.world_to_clip + q] = clip[q]
+        row[ROW_AT.world_to_texture + q] = tex[q]
+    row[at] = 2.0 * wp.f * h / (o.mx * o.width)
+    row[at + 1] = wp.f * (wp.f - wp.n) / (o.my * o.height * wp.n)
 
 
 def stable_box(
@@ -650,6 +700,9 @@ def cascade_loop(
             sl = cascade_slice(e, box, splits[i], j, o)
             if o.fitted:
                 fitted_fit(e, sl, j, o, out[i][j])
+            elif o.warp:
+                VP = (row16(views[i % len(views)], 0), row16(projs[i % len(projs)], 0))
+                warp_fit(e, sl, VP, (j, o), out[i][j])
             else:
                 cascade_fit(e, sl, j, o, out[i][j])
 
@@ -668,8 +721,10 @@ FUNCTIONS = (
     "cascade_slice",
     "slice_corners",
     "cascade_fit",
+    "bounds_fit",
     "fitted_fit",
     "store_turned",
+    "warp_fit",
     "stable_box",
     "cascade_tile",
     "store_cascade",

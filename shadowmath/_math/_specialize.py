@@ -37,6 +37,7 @@ from . import (
     _rows,
     _spot_loop,
     _vertex_passes,
+    _warp_loop,
 )
 
 _MODULES = (
@@ -48,6 +49,7 @@ _MODULES = (
     (_cascade_formulas, _cascade_formulas.FUNCTIONS),
     (_rows, _rows.FUNCTIONS),
     (_rectangle_loop, _rectangle_loop.FUNCTIONS),
+    (_warp_loop, _warp_loop.FUNCTIONS),
     (_cascade_steps, _cascade_steps.FUNCTIONS),
     (_cascade_bounds, _cascade_bounds.FUNCTIONS),
     (_pcss, _pcss.FUNCTIONS),

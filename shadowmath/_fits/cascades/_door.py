@@ -247,15 +247,17 @@ def fit_cascades(
     _scalar_checks(checks, (lm, ov, dmax, S))
     W = _range_checks(checks, M, (Qn, Qf, W), (shape, n))
     C = _clip_from_gl(cam_api, camera_reversed_z)
-    given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None, fitted)
+    given = (U is not None, S is not None, dmax is not None, range_code, Qn is not None,
+             (fitted, warp is not None))  # fmt: skip
     o, record = _options(
         spec, layout, n, given, eps=ctx.eps, C=tuple(v for row in C for v in row), inside=inside
     )
     call = _Call(ctx, spec, layout, shape, o)
     extra = None if M is None and Qn is None else _range_scalars(ctx.xp, M, (Qn, Qf))
     arrays = (L, V, P, box, U, S, dmax, lm, ov, extra, W)
-    small = math.prod(shape) <= PYTHON_LOOP_CAMERAS
-    chosen = form(ctx.xp is np and warp is None, small=small)
+    small = math.prod(shape) <= PYTHON_LOOP_CAMERAS and warp is None  # the warp's Python
+    # loop is slower than its array form
+    chosen = form(ctx.xp is np, small=small)
     if chosen != "arrays":
         try:
             return _compiled(call, arrays, None if chosen == "python" else record)
@@ -421,7 +423,7 @@ def _options(
     spec: ShadowMapSpec,
     layout: str,
     n: int,
-    given: tuple[bool, bool, bool, int, bool, bool],
+    given: tuple[bool, bool, bool, int, bool, tuple[bool, bool]],
     *,
     eps: float,
     C: tuple[float, ...],
@@ -431,10 +433,10 @@ def _options(
     few recur every frame)."""
     cols, rows = _grid(n, layout)
     C_api, TC_api = api_rows(spec.api, spec.reversed_z)
-    has_up, has_splits, has_dmax, range_code, has_state, fitted = given
+    has_up, has_splits, has_dmax, range_code, has_state, (fitted, warp) = given
     o = CascadeOptions(
         has_up=has_up, stable=spec.stable, has_splits=has_splits, has_dmax=has_dmax,
-        depth_range=range_code, has_state=has_state, inside=inside, fitted=fitted,
+        depth_range=range_code, has_state=has_state, inside=inside, fitted=fitted, warp=warp,
         mx=float(spec.margins[0]), my=float(spec.margins[1]), width=float(spec.size[0]),
         height=float(spec.size[1]), eps=eps, tol=math.sqrt(eps), cascades=n,
         slack=NEAR_FAR_SLACK, cols=cols, rows=rows, camera_clip=C, map_clip=tuple(C_api),

@@ -8,8 +8,11 @@ The door (:mod:`._door`) converts and checks the arguments once; the driver runs
   for one to :data:`PYTHON_LOOP_CAMERAS` cameras without Numba;
 * the array mode, JAX input (and NumPy batches without Numba): the same steps once on
   whole arrays (the cascades on the last axis); values and gradients follow the same
-  expressions. ``warp="lispsm"`` and ``orientation="fitted"`` (:mod:`._orientation`) run
-  here only.
+  expressions. ``orientation="fitted"`` and ``warp="lispsm"`` have both forms
+  (:mod:`._orientation` and :mod:`._lispsm` here,
+  :func:`~shadowmath._math._cascade_steps.fitted_fit` and
+  :func:`~shadowmath._math._cascade_steps.warp_fit` in the loop); without Numba the warp
+  takes this mode (its Python loop is slower).
 
 Both return a status word of :data:`shadowmath._boundary._status.CASCADE_CHECKS`; the
 driver raises the first failing check's message (NumPy) or makes the entry NaN (JAX).

@@ -48,54 +48,20 @@ import numpy as np
 
 from shadowmath._fits._spec import ShadowMapSpec, api_rows
 from shadowmath._math._frustum import NEAR_FAR_SLACK
+from shadowmath._math._warp_loop import (
+    NEWTON_STEPS,
+    WARP_CHECK_DEPTH,
+    WARP_MIN_SIN,
+    WARP_MIN_STRENGTH,
+    WARP_PRIOR,
+    WARP_RAYS,
+    WARP_ROUNDS,
+    WARP_SAMPLE_RAMP,
+    WARP_SHARE_MARGIN,
+    WARP_SHARES,
+)
 
 __all__ = ["WARP_MIN_SIN", "WARP_MIN_STRENGTH", "check_warp", "warp_cascades"]
-
-#: The warp falls back to the orthographic cascade where ``sin(gamma) <= WARP_MIN_SIN``
-#: (the view within about 1.15 degrees of the light's direction, either way): the
-#: warp's axis ``u`` is then undefined or ill-conditioned (Filament's threshold).
-WARP_MIN_SIN = 0.02
-
-#: The cascade is not warped where the strength ``lambda = d / n`` (the warp frustum's depth
-#: over its near distance) falls below this: the warp is then within about 1 % of an
-#: orthographic map, and the map's rows would lose precision to ``n >> d``.
-WARP_MIN_STRENGTH = 0.01
-
-#: The cap's first check: the warped map is no coarser than the orthographic one up to the
-#: point of the view axis at view depth ``z_0 (z_1 / z_0)^WARP_CHECK_DEPTH`` (``[z_0, z_1]``:
-#: the cascade's depths), ``docs/lispsm.md``.
-WARP_CHECK_DEPTH = 0.9
-
-#: The cap's second check: the quantiles (shares) of the texel area per pixel footprint, over
-#: each cascade's receiver samples (:func:`_receivers`), that the warp must not raise: the
-#: median and the 90th percentile (:func:`_check`).
-WARP_SHARES = (0.5, 0.9)
-
-#: The margin for the samples standing in for the pixels: a quantile ``q`` of
-#: :data:`WARP_SHARES` holds on the share ``q + WARP_SHARE_MARGIN`` of the samples (the
-#: pose sweep's figures vary by about 2 % with the grid's size without it).
-WARP_SHARE_MARGIN = 0.05
-
-#: The receiver samples: one ray through the centre of each cell of a ``G x G`` grid over
-#: the screen (``G = WARP_RAYS``), where the ray leaves the scene box.
-WARP_RAYS = 16
-
-#: A sample's weight in a cascade ramps from 0 to 1 over this fraction of the slice's depth
-#: about each end (half outside, half inside), so that the weights move continuously as a
-#: sample crosses a split (and, without a blend band, the two cascades' weights add to 1).
-WARP_SAMPLE_RAMP = 0.05
-
-#: The quantile's prior, in samples: ``WARP_PRIOR`` spread evenly over ``[0, 1]`` (it makes
-#: the quantile a continuous function of the samples) and as much at 1 (a cascade without
-#: samples is checked at its far end: never coarser anywhere).
-WARP_PRIOR = 0.5
-
-#: Rounds of ``kappa`` (from the samples, at the strength ``lambda``) and ``lambda`` (capped
-#: at ``kappa``): the first takes ``kappa`` at the uncapped strength.
-WARP_ROUNDS = 2
-
-#: Newton steps toward the strongest warp within the cap (:func:`_capped`).
-NEWTON_STEPS = 8
 
 Rows = tuple[Any, ...]
 
