@@ -35,7 +35,9 @@ parameters are typed by what they are in both:
   ``(*batch, 1)``, so the shape is not held to one memo);
 * :data:`Truth`: one boolean component, ``bool`` per entry or a boolean array;
 * :data:`Row`: a flat row of components, a sequence of numbers per entry (a tuple, a list,
-  or a 1-D NumPy buffer in the compiled loops) or a tuple of arrays of the batch's shape.
+  or a 1-D NumPy buffer in the compiled loops) or a tuple of arrays of the batch's shape
+  (or, for eight corners' values, ``_math._cascade_bounds.CornerRow``: one array per value
+  with the corners on a last axis, read per entry as a row).
 * :data:`Status`: a fit's status word, an ``int`` of bits per entry, an integer array, or
   on whole arrays a record of each check by its bit (``_fits/shadow/_arrays.Flags``);
 * :data:`Options`: a fit's static options read by name, a ``NamedTuple`` on arrays, a
@@ -159,6 +161,8 @@ else:
         def __instancecheck__(cls, value: object) -> bool:
             if isinstance(value, tuple | list):
                 return all(isinstance(v, Scalar | Truth) for v in value)
+            if hasattr(value, "columns"):  # the array form's corner row: arrays per column
+                return all(isinstance(v, Scalar) for v in value.columns)
             return getattr(value, "ndim", None) == 1 and isinstance(value, Scalar)
 
     class Row(metaclass=_RowType):

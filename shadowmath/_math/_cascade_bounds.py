@@ -21,6 +21,7 @@ side values and view depth (``boxp = (bl, bg)``, 8 x 3 and 8 x 5) and the slice'
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from types import ModuleType
 from typing import Any, NamedTuple
 
@@ -41,8 +42,6 @@ from ._formulas import where
 
 _E0 = (0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3)
 _E1 = (1, 3, 5, 7, 2, 3, 6, 7, 4, 5, 6, 7)
-_EDGE_0 = np.array(_E0)
-_EDGE_1 = np.array(_E1)
 
 
 class LightBounds(NamedTuple):
@@ -57,6 +56,37 @@ class LightBounds(NamedTuple):
     z_hi: Any
     box_z_lo: Any
     box_z_hi: Any
+
+
+class CornerRow:
+    """The array form's 8 x m corner buffer: ``columns``, ``m`` arrays ``(*b, n, 8)`` (value
+    ``c`` of the eight corners), which :func:`cascade_body` reads whole, read per entry as
+    the loop form's flat row (entry ``m k + c``: value ``c`` of corner ``k``, ``(*b, n)``).
+
+    The passes over corners compute ``columns`` once on the corners' axis; a step written per
+    entry indexes the row as it indexes the loop form's (an entry is sliced when read).
+    """
+
+    __slots__ = ("columns",)
+
+    def __init__(self, columns: tuple[Scalar, ...]) -> None:
+        self.columns = tuple(columns)
+
+    def __len__(self) -> int:
+        return 8 * len(self.columns)
+
+    def __getitem__(self, i: int) -> Scalar:
+        m = len(self.columns)
+        return self.columns[i % m][..., i // m]
+
+    def __iter__(self) -> Iterator[Scalar]:
+        return (self[i] for i in range(len(self)))
+
+
+def corner_axis(row: Row) -> tuple[Scalar, ...]:
+    """Per-entry values ``(*b, 1)`` with a last axis for the corners (``(*b, 1, 1)``);
+    Python numbers as they are."""
+    return tuple(v[..., None] if hasattr(v, "shape") else v for v in row)
 
 
 #: The most vertices of a cascade's body: both ends of the 24 edges.
@@ -196,24 +226,53 @@ def cascade_body(
     g_box = slice_values(sides, sides[4], s0, s1)
     g0, g1 = [], []
     for gsl, gb in zip(g_slice, g_box, strict=True):
-        gb = xp.broadcast_to(gb, gsl.shape)
-        g0.append(xp.concat([gsl[..., _EDGE_0], gb[..., _EDGE_0]], axis=-1))
-        g1.append(xp.concat([gsl[..., _EDGE_1], gb[..., _EDGE_1]], axis=-1))
-    t0, t1, ok = clip_segment(tuple(g0), tuple(g1))
+        (a0, a1), (b0, b1) = _edge_ends(xp, gsl), _edge_ends(xp, xp.broadcast_to(gb, gsl.shape))
+        g0.append(xp.concat([a0, b0], axis=-1))
+        g1.append(xp.concat([a1, b1], axis=-1))
+    t0, t1, ok = _clip_array(xp.stack(g0, axis=-3), xp.stack(g1, axis=-3))
     ends = []
     for p_s, p_b in zip(sl, bc, strict=True):
         # The slice may be one for the batch (a visible range's camera-wide depths) while
         # the box is per camera, or the other way round: both to their common shape.
         shape = xp.broadcast_shapes(p_s.shape, p_b.shape)
         p_s, p_b = xp.broadcast_to(p_s, shape), xp.broadcast_to(p_b, shape)
-        p0 = xp.concat([p_s[..., _EDGE_0], p_b[..., _EDGE_0]], axis=-1)
-        p1 = xp.concat([p_s[..., _EDGE_1], p_b[..., _EDGE_1]], axis=-1)
+        (a0, a1), (b0, b1) = _edge_ends(xp, p_s), _edge_ends(xp, p_b)
+        p0, p1 = xp.concat([a0, b0], axis=-1), xp.concat([a1, b1], axis=-1)
         ends.append(xp.concat([p0 + t0 * (p1 - p0), p0 + t1 * (p1 - p0)], axis=-1))
     return ends, xp.concat([ok, ok], axis=-1), sl, bc
 
 
+def _clip_array(g0: Scalar, g1: Scalar) -> tuple[Scalar, Scalar, Truth]:
+    """The array form of :func:`._cascade_formulas.clip_segment`: the six planes on an axis
+    (``g0``, ``g1``: ``(*b, 6, n, e)``) clipped at once. Each plane's step only raises ``t_0``
+    or lowers ``t_1`` (:func:`._cascade_formulas.clip_plane`), so the six steps in turn are
+    a maximum and a minimum: the same numbers."""
+    xp = array_api
+    d = g0 - g1
+    t = g0 / where(d != 0, d, 1.0)
+    t0 = xp.max(where((g0 < 0) & (g1 >= 0), t, 0.0), axis=-3)
+    t1 = xp.min(where((g0 >= 0) & (g1 < 0), t, 1.0), axis=-3)
+    ok = xp.all((g0 >= 0) | (g1 >= 0), axis=-3)
+    return t0, t1, ok & (t0 <= t1)
+
+
+def _edge_ends(xp: ModuleType, v: Scalar) -> tuple[Scalar, Scalar]:
+    """The ends of a box's 12 edges from its corners' values ``v`` ``(..., 8)`` (corner
+    ``i + 2 j + 4 k``): two ``(..., 12)``, in the order of ``_E0`` and ``_E1`` (the edges
+    along ``i``, then ``j``, then ``k``), by strided slices rather than a gather (whose
+    derivative, a scatter, would cost XLA more to compile)."""
+    half = xp.reshape(v, (*v.shape[:-1], 2, 4))  # (k, 2 j + i)
+    shape = (*v.shape[:-1], 4)
+    along_j = (xp.reshape(half[..., :2], shape), xp.reshape(half[..., 2:], shape))
+    return (xp.concat([v[..., 0::2], along_j[0], v[..., :4]], axis=-1),
+            xp.concat([v[..., 1::2], along_j[1], v[..., 4:]], axis=-1))  # fmt: skip
+
+
 def _corners(xp: ModuleType, buffer: Row, m: int) -> tuple[Scalar, ...]:
-    """``m`` arrays ``(..., 8)``: value ``c`` of the eight corners of a buffer of 8 x m."""
+    """``m`` arrays ``(..., 8)``: value ``c`` of the eight corners of a buffer of 8 x m
+    (a :class:`CornerRow`'s columns)."""
+    if isinstance(buffer, CornerRow):
+        return buffer.columns
     stacked = xp.stack(xp.broadcast_arrays(*buffer), axis=-1)
     stacked = xp.reshape(stacked, (*stacked.shape[:-1], 8, m))
     return tuple(stacked[..., c] for c in range(m))
@@ -232,12 +291,16 @@ def body_bounds(
     xp = array_api
     ends, ok2, sl, bc = body
     seen = xp.any(ok2, axis=-1)
-    inf = xp.asarray(np.inf, dtype=ends[0].dtype)
-    low = [where(seen, xp.min(where(ok2, v, inf), axis=-1), xp.min(f, axis=-1))
-           for v, f in zip(ends, sl, strict=True)]  # fmt: skip
-    high = [where(seen, xp.max(where(ok2, v, -inf), axis=-1), xp.max(f, axis=-1))
-            for v, f in zip(ends, sl, strict=True)]  # fmt: skip
-    zb_lo, zb_hi = xp.min(bc[2], axis=-1), xp.max(bc[2], axis=-1)
+    # Every bound as one maximum (a minimum is -max(-v), exactly): one reduction, whose
+    # derivative meets the bounds' cotangents once, where six would each repeat them.
+    signed = xp.stack([s * v for v in ends for s in (-1.0, 1.0)], axis=-3)  # (*b, 6, n, 48)
+    hit = xp.max(where(ok2[..., None, :, :], signed, -np.inf), axis=-1)
+    own = xp.max(xp.stack([s * f for f in sl for s in (-1.0, 1.0)], axis=-3), axis=-1)
+    b6 = where(seen[..., None, :], hit, own)
+    low = [-b6[..., 2 * c, :] for c in range(3)]
+    high = [b6[..., 2 * c + 1, :] for c in range(3)]
+    zb = xp.max(xp.stack([-bc[2], bc[2]], axis=-2), axis=-1)
+    zb_lo, zb_hi = -zb[..., 0], zb[..., 1]
     z_lo = xp.minimum(xp.minimum(zb_lo, low[2]), high[2])
     return LightBounds(low[0], high[0], low[1], high[1], z_lo, high[2], zb_lo, zb_hi)
 
@@ -249,6 +312,8 @@ FUNCTIONS = (
     "_outcodes",
     "_clip_crossed",
     "cascade_body",
+    "_clip_array",
+    "_edge_ends",
     "_corners",
     "_bounds_array",
     "body_bounds",

@@ -57,7 +57,14 @@ from shadowmath._boundary._status import (
 )
 
 # Shared formulas and primitives, rebound by specialize().
-from ._cascade_bounds import BODY_VERTICES, LightBounds, body_loop, points_bounds
+from ._cascade_bounds import (
+    BODY_VERTICES,
+    CornerRow,
+    LightBounds,
+    body_loop,
+    corner_axis,
+    points_bounds,
+)
 from ._cascade_formulas import (  # noqa: F401
     EDGES,
     affine,
@@ -83,8 +90,14 @@ from ._rectangle_loop import rectangle_loop
 from ._rows import _mul16, inverse4, row16, tile_rows
 from ._warp_loop import warp_frustum, warp_rows, warp_samples, warp_view, warp_world
 
-#: The bounds pass of the mode (:data:`FORMS`).
+#: The bounds pass of the mode, and the passes over the corners of the scene box and of a
+#: slice: each bound by specialize() to its loop form or its array form (:data:`FORMS`).
 cascade_bounds: Any = None
+box_pass: Any = None
+slice_corners: Any = None
+
+#: Names bound per mode by specialize(): ``name: (loop form, array form)``.
+FORMS = {"box_pass": ("_box_loop", "_box_array"), "slice_corners": ("_slice_loop", "_slice_array")}
 
 # Status bits (module constants: Numba freezes them at compile time).
 
@@ -366,11 +379,13 @@ def cascade_split(
     return where(k == 0, near, where(k == n, end, s))
 
 
-def box_pass(VP: tuple[Row, Row], box: Row, a_sign: tuple[Row, Scalar], bl: Row, bg: Row) -> None:
-    """The scene box's corners (``box``: min then max, 6 numbers): light coordinates
-    (``bl``, 8 x 3), camera side values and view depth (``bg``, 8 x 5)."""
+def _box_loop(VP: tuple[Row, Row], box: Row, a_sign: tuple[Row, Scalar]) -> tuple[Row, Row]:
+    """The scene box's corners (``box``: min then max, 6 numbers, corner ``k``'s ``x, y, z``
+    from bits 0, 1, 2 of ``k``): light coordinates (``bl``, 8 x 3), camera side values and
+    view depth (``bg``, 8 x 5). The loop form of ``box_pass``."""
     V, P = VP
     a, sign = a_sign
+    bl, bg = alloc(24), alloc(40)
     PV = _mul16(P, V)
     for k in range(8):
         x, y, z = box[3 * (k & 1)], box[3 * ((k >> 1) & 1) + 1], box[3 * (k >> 2) + 2]
@@ -380,6 +395,22 @@ def box_pass(VP: tuple[Row, Row], box: Row, a_sign: tuple[Row, Scalar], bl: Row,
         for c in range(4):
             bg[5 * k + c] = sides[c]
         bg[5 * k + 4] = sign * (V[8] * x + V[9] * y + V[10] * z + V[11])
+    return bl, bg
+
+
+def _box_array(VP: tuple[Row, Row], box: Row, a_sign: tuple[Row, Scalar]) -> tuple[Row, Row]:
+    """The array form of ``box_pass`` (:func:`_box_loop`): the same formulas once, on the
+    eight corners as a last axis (:class:`._cascade_bounds.CornerRow`)."""
+    xp = array_api
+    V, P = VP
+    a, sign = a_sign
+    x, y, z = (xp.stack([box[3 * ((k >> c) & 1) + c] for k in range(8)], axis=-1)
+               for c in range(3))  # fmt: skip
+    Vc = corner_axis(V)
+    sides = camera_values(corner_axis(_mul16(P, V)), x, y, z)
+    depth = corner_axis((sign,))[0] * (Vc[8] * x + Vc[9] * y + Vc[10] * z + Vc[11])
+    bl = CornerRow(to_light(x, y, z, corner_axis(a)))
+    return bl, CornerRow((sides[0], sides[1], sides[2], sides[3], depth))
 
 
 def cascade_entry(
@@ -394,7 +425,7 @@ def cascade_entry(
     (rows)."""
     L, V, P, box, U = inputs.light, inputs.view_matrix, inputs.projection, inputs.box, inputs.up
     G, W = GW
-    nc, fc, bl, bg = alloc(12), alloc(16), alloc(24), alloc(40)
+    nc, fc = alloc(12), alloc(16)
     sign, near, far, st = cascade_camera(V, P, o, nc, fc)
     end, st_range = cascade_range(near, far, sc, G, o)
     coords = greater(greater(greater(fabs(box[0]), fabs(box[1])), fabs(box[2])),
@@ -402,7 +433,7 @@ def cascade_entry(
     a, ok_light, _, ok_up = fit_axes((-L[0], -L[1], -L[2]), U, o.has_up, coords, o.eps)
     st = st | cascade_checks(inputs, o) | st_range
     st = st | flag(ok_light, C_LIGHT_ZERO) | flag(ok_up, C_UP_PARALLEL)
-    box_pass((V, P), box, (a, sign), bl, bg)
+    bl, bg = box_pass((V, P), box, (a, sign))
     cam = CascadeCamera(sign, nc, fc, inverse4(V)[0], a)
     lo, hi = split_range(cam, (box, bg), (near, end), sc, o)
     return CascadeEntry(cam, lo, hi, sc.lam, sc.overlap, W, bl, bg, st)
@@ -463,10 +494,10 @@ def cascade_slice(
     return CascadeSlice(s0, s1, vc, lc, gs)
 
 
-def slice_corners(cam: CascadeCamera, box: Row, s0: Scalar, s1: Scalar) -> tuple[Row, Row, Row]:
+def _slice_loop(cam: CascadeCamera, box: Row, s0: Scalar, s1: Scalar) -> tuple[Row, Row, Row]:
     """The corners of the camera's slice between view depths ``s0`` and ``s1``: view
     (``vc``, 8 x 3), light (``lc``) and the box's half-space values at them (``gs``, 8 x 6).
-    ``cam``: :class:`CascadeCamera`."""
+    ``cam``: :class:`CascadeCamera`. The loop form of ``slice_corners``."""
     sign, nc, fc, iV, a = cam.sign, cam.near_corners, cam.far_corners, cam.view_to_world, cam.axes
     vc, lc, gs = alloc(24), alloc(24), alloc(48)
     lo, hi = (box[0], box[1], box[2]), (box[3], box[4], box[5])
@@ -483,6 +514,25 @@ def slice_corners(cam: CascadeCamera, box: Row, s0: Scalar, s1: Scalar) -> tuple
         for c in range(6):
             gs[6 * k + c] = g[c]
     return vc, lc, gs
+
+
+def _slice_array(cam: CascadeCamera, box: Row, s0: Scalar, s1: Scalar) -> tuple[Row, Row, Row]:
+    """The array form of ``slice_corners`` (:func:`_slice_loop`): the same formulas once, on
+    the eight corners as a last axis (:class:`._cascade_bounds.CornerRow`): ``s0``, ``s1``
+    ``(*b, n)``, the rows ``(*b, n)`` per entry, their columns ``(*b, n, 8)``."""
+    xp = array_api
+    nc, fc = cam.near_corners, cam.far_corners
+    n8 = tuple(xp.stack([nc[3 * (k & 3) + c] for k in range(8)], axis=-1) for c in range(3))
+    f8 = tuple(xp.stack([fc[4 * (k & 3) + c] for k in range(8)], axis=-1) for c in range(4))
+    shape = (*xp.broadcast_shapes(xp.shape(s0), xp.shape(s1)), 4)
+    d8 = xp.concat([xp.broadcast_to(s0[..., None], shape), xp.broadcast_to(s1[..., None], shape)],
+                   axis=-1)  # fmt: skip
+    p = edge_point(n8, f8, corner_axis((cam.sign,))[0], d8)
+    w = affine(corner_axis(cam.view_to_world), p[0], p[1], p[2])
+    q = to_light(w[0], w[1], w[2], corner_axis(cam.axes))
+    b = corner_axis(box)
+    g = box_values(w[0], w[1], w[2], (b[0], b[1], b[2]), (b[3], b[4], b[5]))
+    return CornerRow(p), CornerRow(q), CornerRow(g)
 
 
 def cascade_fit(e: CascadeEntry, sl: CascadeSlice, j: Scalar, o: Options, row: Row) -> None:
@@ -714,12 +764,14 @@ FUNCTIONS = (
     "cascade_checks",
     "cascade_range",
     "cascade_split",
-    "box_pass",
+    "_box_loop",
+    "_box_array",
     "cascade_entry",
     "split_range",
     "visible_range",
     "cascade_slice",
-    "slice_corners",
+    "_slice_loop",
+    "_slice_array",
     "cascade_fit",
     "bounds_fit",
     "fitted_fit",

@@ -58,8 +58,12 @@ _MODULES = (
 
 
 def _forms() -> dict[str, tuple[str, str]]:
-    """Names with a loop form and an array form (a module's ``FORMS``)."""
-    return {k: v for module, _ in _MODULES for k, v in getattr(module, "FORMS", {}).items()}
+    """Names with a loop form and an array form (the modules' ``FORMS``, each name once)."""
+    pairs = [kv for module, _ in _MODULES for kv in getattr(module, "FORMS", {}).items()]
+    forms = dict(pairs)
+    if len(forms) != len(pairs):
+        raise RuntimeError(f"a name with two forms in two modules: {sorted(forms)}")
+    return forms
 
 
 def specialize(
