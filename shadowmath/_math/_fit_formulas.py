@@ -28,6 +28,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
 from shadowmath._boundary._messages import MAX_FOV_TAN, WIDE_FOV_TAN
 
 # Backend primitives and the shared formulas, rebound by specialize().
@@ -46,8 +48,15 @@ from ._formulas import (  # noqa: F401  (names the specialized copies look up)
     sqrt,
     where,
 )
+from ._rows import MatrixEntries
+from ._vector import matmul
 
 rint: Any = None  # round half to even; bound by specialize()
+array_api: Any = None  # the array mode's namespace; bound by specialize()
+fit_rows: Any = None  # the mode's form (:data:`FORMS`); bound by specialize()
+
+#: Names bound per mode by specialize(): ``name: (loop form, array form)``.
+FORMS = {"fit_rows": ("_rows_loop", "_rows_array")}
 
 
 def place(
@@ -593,7 +602,7 @@ def const_times(c: tuple[float, ...], m: tuple[Scalar, ...]) -> tuple[Scalar, ..
 IDENTITY16 = (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 
 
-def fit_rows(
+def _rows_loop(
     frame: tuple[tuple[Scalar, Scalar, Scalar], tuple[Scalar, ...]],
     box: tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar],
     margins: tuple[float, float],
@@ -605,6 +614,7 @@ def fit_rows(
     ``frame = (origin, axes)``: the light frame's origin (3) and axes ``X, Y, Z`` (9).
     ``box = (h_x, h_y, c_x, c_y, near, far)``, already safe (``h > 0``, ``far > near``).
     ``api = (C, T C)``: OpenGL clip to the API's clip, and to its texture coordinates.
+    The loop form of ``fit_rows`` (:data:`FORMS`): the constant products entry by entry.
     """
     hx, hy, cx, cy, near, far = box
     w = light_rows(frame[0], frame[1])
@@ -614,6 +624,52 @@ def fit_rows(
     else:
         gl = clip_rows(w, projection_rows(scale, (cx, cy), near, far))
     return w, const_times(api[0], gl), const_times(api[1], gl)
+
+
+def _rows_array(
+    frame: tuple[tuple[Scalar, Scalar, Scalar], tuple[Scalar, ...]],
+    box: tuple[Scalar, Scalar, Scalar, Scalar, Scalar, Scalar],
+    margins: tuple[float, float],
+    directional: bool,
+    api: tuple[tuple[float, ...], tuple[float, ...]],
+) -> tuple[tuple[Scalar, ...], tuple[Scalar, ...], tuple[Scalar, ...]]:
+    """The array form of ``fit_rows`` (:func:`_rows_loop`): the same rows, the products as
+    matrix products on ``(*b, 4, 4)``: ``G = P @ W`` for an orthographic ``P``
+    (:func:`ortho_rows`; a perspective one keeps :func:`._formulas.clip_rows`' closed form),
+    then ``C @ G`` and ``T C @ G``. Under JAX a program a fraction of the size of the
+    entries written out, which XLA compiles in a fraction of the time."""
+    xp = array_api
+    hx, hy, cx, cy, near, far = box
+    w = light_rows(frame[0], frame[1])
+    scale = (margins[0] / hx, margins[1] / hy)
+    if directional:
+        sx, sxc, sy, syc, a, b = ortho_rows(scale, (cx, cy), near, far)
+        z = xp.zeros_like(sx)
+        P = _matrix((sx, z, z, sxc, z, sy, z, syc, z, z, a, b, z, z, z, z + 1.0))
+        G = matmul(xp, P, _matrix((*w, z, z, z, z + 1.0)))
+        gl: tuple[Scalar, ...] = MatrixEntries(G)
+    else:
+        gl = clip_rows(w, projection_rows(scale, (cx, cy), near, far))
+        G = _matrix(gl)
+    return w, _const_matmul(api[0], G, gl), _const_matmul(api[1], G, gl)
+
+
+def _matrix(entries: tuple[Scalar, ...]) -> Scalar:
+    """16 row-major entries ``(*b)`` as one ``(*b, 4, 4)`` array."""
+    if isinstance(entries, MatrixEntries):
+        return entries.matrix
+    xp = array_api
+    m = xp.stack(xp.broadcast_arrays(*entries), axis=-1)
+    return xp.reshape(m, (*m.shape[:-1], 4, 4))
+
+
+def _const_matmul(c: tuple[float, ...], G: Scalar, gl: tuple[Scalar, ...]) -> tuple[Scalar, ...]:
+    """``C @ G`` (``G``: ``gl``'s 16 entries as ``(*b, 4, 4)``) as 16 entries (``gl`` itself
+    for the identity)."""
+    if c == IDENTITY16:
+        return gl
+    xp = array_api
+    return MatrixEntries(matmul(xp, xp.asarray(np.reshape(c, (4, 4)), dtype=G.dtype), G))
 
 
 def safe_box(
@@ -666,6 +722,9 @@ FUNCTIONS = (
     "_term",
     "_crow",
     "const_times",
-    "fit_rows",
+    "_rows_loop",
+    "_rows_array",
+    "_matrix",
+    "_const_matmul",
     "safe_box",
 )

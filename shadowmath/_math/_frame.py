@@ -69,7 +69,11 @@ def light_entries(xp: ModuleType, frame: LightFrame) -> tuple[Float[Array, "*bat
 
 
 def stack_matrix(xp: ModuleType, entries: tuple[Scalar, ...]) -> Float[Array, "*batch 4 4"]:
-    """``(*batch, 4, 4)`` from 16 row-major entries (or 12: the last row is ``(0, 0, 0, 1)``)."""
+    """``(*batch, 4, 4)`` from 16 row-major entries (or 12: the last row is ``(0, 0, 0, 1)``;
+    the entries of an array form's product, :class:`._rows.MatrixEntries`, its matrix)."""
+    whole = getattr(entries, "matrix", None)
+    if whole is not None:
+        return whole
     if len(entries) == 12:
         zero = xp.zeros_like(entries[0])
         entries = (*entries, zero, zero, zero, zero + 1)

@@ -11,6 +11,18 @@ from shadowmath._boundary._shapes import Row, Scalar
 from ._formulas import where
 
 
+class MatrixEntries(tuple):  # type: ignore[type-arg]
+    """The 16 row-major entries of an array ``matrix`` ``(*b, 4, 4)`` (the array forms'
+    products), which :func:`._frame.stack_matrix` returns whole instead of restacking."""
+
+    matrix: Scalar
+
+    def __new__(cls, matrix: Scalar) -> MatrixEntries:
+        entries = super().__new__(cls, (matrix[..., i // 4, i % 4] for i in range(16)))
+        entries.matrix = matrix
+        return entries
+
+
 def row16(v: Row, k: int) -> tuple[Scalar, ...]:
     """The 16 entries ``v[k], ..., v[k + 15]`` as a tuple."""
     return (
