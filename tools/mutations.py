@@ -4,7 +4,8 @@ Each entry of :data:`ALL` (the fits' :data:`MUTATIONS`, then :data:`MODULES`: ca
 atlas, shadow cameras, cube depth, bias, PCF, spot caster selection, soft shadows,
 gather and the pygfx integration, then :data:`NEWEST`: the scene and its culling, the
 spot light's clipping loop, the atlas redraw, ``pcss_parameters``' recorded map size,
-the placement check and the float32 warning) changes one piece of exact source text into a
+the placement check and the float32 warning, and the array forms that keep the traced
+programs small) changes one piece of exact source text into a
 plausible mistake (a sign, a factor, a rounding mode, a bound, a swapped axis). For
 each, the runner copies the repository's ``shadowmath/``, ``tests/``, ``docs/`` (whose
 examples tests run), ``conftest.py`` and ``pyproject.toml`` into a temporary folder,
@@ -1115,6 +1116,48 @@ NEWEST: tuple[Mutation, ...] = (
         "big = max(big, 0.0 * lx)",
         "float32 warning: a light far from the origin not counted in the coordinates' size",
         PRECISION,
+    ),
+    # the array forms that keep the traced programs small: corners on a last axis, the
+    # bounds as one reduction, the edges by strided slices, the rows as matrix products
+    Mutation(
+        "slice-array-edge",
+        "shadowmath/_math/_cascade_steps.py",
+        "n8 = tuple(xp.stack([nc[3 * (k & 3) + c] for k in range(8)], axis=-1) for c in range(3))",
+        "n8 = tuple(xp.stack([nc[3 * (k & 1) + c] for k in range(8)], axis=-1) for c in range(3))",
+        "slice corners (array form): two of the frustum's four edges read twice",
+        CASCADES,
+    ),
+    Mutation(
+        "box-array-bits",
+        "shadowmath/_math/_cascade_steps.py",
+        "x, y, z = (xp.stack([box[3 * ((k >> c) & 1) + c] for k in range(8)], axis=-1)",
+        "x, y, z = (xp.stack([box[3 * ((k >> (2 - c)) & 1) + c] for k in range(8)], axis=-1)",
+        "scene box corners (array form): corner k's bits read in the wrong order",
+        CASCADES,
+    ),
+    Mutation(
+        "edge-ends-along-k",
+        "shadowmath/_math/_cascade_bounds.py",
+        "xp.concat([v[..., 1::2], along_j[1], v[..., 4:]], axis=-1)",
+        "xp.concat([v[..., 1::2], along_j[1], v[..., :4]], axis=-1)",
+        "cascade body (array form): the edges along k end where they start",
+        CASCADES,
+    ),
+    Mutation(
+        "body-bounds-low-sign",
+        "shadowmath/_math/_cascade_bounds.py",
+        "low = [-b6[..., 2 * c, :] for c in range(3)]",
+        "low = [b6[..., 2 * c, :] for c in range(3)]",
+        "cascade bounds (array form): the minimum read without its sign",
+        CASCADES,
+    ),
+    Mutation(
+        "rows-array-transposed",
+        "shadowmath/_math/_fit_formulas.py",
+        "matmul(xp, xp.asarray(np.reshape(c, (4, 4)), dtype=G.dtype), G)",
+        "matmul(xp, xp.asarray(np.reshape(c, (4, 4)).T, dtype=G.dtype), G)",
+        "fit rows (array form): the API's constant matrix transposed",
+        CASCADES,
     ),
 )
 
