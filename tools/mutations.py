@@ -1131,8 +1131,9 @@ NEWEST: tuple[Mutation, ...] = (
         "box-array-bits",
         "shadowmath/_math/_cascade_steps.py",
         "x, y, z = (xp.stack([box[3 * ((k >> c) & 1) + c] for k in range(8)], axis=-1)",
-        "x, y, z = (xp.stack([box[3 * ((k >> (2 - c)) & 1) + c] for k in range(8)], axis=-1)",
-        "scene box corners (array form): corner k's bits read in the wrong order",
+        "x, y, z = (xp.stack([box[3 * ((k >> 1) & 1) + c] for k in range(8)], axis=-1)",
+        "scene box corners (array form): every coordinate from one bit of k (a diagonal, not"
+        " the box; swapping two bits would be equivalent: the same corners and edges)",
         CASCADES,
     ),
     Mutation(
@@ -1157,6 +1158,15 @@ NEWEST: tuple[Mutation, ...] = (
         "matmul(xp, xp.asarray(np.reshape(c, (4, 4)), dtype=G.dtype), G)",
         "matmul(xp, xp.asarray(np.reshape(c, (4, 4)).T, dtype=G.dtype), G)",
         "fit rows (array form): the API's constant matrix transposed",
+        CASCADES,
+    ),
+    Mutation(
+        "row-parts-transposed",
+        "shadowmath/_fits/cascades/_driver.py",
+        "parts.append(xp.broadcast_to(xp.reshape(m, (*m.shape[:-2], 16)), (*full, 16)))",
+        "parts.append(xp.broadcast_to(xp.reshape(xp.swapaxes(m, -1, -2), (*m.shape[:-2], 16)),"
+        " (*full, 16)))",
+        "cascades' rows (array form): a matrix kept whole written column-major",
         CASCADES,
     ),
 )

@@ -702,12 +702,10 @@ def store_cascade(
     w, clip, tex = fit_rows((origin, a), box, (o.mx, o.my), True, api)
     tex = cascade_tile(tex, j, o)
     at_w, at_c, at_t = ROW_AT.world_to_light, ROW_AT.world_to_clip, ROW_AT.world_to_texture
-    for k in range(12):
-        row[at_w + k] = w[k]
+    row[at_w : at_w + 12] = w
     row[at_w + 12], row[at_w + 13], row[at_w + 14], row[at_w + 15] = 0.0, 0.0, 0.0, 1.0
-    for k in range(16):
-        row[at_c + k] = clip[k]
-        row[at_t + k] = tex[k]
+    row[at_c : at_c + 16] = clip  # whole: the array form keeps a product's matrix whole
+    row[at_t : at_t + 16] = tex
     f = ROW_AT.frustum  # OrthographicBox's order
     row[f], row[f + 1], row[f + 2], row[f + 3] = hx, hy, near, far
     row[f + 4], row[f + 5], row[f + 6], row[f + 7] = o.mx, o.my, cx, cy

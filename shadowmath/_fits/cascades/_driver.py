@@ -41,6 +41,7 @@ from shadowmath._math._cascade_steps import (
     row_part,
 )
 from shadowmath._math._frustum import OrthographicBox
+from shadowmath._math._rows import MatrixEntries
 from shadowmath._math._specialize import formulas, scalar_formulas
 from shadowmath._math._vector import matmul
 
@@ -143,7 +144,7 @@ def _arrays(call: _Call, checks: Checks, arrays: CascadeArrays, warp: str | None
         e = F.cascade_entry(inputs, sc, (S, W), o)
         splits = F.cascade_split(S, j, (e.lo, e.hi, e.lam, e.overlap), o)
         sl = F.cascade_slice(e, inputs.box, splits, j[:-1], o)
-        row: list[Any] = [0.0] * ROW
+        row = _RowParts([0.0] * ROW)
         if o.fitted:
             fitted_cascade(xp, F, (e, sl, j[:-1], o), row)
         else:
@@ -152,10 +153,41 @@ def _arrays(call: _Call, checks: Checks, arrays: CascadeArrays, warp: str | None
             _warp(call, (e, sl, j[:-1]), (V, P), row)
     for bit, message in cascade_messages():
         checks.require((e.status[..., 0] & bit) == 0, message)
-    full = (*call.shape, o.cascades)
-    rows = xp.stack([xp.broadcast_to(xp.asarray(v, dtype=ctx.dtype), full) for v in row], -1)
+    rows = row.assemble(xp, (*call.shape, o.cascades), ctx.dtype)
     splits = xp.broadcast_to(splits, (*call.shape, o.cascades + 1))
     return _result(call, checks.poison(rows, 2), checks.poison(splits, 1))
+
+
+class _RowParts(list[Any]):
+    """The array mode's row: a list of per-entry values ``(*b, n)``, which also keeps a
+    matrix product's 16 entries written whole (``row[k : k + 16] = entries``, the
+    :class:`~shadowmath._math._rows.MatrixEntries` of the array form of ``fit_rows``) as its
+    matrix ``(*b, n, 4, 4)``, so that :meth:`assemble` does not slice it and stack it again
+    (under JAX, 32 kernels fewer). Writing into such a part forgets the matrix."""
+
+    def __init__(self, values: list[Any]) -> None:
+        super().__init__(values)
+        self.blocks: dict[int, Any] = {}
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        first, stop = (key.start, key.stop) if isinstance(key, slice) else (key, key + 1)
+        self.blocks = {k: m for k, m in self.blocks.items() if k + 16 <= first or stop <= k}
+        super().__setitem__(key, value)
+        if isinstance(key, slice) and isinstance(value, MatrixEntries) and stop - first == 16:
+            self.blocks[first] = value.matrix
+
+    def assemble(self, xp: Any, full: tuple[int, ...], dtype: Any) -> Float[Array, "*b n r"]:
+        """The rows ``(*full, ROW)``: each entry broadcast to ``full``, a kept matrix whole."""
+        parts, k = [], 0
+        while k < len(self):
+            if k in self.blocks:
+                m = self.blocks[k]
+                parts.append(xp.broadcast_to(xp.reshape(m, (*m.shape[:-2], 16)), (*full, 16)))
+                k += 16
+            else:
+                parts.append(xp.broadcast_to(xp.asarray(self[k], dtype=dtype), full)[..., None])
+                k += 1
+        return xp.concat(parts, axis=-1)
 
 
 class _WarpCamera(NamedTuple):
