@@ -547,3 +547,33 @@ def test_the_options_record_reads_back_each_option_by_name() -> None:
             assert tuple(got) == value, name
         else:
             assert type(got.item()) is type(value) and got == value, name
+
+
+@pytest.mark.parametrize("options", [{}, {"stable": True}, {"layout": "atlas"}])
+def test_jax_gradient_program_gathers_and_scatters_nothing(options: dict[str, Any]) -> None:
+    """Under JAX the cascades' edges are strided slices of the corners and the splits slices
+    of their row (not gathers, whose derivatives are scatters: XLA compiles those slowly):
+    the gradient's program reads nothing by index arrays (``orientation="fitted"`` does,
+    by nature: it picks the best of the hull's edges)."""
+    jax = pytest.importorskip("jax")
+    jnp = jax.numpy
+    sun, view, proj, box = scene(3)
+
+    def loss(light: Any) -> Any:
+        c = sm.fit_cascades(light, view, proj, box, 512, **options)
+        return jnp.sum(c.world_to_clip**2) + jnp.sum(c.world_to_texture**2)
+
+    def primitives(jaxpr: Any) -> set[str]:
+        names = set()
+        for eqn in jaxpr.eqns:
+            names.add(eqn.primitive.name)
+            for value in eqn.params.values():
+                for sub in value if isinstance(value, tuple | list) else (value,):
+                    inner = getattr(sub, "jaxpr", sub)
+                    if hasattr(inner, "eqns"):
+                        names |= primitives(inner)
+        return names
+
+    used = primitives(jax.make_jaxpr(jax.value_and_grad(loss))(jnp.asarray(sun)).jaxpr)
+    assert "dot_general" in used  # the matrices as products: the program was read
+    assert not {n for n in used if n.startswith(("gather", "scatter"))}, sorted(used)

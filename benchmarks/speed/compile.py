@@ -2,20 +2,21 @@
 how long it takes to compile, in float64.
 
 For ``fit_shadow`` per light kind and main options, ``fit_cascades`` (four cascades by
-default, and a few options) and ``pcss_parameters``: the number of equations
-in the jaxpr of ``value_and_grad(loss)`` (counted into every sub-jaxpr: nested ``jit``,
-``cond``, ``while``, custom derivatives) and the time of ``jit(...).lower(...).compile()``
-after ``jax.clear_caches()`` (tracing, lowering and XLA's compile: what the first call pays,
-less running it), with JAX's persistent compilation cache off. ``loss`` is the sum of the
-squares of the fit's matrices. Under ``--tiny`` every program is traced (its equations are
-counted) and the point light's fit alone is compiled.
+default, and a few options) and ``pcss_parameters``: the number of equations in the jaxpr
+of ``value_and_grad(loss)`` (counted into every sub-jaxpr: nested ``jit``, ``cond``,
+``while``, custom derivatives), the fused kernels XLA emits for it, and the time of
+``jit(...).lower(...).compile()`` after ``jax.clear_caches()`` (tracing, lowering and
+XLA's compile: what the first call pays, less running it), with JAX's persistent
+compilation cache off. ``loss`` is the sum of the squares of the fit's matrices. Under
+``--tiny`` every program is traced (its equations are counted) and the point light's fit
+alone is compiled.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -143,13 +144,20 @@ def _other_programs() -> dict[str, tuple[Callable[..., Any], tuple[Any, ...]]]:
     }
 
 
-def measure_program(
-    fn: Callable[..., Any], args: tuple[Any, ...]
-) -> tuple[int, float, float, float]:
-    """``(equations, trace seconds, first-compile seconds, its CPU seconds)`` of
-    ``jit(value_and_grad(fn))``: the jaxpr's equations, the time to trace it, and lower +
-    compile in a fresh trace (wall clock, and this process's CPU time: steadier on a
-    machine shared with other jobs)."""
+class Measured(NamedTuple):
+    """One first compile of ``jit(value_and_grad(fn))``."""
+
+    equations: int  # the jaxpr's, counted into sub-jaxprs
+    traced: float  # seconds to trace it
+    seconds: float  # lower + compile, wall clock
+    cpu: float  # this process's CPU seconds for it (steadier on a shared machine)
+    kernels: int  # the fused kernels of the optimized program (XLA's time grows with them)
+
+
+def measure_program(fn: Callable[..., Any], args: tuple[Any, ...]) -> Measured:
+    """:class:`Measured` for ``jit(value_and_grad(fn))``: the jaxpr's equations, the time to
+    trace it, lower + compile in a fresh trace, and the fusions of the optimized program's
+    entry computation."""
     import jax
 
     program = jax.value_and_grad(fn)
@@ -159,8 +167,13 @@ def measure_program(
     traced = time.perf_counter() - t0
     jax.clear_caches()
     c0, t0 = time.process_time(), time.perf_counter()
-    jax.jit(program).lower(*args).compile()
-    return equations, traced, time.perf_counter() - t0, time.process_time() - c0
+    compiled = jax.jit(program).lower(*args).compile()
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    text = compiled.as_text()
+    entry = text[text.index("\nENTRY ") :]
+    entry = entry[: entry.index("\n}")]
+    kernels = sum(" fusion(" in line for line in entry.splitlines())
+    return Measured(equations, traced, seconds, cpu, kernels)
 
 
 def run(cfg: Config) -> Section:
@@ -193,9 +206,9 @@ def _row(cfg: Config, section: Section, name: str, program: Any, *, compile_it: 
     limit = TARGETS.get(name)
     reps = cfg.repeats(3 if limit is not None else 1)
     samples, cpu = [], []
-    equations, traced = 0, 0.0
+    equations, traced, kernels = 0, 0.0, 0
     for _ in range(reps if compile_it else 0):
-        equations, traced, seconds, cpu_seconds = measure_program(*program)
+        equations, traced, seconds, cpu_seconds, kernels = measure_program(*program)
         samples.append(seconds)
         cpu.append(cpu_seconds)
     if not compile_it:
@@ -210,13 +223,14 @@ def _row(cfg: Config, section: Section, name: str, program: Any, *, compile_it: 
     section.figures[f"trace_s_{key}"] = traced
     if not samples:
         return
+    section.figures[f"kernels_{key}"] = float(kernels)
     samples.sort()
     cpu.sort()
     section.figures[f"compile_s_{key}"] = samples[len(samples) // 2]
     section.figures[f"compile_cpu_s_{key}"] = cpu[len(cpu) // 2]
     section.rows.append(
         Row(
-            f"{name}: {equations:,} equations, traced in {traced:.2f} s, "
+            f"{name}: {equations:,} equations, {kernels} kernels, traced in {traced:.2f} s, "
             f"compiled in {cpu[len(cpu) // 2]:.2f} s of CPU",
             Timing(samples[len(samples) // 2], len(samples)),
             target=None if limit is None else f"≤ {limit:g} s",
