@@ -634,23 +634,26 @@ def _rows_array(
     api: tuple[tuple[float, ...], tuple[float, ...]],
 ) -> tuple[tuple[Scalar, ...], tuple[Scalar, ...], tuple[Scalar, ...]]:
     """The array form of ``fit_rows`` (:func:`_rows_loop`): the same rows, the products as
-    matrix products on ``(*b, 4, 4)``: ``G = P @ W`` for an orthographic ``P``
-    (:func:`ortho_rows`; a perspective one keeps :func:`._formulas.clip_rows`' closed form),
-    then ``C @ G`` and ``T C @ G``. Under JAX a program a fraction of the size of the
-    entries written out, which XLA compiles in a fraction of the time."""
+    matrix products on ``(*b, 4, 4)``: ``G = P @ W`` (``P`` the orthographic box's or the
+    blocker projection's, :func:`ortho_rows`, :func:`._formulas.projection_rows`), then
+    ``C @ G`` and ``T C @ G``. Under JAX a program a fraction of the size of the entries
+    written out, which XLA compiles in a fraction of the time."""
     xp = array_api
     hx, hy, cx, cy, near, far = box
     w = light_rows(frame[0], frame[1])
     scale = (margins[0] / hx, margins[1] / hy)
     if directional:
         sx, sxc, sy, syc, a, b = ortho_rows(scale, (cx, cy), near, far)
-        z = xp.zeros_like(sx)
-        P = _matrix((sx, z, z, sxc, z, sy, z, syc, z, z, a, b, z, z, z, z + 1.0))
-        G = matmul(xp, P, _matrix((*w, z, z, z, z + 1.0)))
-        gl: tuple[Scalar, ...] = MatrixEntries(G)
     else:
-        gl = clip_rows(w, projection_rows(scale, (cx, cy), near, far))
-        G = _matrix(gl)
+        sx, sxc, sy, syc, a, b = projection_rows(scale, (cx, cy), near, far)
+    z = xp.zeros_like(sx)
+    one = z + 1.0
+    if directional:
+        P = (sx, z, z, sxc, z, sy, z, syc, z, z, a, b, z, z, z, one)
+    else:
+        P = (sx, z, sxc, z, z, sy, syc, z, z, z, a, b, z, z, one, z)
+    G = matmul(xp, _matrix(P), _matrix((*w, z, z, z, one)))
+    gl = MatrixEntries(G)
     return w, _const_matmul(api[0], G, gl), _const_matmul(api[1], G, gl)
 
 
