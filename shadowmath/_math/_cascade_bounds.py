@@ -42,6 +42,7 @@ from ._formulas import where
 
 _E0 = (0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3)
 _E1 = (1, 3, 5, 7, 2, 3, 6, 7, 4, 5, 6, 7)
+_EDGE_0, _EDGE_1 = np.array(_E0), np.array(_E1)
 
 
 class LightBounds(NamedTuple):
@@ -229,7 +230,7 @@ def cascade_body(
         (a0, a1), (b0, b1) = _edge_ends(xp, gsl), _edge_ends(xp, xp.broadcast_to(gb, gsl.shape))
         g0.append(xp.concat([a0, b0], axis=-1))
         g1.append(xp.concat([a1, b1], axis=-1))
-    t0, t1, ok = _clip_array(xp.stack(g0, axis=-3), xp.stack(g1, axis=-3))
+    t0, t1, ok = clip_segment(tuple(g0), tuple(g1))
     ends = []
     for p_s, p_b in zip(sl, bc, strict=True):
         # The slice may be one for the batch (a visible range's camera-wide depths) while
@@ -242,25 +243,14 @@ def cascade_body(
     return ends, xp.concat([ok, ok], axis=-1), sl, bc
 
 
-def _clip_array(g0: Scalar, g1: Scalar) -> tuple[Scalar, Scalar, Truth]:
-    """The array form of :func:`._cascade_formulas.clip_segment`: the six planes on an axis
-    (``g0``, ``g1``: ``(*b, 6, n, e)``) clipped at once. Each plane's step only raises ``t_0``
-    or lowers ``t_1`` (:func:`._cascade_formulas.clip_plane`), so the six steps in turn are
-    a maximum and a minimum: the same numbers."""
-    xp = array_api
-    d = g0 - g1
-    t = g0 / where(d != 0, d, 1.0)
-    t0 = xp.max(where((g0 < 0) & (g1 >= 0), t, 0.0), axis=-3)
-    t1 = xp.min(where((g0 >= 0) & (g1 < 0), t, 1.0), axis=-3)
-    ok = xp.all((g0 >= 0) | (g1 >= 0), axis=-3)
-    return t0, t1, ok & (t0 <= t1)
-
-
 def _edge_ends(xp: ModuleType, v: Scalar) -> tuple[Scalar, Scalar]:
     """The ends of a box's 12 edges from its corners' values ``v`` ``(..., 8)`` (corner
     ``i + 2 j + 4 k``): two ``(..., 12)``, in the order of ``_E0`` and ``_E1`` (the edges
     along ``i``, then ``j``, then ``k``), by strided slices rather than a gather (whose
-    derivative, a scatter, would cost XLA more to compile)."""
+    derivative, a scatter, would cost XLA more to compile). NumPy takes them by index arrays:
+    one call each instead of ten."""
+    if xp is np:
+        return v[..., _EDGE_0], v[..., _EDGE_1]
     half = xp.reshape(v, (*v.shape[:-1], 2, 4))  # (k, 2 j + i)
     shape = (*v.shape[:-1], 4)
     along_j = (xp.reshape(half[..., :2], shape), xp.reshape(half[..., 2:], shape))
@@ -293,8 +283,8 @@ def body_bounds(
     seen = xp.any(ok2, axis=-1)
     # Every bound as one maximum (a minimum is -max(-v), exactly): one reduction, whose
     # derivative meets the bounds' cotangents once, where six would each repeat them.
-    signed = xp.stack([s * v for v in ends for s in (-1.0, 1.0)], axis=-3)  # (*b, 6, n, 48)
-    hit = xp.max(where(ok2[..., None, :, :], signed, -np.inf), axis=-1)
+    hit = xp.max(xp.stack([where(ok2, s * v, -np.inf) for v in ends for s in (-1.0, 1.0)],
+                          axis=-3), axis=-1)  # fmt: skip
     own = xp.max(xp.stack([s * f for f in sl for s in (-1.0, 1.0)], axis=-3), axis=-1)
     b6 = where(seen[..., None, :], hit, own)
     low = [-b6[..., 2 * c, :] for c in range(3)]
@@ -312,7 +302,6 @@ FUNCTIONS = (
     "_outcodes",
     "_clip_crossed",
     "cascade_body",
-    "_clip_array",
     "_edge_ends",
     "_corners",
     "_bounds_array",
