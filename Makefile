@@ -30,9 +30,11 @@ demo: $(DEMO_STAMP)
 
 ## The whole suite: lint, strict typing, tests, the docs site and the notebooks, two at a
 ## time (pytest itself on every core: JOBS=auto workers, each with its own GL context;
-## JOBS=0 runs it in one process).
+## JOBS=0 runs it in one process). The docs build runs every notebook (mkdocs.yml:
+## mkdocs-jupyter, execute: true, allow_errors: false): a failing cell fails it, so the
+## notebooks target is not run a second time here.
 test: $(STAMP)
-	$(MAKE) --no-print-directory -j2 --output-sync=target lint typecheck pytest docs notebooks
+	$(MAKE) --no-print-directory -j2 --output-sync=target lint typecheck pytest docs
 
 lint: $(STAMP)
 	$(PY) -m ruff check .
@@ -48,6 +50,7 @@ pytest: $(STAMP)
 docs: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --quiet
 
+## The notebooks alone, each as a test (nbmake); `make test` runs them in the docs build.
 notebooks: $(STAMP)
 	$(PY) -m pytest --nbmake notebooks
 

@@ -116,33 +116,38 @@ def segment_hits_triangles(
     # A directional light's ray d = (x, y, z) has no far end: t is bounded below only.
     upper = np.inf if directional else 1 - eps
     v, t = _mesh(vertices, triangles)
-    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
-    e1, e2 = b - a, c - a
-
-    def chunk(q: NDArray[np.float64]) -> NDArray[np.bool_]:
-        # Components as separate (P, M) arrays: np.cross on (P, M, 3) is several times slower.
-        if directional:
-            dx, dy, dz = (np.broadcast_to(light[i], (len(q), 1)) for i in range(3))
-        else:
-            dx, dy, dz = (light[i] - q[:, i, None] for i in range(3))
-        sx, sy, sz = (q[:, i, None] - a[None, :, i] for i in range(3))
-        ax, ay, az = e1[:, 0], e1[:, 1], e1[:, 2]
-        bx, by, bz = e2[:, 0], e2[:, 1], e2[:, 2]
-        hx, hy, hz = dy * bz - dz * by, dz * bx - dx * bz, dx * by - dy * bx  # d x e2
-        det = ax * hx + ay * hy + az * hz
-        ok = np.abs(det) > 1e-300  # a segment parallel to the triangle's plane never hits it
-        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-        u = (sx * hx + sy * hy + sz * hz) * inv
-        kx, ky, kz = sy * az - sz * ay, sz * ax - sx * az, sx * ay - sy * ax  # s x e1
-        w = (dx * kx + dy * ky + dz * kz) * inv
-        along = (bx * kx + by * ky + bz * kz) * inv
-        crossing = ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (along > eps) & (along < upper)
-        result: NDArray[np.bool_] = crossing.any(axis=-1)
-        return result
-
+    corners = v[t]  # (M, 3 corners, 3)
     flat = p.reshape(-1, 3)
-    # Only segments that pass through the blocker's bounding sphere can hit it: the
+    # Only segments that pass through the blocker's bounding sphere can hit it, and within
+    # it only those through the sphere of a run of triangles can hit one of them: the
     # others are answered without the (points x triangles) test.
+    near = _near_sphere(flat, light, directional, v)
+    hits_near = np.zeros(len(near), dtype=bool)
+    for first in range(0, len(t), _RUN):
+        run = corners[first : first + _RUN]
+        close = (
+            _near_sphere(flat[near], light, directional, run.reshape(-1, 3))
+            if len(t) > _RUN
+            else np.arange(len(near))
+        )
+        step = max(1, _CHUNK_PAIRS // len(run))
+        for i in range(0, len(close), step):
+            rows = close[i : i + step]
+            hits_near[rows] |= _crossings(flat[near[rows]], light, directional, run, (eps, upper))
+    hits = np.zeros(len(flat), dtype=bool)
+    hits[near[hits_near]] = True
+    return hits.reshape(p.shape[:-1])
+
+
+#: Triangles whose bounding sphere is tested as one (a mesh's triangles run over its surface).
+_RUN = 64
+
+
+def _near_sphere(
+    flat: NDArray[np.float64], light: NDArray[np.float64], directional: bool, v: NDArray[np.float64]
+) -> NDArray[np.intp]:
+    """The points whose segment (ray) to the light passes through the bounding sphere of
+    the points ``v`` (about their mean, widened by rounding's margin)."""
     centre = v.mean(axis=0)
     radius = np.linalg.norm(v - centre, axis=1).max() * (1 + 1e-9) + 1e-12
     seg = np.broadcast_to(light, flat.shape) if directional else light - flat
@@ -152,9 +157,36 @@ def segment_hits_triangles(
         np.inf if directional else 1,
     )
     nearest = flat + along_seg[:, None] * seg
-    near = np.flatnonzero(np.linalg.norm(nearest - centre, axis=1) <= radius)
-    step = max(1, _CHUNK_PAIRS // max(1, len(t)))
-    parts = [chunk(flat[near[i : i + step]]) for i in range(0, len(near), step)]
-    hits_near = np.concatenate(parts) if parts else np.zeros(0, dtype=bool)
-    hits = np.isin(np.arange(len(flat)), near[hits_near])
-    return hits.reshape(p.shape[:-1])
+    return np.flatnonzero(np.linalg.norm(nearest - centre, axis=1) <= radius)
+
+
+def _crossings(
+    q: NDArray[np.float64],
+    light: NDArray[np.float64],
+    directional: bool,
+    corners: NDArray[np.float64],
+    bounds: tuple[float, float],
+) -> NDArray[np.bool_]:
+    """Whether the segment (ray) from each point ``q`` crosses one of the triangles
+    ``corners`` ``(M, 3, 3)`` at ``eps < t < upper`` (``bounds``): Möller–Trumbore."""
+    eps, upper = bounds
+    a = corners[:, 0]
+    e1, e2 = corners[:, 1] - a, corners[:, 2] - a
+    # Components as separate (P, M) arrays: np.cross on (P, M, 3) is several times slower.
+    if directional:
+        dx, dy, dz = (np.broadcast_to(light[i], (len(q), 1)) for i in range(3))
+    else:
+        dx, dy, dz = (light[i] - q[:, i, None] for i in range(3))
+    sx, sy, sz = (q[:, i, None] - a[None, :, i] for i in range(3))
+    ax, ay, az = e1[:, 0], e1[:, 1], e1[:, 2]
+    bx, by, bz = e2[:, 0], e2[:, 1], e2[:, 2]
+    hx, hy, hz = dy * bz - dz * by, dz * bx - dx * bz, dx * by - dy * bx  # d x e2
+    det = ax * hx + ay * hy + az * hz
+    ok = np.abs(det) > 1e-300  # a segment parallel to the triangle's plane never hits it
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    u = (sx * hx + sy * hy + sz * hz) * inv
+    kx, ky, kz = sy * az - sz * ay, sz * ax - sx * az, sx * ay - sy * ax  # s x e1
+    w = (dx * kx + dy * ky + dz * kz) * inv
+    along = (bx * kx + by * ky + bz * kz) * inv
+    crossing = ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (along > eps) & (along < upper)
+    return np.asarray(crossing.any(axis=-1), dtype=np.bool_)

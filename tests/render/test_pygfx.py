@@ -270,19 +270,58 @@ def pixel_rays(camera: Any) -> tuple[np.ndarray, np.ndarray]:
     return ends[0], d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
-def first_hits(origins, dirs, vertices, triangles, chunk=512):
-    """Möller–Trumbore: the nearest triangle along each ray (-1 where none) and its distance."""
+def _block_boxes(A, B, C, block):
+    """The bounds of each run of ``block`` consecutive triangles, widened by far more than
+    rounding: a ray that hits a triangle meets its run's box."""
+    corners = np.stack([A, B, C], axis=1)  # (T, 3, 3)
+    pad = (-len(A)) % block
+    corners = np.concatenate([corners, np.repeat(corners[-1:], pad, axis=0)])
+    runs = corners.reshape(-1, block * 3, 3)
+    lo, hi = runs.min(axis=1), runs.max(axis=1)
+    margin = 1e-6 * (1.0 + np.abs(corners).max())
+    return lo - margin, hi + margin
+
+
+def _rays_meet_boxes(o, d, lo, hi):
+    """(R, K): ray ``o + t d`` (t >= 0) meets box k (slab test; an axis the ray runs along
+    is met where the origin lies between the box's planes)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / d[:, None, :]
+        t1, t2 = (lo[None] - o[:, None, :]) * inv, (hi[None] - o[:, None, :]) * inv
+    along = d[:, None, :] == 0
+    inside = (o[:, None, :] >= lo[None]) & (o[:, None, :] <= hi[None])
+    near = np.where(along, np.where(inside, -np.inf, np.inf), np.minimum(t1, t2))
+    far = np.where(along, np.where(inside, np.inf, -np.inf), np.maximum(t1, t2))
+    enter, leave = near.max(axis=-1), far.min(axis=-1)
+    return (enter <= leave) & (leave >= 0)
+
+
+def first_hits(origins, dirs, vertices, triangles, chunk=512, block=16):
+    """Möller–Trumbore: the nearest triangle along each ray (-1 where none) and its distance.
+
+    Each chunk of rays is tested against the triangles of the runs of ``block`` triangles
+    whose (widened) bounds one of its rays meets, in their order: a triangle left out has
+    no hit on those rays, so the nearest hit, its distance and the first of equal distances
+    are those of all the triangles."""
     A, B, C = (vertices[triangles[:, i]] for i in range(3))
-    e1, e2 = B - A, C - A
+    lo, hi = _block_boxes(A, B, C, block)
+    e1_all, e2_all = B - A, C - A
     best_t = np.full(len(origins), np.inf)
     best = np.full(len(origins), -1)
     for s in range(0, len(origins), chunk):
+        meets = _rays_meet_boxes(origins[s : s + chunk], dirs[s : s + chunk], lo, hi)
+        runs = np.flatnonzero(meets.any(axis=0))
+        keep = (runs[:, None] * block + np.arange(block)).ravel()
+        keep = keep[keep < len(A)]
+        if len(keep) == 0:
+            continue
+        a, e1, e2 = A[keep], e1_all[keep], e2_all[keep]
         o, d = origins[s : s + chunk, None], dirs[s : s + chunk, None]
         h = np.cross(d, e2)
         det = np.sum(e1 * h, axis=-1)
         ok = np.abs(det) > 1e-12
         inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-        q = o - A
+        q = o - a
         u = np.sum(q * h, axis=-1) * inv
         k = np.cross(q, e1)
         v = np.sum(d * k, axis=-1) * inv
@@ -292,7 +331,7 @@ def first_hits(origins, dirs, vertices, triangles, chunk=512):
         i = np.argmin(t, axis=1)
         tmin = t[np.arange(len(i)), i]
         best_t[s : s + chunk] = tmin
-        best[s : s + chunk] = np.where(np.isfinite(tmin), i, -1)
+        best[s : s + chunk] = np.where(np.isfinite(tmin), keep[i], -1)
     return best, best_t
 
 
