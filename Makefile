@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 DEMO_STAMP := $(VENV)/.demo-installed
 
-.PHONY: demo test lint typecheck warm pytest docs notebooks bench bench-coverage fuzz gpu-check clean
+.PHONY: demo test lint typecheck pytest docs notebooks bench bench-coverage fuzz gpu-check clean
 
 # .venv with the package and the extras $(1), then the stamp ($@).
 define install
@@ -43,14 +43,8 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(PY) -m mypy
 
-## The `fast` extra's loops compiled once into the disk cache before pytest (beside ruff and
-## mypy under `make test`), so that pytest's workers load them instead of each compiling
-## them on its first call (tools/warm_numba.py; seconds once cached).
-warm: $(STAMP)
-	$(PY) tools/warm_numba.py
-
 JOBS ?= auto
-pytest: $(STAMP) warm
+pytest: $(STAMP)
 	$(PY) -m pytest -n $(JOBS) --dist loadfile --durations=20
 
 docs: $(STAMP)
