@@ -289,8 +289,7 @@ def body_bounds(
     b6 = where(seen[..., None, :], hit, own)
     low = [-b6[..., 2 * c, :] for c in range(3)]
     high = [b6[..., 2 * c + 1, :] for c in range(3)]
-    zb = xp.max(xp.stack([-bc[2], bc[2]], axis=-2), axis=-1)
-    zb_lo, zb_hi = -zb[..., 0], zb[..., 1]
+    zb_lo, zb_hi = xp.min(bc[2], axis=-1), xp.max(bc[2], axis=-1)
     z_lo = xp.minimum(xp.minimum(zb_lo, low[2]), high[2])
     return LightBounds(low[0], high[0], low[1], high[1], z_lo, high[2], zb_lo, zb_hi)
 

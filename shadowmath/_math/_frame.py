@@ -20,6 +20,7 @@ import numpy as np
 from shadowmath._boundary._shapes import Float, Scalar
 from shadowmath._boundary._validate import Array, Context
 
+from ._rows import MatrixEntries
 from ._specialize import formulas
 
 
@@ -71,9 +72,8 @@ def light_entries(xp: ModuleType, frame: LightFrame) -> tuple[Float[Array, "*bat
 def stack_matrix(xp: ModuleType, entries: tuple[Scalar, ...]) -> Float[Array, "*batch 4 4"]:
     """``(*batch, 4, 4)`` from 16 row-major entries (or 12: the last row is ``(0, 0, 0, 1)``;
     the entries of an array form's product, :class:`._rows.MatrixEntries`, its matrix)."""
-    whole = getattr(entries, "matrix", None)
-    if whole is not None:
-        return whole
+    if isinstance(entries, MatrixEntries):
+        return entries.matrix
     if len(entries) == 12:
         zero = xp.zeros_like(entries[0])
         entries = (*entries, zero, zero, zero, zero + 1)

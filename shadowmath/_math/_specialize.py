@@ -178,9 +178,10 @@ def _take_last(
     ``(*batch, n)`` for ``n`` indices (whole numbers of any dtype)."""
     if isinstance(k, int):
         return row[..., k, None]
-    first = int(k[0]) if len(k) else 0
-    if isinstance(k, np.ndarray) and np.array_equal(k, np.arange(first, first + len(k))):
-        return row[..., first : first + len(k)]  # a slice, not a gather (JAX: nor a scatter)
+    if isinstance(k, np.ndarray) and len(k):  # the driver's indices, on the host
+        first = int(k[0])
+        if np.array_equal(k, np.arange(first, first + len(k))):
+            return row[..., first : first + len(k)]  # a slice, not a gather (JAX: nor a scatter)
     return row[..., k.astype(int)]
 
 
